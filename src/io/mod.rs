@@ -1,0 +1,4 @@
+//! Reading and writing files: recordings (MCAP, CARMEN), trajectories, CSV
+//! outputs. Every write goes through [`atomic`].
+
+pub mod atomic;

@@ -1,0 +1,19 @@
+//! odocal: calibrated wheel odometry for differential-drive robots from 2D
+//! laser scans and wheel encoders.
+//!
+//! Math modules (`geom`, `scan`, `robot`, `icp`, `calib`, `sim`, `eval`,
+//! `diagnose`) know nothing of files, the command line or Rerun; `io` reads and
+//! writes formats, `pipeline` wires the stages, `viz` draws them.
+#![warn(missing_docs)]
+
+pub mod effects;
+pub mod error;
+pub mod geom;
+pub mod io;
+pub mod motion;
+pub mod recording;
+pub mod robot;
+pub mod scan;
+pub mod traj;
+
+pub use error::InputError;

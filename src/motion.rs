@@ -1,0 +1,158 @@
+//! Incremental motions between two scans (what scan matching produces) and the
+//! velocity observations the calibrators consume.
+
+use nalgebra::Matrix3;
+
+/// Why a scan pair produced no trustworthy motion.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PairFailure {
+    /// Too few valid points in one of the scans.
+    TooFewPoints,
+    /// Too few correspondences survived the distance threshold.
+    TooFewCorrespondences,
+    /// The iteration did not converge.
+    NotConverged,
+    /// The geometry leaves a direction unconstrained.
+    Degenerate,
+    /// dt between the scans is zero, negative or not finite.
+    BadTime,
+    /// The scans have different beam layouts or invalid angles.
+    Inconsistent,
+    /// The result disagrees with the motion prior beyond plausibility.
+    Implausible,
+}
+
+impl PairFailure {
+    /// Short machine-readable reason, as written in CSV/JSON outputs.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Self::TooFewPoints => "too_few_points",
+            Self::TooFewCorrespondences => "too_few_correspondences",
+            Self::NotConverged => "not_converged",
+            Self::Degenerate => "degenerate",
+            Self::BadTime => "bad_time",
+            Self::Inconsistent => "inconsistent",
+            Self::Implausible => "implausible",
+        }
+    }
+}
+
+/// Motion of the robot base between the stamps of two scans, in the base frame
+/// at `t0`: `(dx, dy)` in m, `dtheta` in rad, with a 3×3 covariance over
+/// (dx, dy, dθ).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    /// Stamp of the reference (earlier) scan (s).
+    pub t0: f64,
+    /// Stamp of the current scan (s).
+    pub t1: f64,
+    /// Forward displacement (m).
+    pub dx: f64,
+    /// Leftward displacement (m).
+    pub dy: f64,
+    /// Heading change (rad, wrapped).
+    pub dtheta: f64,
+    /// Covariance of (dx, dy, dθ) in m², m·rad, rad².
+    pub cov: Matrix3<f64>,
+    /// Iterations the matcher ran.
+    pub iterations: u32,
+    /// Correspondences used in the final iteration.
+    pub inliers: u32,
+    /// `None` when the match is trustworthy, else why not.
+    pub failure: Option<PairFailure>,
+}
+
+impl Motion {
+    /// Whether the motion may be used as an observation.
+    pub fn is_valid(&self) -> bool {
+        self.failure.is_none()
+    }
+}
+
+/// Body velocities measured over an interval, each with its own standard deviation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VelocityObs {
+    /// Interval start (s).
+    pub t0: f64,
+    /// Interval end (s).
+    pub t1: f64,
+    /// Forward velocity V_m (m/s).
+    pub v: f64,
+    /// Turn rate W_m (rad/s).
+    pub w: f64,
+    /// σ of `v` (m/s).
+    pub sigma_v: f64,
+    /// σ of `w` (rad/s).
+    pub sigma_w: f64,
+}
+
+impl VelocityObs {
+    /// Velocities from a valid motion: the constant (V, W) whose arc over dt
+    /// gives the motion (`V = arc length/dt`, `W = dθ/dt`), with σ propagated
+    /// from the covariance (`σ_V = sqrt(cov_xx)/dt`, `σ_W = sqrt(cov_θθ)/dt`).
+    /// `None` for failed pairs or dt ≤ 0, so a failed match never becomes a
+    /// confident observation.
+    pub fn from_motion(m: &Motion) -> Option<Self> {
+        let dt = m.t1 - m.t0;
+        if !m.is_valid() || !(dt > 0.0) || !dt.is_finite() {
+            return None;
+        }
+        let inc = crate::geom::pose(m.dx, m.dy, m.dtheta);
+        let (ds, dth) = crate::geom::arc_of_increment(&inc);
+        let sv = m.cov[(0, 0)].max(0.0).sqrt() / dt;
+        let sw = m.cov[(2, 2)].max(0.0).sqrt() / dt;
+        let obs = Self {
+            t0: m.t0,
+            t1: m.t1,
+            v: ds / dt,
+            w: dth / dt,
+            sigma_v: sv,
+            sigma_w: sw,
+        };
+        [obs.v, obs.w, obs.sigma_v, obs.sigma_w]
+            .iter()
+            .all(|x| x.is_finite())
+            .then_some(obs)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn motion() -> Motion {
+        Motion {
+            t0: 1.0,
+            t1: 1.02,
+            dx: 0.02,
+            dy: 0.0,
+            dtheta: 0.004,
+            cov: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-8, 1e-8, 4e-8)),
+            iterations: 5,
+            inliers: 500,
+            failure: None,
+        }
+    }
+
+    #[test]
+    fn velocity_from_motion_divides_by_dt() {
+        let o = VelocityObs::from_motion(&motion()).unwrap();
+        assert!((o.v - 1.0).abs() < 1e-5);
+        assert!((o.w - 0.2).abs() < 1e-12);
+        assert!((o.sigma_v - 1e-4 / 0.02).abs() < 1e-12);
+        assert!((o.sigma_w - 2e-4 / 0.02).abs() < 1e-12);
+    }
+
+    #[test]
+    fn failed_pairs_and_bad_time_give_no_observation() {
+        let mut m = motion();
+        m.failure = Some(PairFailure::Degenerate);
+        assert!(VelocityObs::from_motion(&m).is_none());
+        let mut m = motion();
+        m.t1 = m.t0;
+        assert!(VelocityObs::from_motion(&m).is_none());
+        let mut m = motion();
+        m.dx = f64::NAN;
+        assert!(VelocityObs::from_motion(&m).is_none());
+    }
+}

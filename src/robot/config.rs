@@ -1,0 +1,163 @@
+//! Nominal robot description, loadable from TOML (`--robot FILE.toml`).
+
+use crate::geom::{self, Pose2};
+use serde::{Deserialize, Serialize};
+
+/// Where the laser sits on the robot: `base_from_laser` as x, y (m) and yaw (rad).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LaserMount {
+    /// Forward offset from the base origin (m).
+    pub x: f64,
+    /// Leftward offset (m).
+    pub y: f64,
+    /// Yaw of the laser x axis relative to base x (rad).
+    pub yaw: f64,
+}
+
+impl Default for LaserMount {
+    /// The wheelchair's LMS111: on the back of the chair, facing backwards.
+    fn default() -> Self {
+        Self {
+            x: -0.45,
+            y: 0.0,
+            yaw: std::f64::consts::PI,
+        }
+    }
+}
+
+impl LaserMount {
+    /// The mounting as a pose `base_from_laser`.
+    pub fn pose(&self) -> Pose2 {
+        geom::pose(self.x, self.y, self.yaw)
+    }
+}
+
+/// A differential-drive robot's nominal parameters and sensor layout.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RobotConfig {
+    /// Human-readable name.
+    pub name: String,
+    /// Right wheel radius (m).
+    pub r_right: f64,
+    /// Left wheel radius (m).
+    pub r_left: f64,
+    /// Distance between the wheel contact points (m).
+    pub wheel_base: f64,
+    /// Encoder ticks per wheel revolution.
+    pub ticks_per_rev: u32,
+    /// JointState name of the left wheel joint.
+    pub left_joint: String,
+    /// JointState name of the right wheel joint.
+    pub right_joint: String,
+    /// Laser mounting, used when the recording has no /tf_static.
+    pub laser: LaserMount,
+}
+
+impl Default for RobotConfig {
+    /// The users' wheelchair (seed 000): R = 0.32 m, D = 0.65 m, 8800 ticks/rev.
+    fn default() -> Self {
+        Self {
+            name: "wheelchair".into(),
+            r_right: 0.32,
+            r_left: 0.32,
+            wheel_base: 0.65,
+            ticks_per_rev: 8800,
+            left_joint: "left_wheel".into(),
+            right_joint: "right_wheel".into(),
+            laser: LaserMount::default(),
+        }
+    }
+}
+
+/// A robot file that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum RobotConfigError {
+    /// The TOML does not parse or has unknown keys.
+    #[error("robot config: {0}")]
+    Parse(#[from] toml::de::Error),
+    /// A value is out of its physical range.
+    #[error("robot config: {0}")]
+    Invalid(String),
+}
+
+impl RobotConfig {
+    /// Parses and validates a TOML robot description.
+    pub fn from_toml(text: &str) -> Result<Self, RobotConfigError> {
+        let c: Self = toml::from_str(text)?;
+        c.validate()?;
+        Ok(c)
+    }
+
+    /// Checks that every parameter is finite and physically meaningful.
+    pub fn validate(&self) -> Result<(), RobotConfigError> {
+        for (name, v) in [
+            ("r_right", self.r_right),
+            ("r_left", self.r_left),
+            ("wheel_base", self.wheel_base),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(RobotConfigError::Invalid(format!(
+                    "{name} must be a positive length in m, got {v}"
+                )));
+            }
+        }
+        if self.ticks_per_rev == 0 {
+            return Err(RobotConfigError::Invalid(
+                "ticks_per_rev must be > 0".into(),
+            ));
+        }
+        if ![self.laser.x, self.laser.y, self.laser.yaw]
+            .iter()
+            .all(|v| v.is_finite())
+        {
+            return Err(RobotConfigError::Invalid(
+                "laser mount must be finite".into(),
+            ));
+        }
+        if self.left_joint == self.right_joint {
+            return Err(RobotConfigError::Invalid(
+                "left_joint and right_joint must differ".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The nominal kinematic parameters.
+    pub fn diff_drive(&self) -> super::DiffDrive {
+        super::DiffDrive {
+            r_right: self.r_right,
+            r_left: self.r_left,
+            wheel_base: self.wheel_base,
+        }
+    }
+
+    /// Wheel angle of one encoder tick (rad).
+    pub fn rad_per_tick(&self) -> f64 {
+        2.0 * std::f64::consts::PI / self.ticks_per_rev as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_round_trips_through_toml() {
+        let c = RobotConfig::default();
+        let text = toml::to_string(&c).unwrap();
+        assert_eq!(RobotConfig::from_toml(&text).unwrap(), c);
+    }
+
+    #[test]
+    fn partial_file_keeps_defaults_and_unknown_keys_are_refused() {
+        let c = RobotConfig::from_toml("wheel_base = 0.7\n[laser]\nx = 0.1\n").unwrap();
+        assert_eq!(c.wheel_base, 0.7);
+        assert_eq!(c.laser.x, 0.1);
+        assert_eq!(c.r_right, 0.32);
+        assert!(RobotConfig::from_toml("wheelbase = 0.7").is_err());
+        assert!(RobotConfig::from_toml("r_left = -0.3").is_err());
+        assert!(RobotConfig::from_toml("r_left = nan").is_err());
+    }
+}

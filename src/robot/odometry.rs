@@ -1,0 +1,121 @@
+//! Dead reckoning from wheel angles, and wheel rates from consecutive samples.
+
+use super::DiffDrive;
+use crate::geom::Pose2;
+use crate::recording::WheelSample;
+use crate::traj::Trajectory;
+
+/// Mean wheel rates (rad/s) over the interval between two wheel samples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WheelRate {
+    /// Interval start (s).
+    pub t0: f64,
+    /// Interval end (s).
+    pub t1: f64,
+    /// Right wheel rate (rad/s).
+    pub right: f64,
+    /// Left wheel rate (rad/s).
+    pub left: f64,
+}
+
+/// Wheel rates between consecutive samples. Intervals with dt ≤ 0 (duplicate
+/// stamps) are merged into the next one, so no rate is ever inf or NaN.
+pub fn wheel_rates(wheels: &[WheelSample]) -> Vec<WheelRate> {
+    let mut out = Vec::with_capacity(wheels.len().saturating_sub(1));
+    let Some(mut prev) = wheels.first().copied() else {
+        return out;
+    };
+    for s in &wheels[1..] {
+        let dt = s.stamp - prev.stamp;
+        if !(dt > 0.0) {
+            continue;
+        }
+        out.push(WheelRate {
+            t0: prev.stamp,
+            t1: s.stamp,
+            right: (s.right - prev.right) / dt,
+            left: (s.left - prev.left) / dt,
+        });
+        prev = *s;
+    }
+    out
+}
+
+/// Integrates wheel angles with the given kinematics into a trajectory starting
+/// at `start` at the first sample's stamp. Samples with non-increasing stamps
+/// are skipped (their motion is carried by the next valid sample).
+pub fn wheel_odometry(k: &DiffDrive, wheels: &[WheelSample], start: Pose2) -> Trajectory {
+    let mut traj = Trajectory::with_capacity(wheels.len());
+    let Some(first) = wheels.first() else {
+        return traj;
+    };
+    let mut pose = start;
+    let mut prev = *first;
+    traj.push(first.stamp, pose);
+    for s in &wheels[1..] {
+        if !(s.stamp > prev.stamp) {
+            continue;
+        }
+        pose *= k.increment(s.right - prev.right, s.left - prev.left);
+        traj.push(s.stamp, pose);
+        prev = *s;
+    }
+    traj
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom;
+
+    #[test]
+    fn constant_rates_trace_a_circle() {
+        let k = DiffDrive {
+            r_right: 0.32,
+            r_left: 0.32,
+            wheel_base: 0.65,
+        };
+        let (v, w) = (0.5, 0.25);
+        let (wr, wl) = k.wheel_rates(v, w);
+        let period = 2.0 * std::f64::consts::PI / w;
+        let n = 1000;
+        let wheels: Vec<_> = (0..=n)
+            .map(|i| {
+                let t = period * i as f64 / n as f64;
+                WheelSample {
+                    stamp: t,
+                    left: wl * t,
+                    right: wr * t,
+                }
+            })
+            .collect();
+        let traj = wheel_odometry(&k, &wheels, Pose2::identity());
+        let end = traj.poses.last().unwrap();
+        assert!(end.translation.vector.norm() < 1e-9, "closes the circle");
+        let mid = traj.poses[n / 2];
+        assert!((mid.translation.y - 2.0 * v / w).abs() < 1e-9);
+        assert!((traj.path_length() - v * period).abs() < 1e-3);
+        let rates = wheel_rates(&wheels);
+        assert!(rates.iter().all(|r| (r.right - wr).abs() < 1e-9));
+        assert!((geom::heading(&mid).abs() - std::f64::consts::PI).abs() < 1e-9);
+    }
+
+    #[test]
+    fn duplicate_stamps_do_not_produce_infinite_rates() {
+        let s = |t, a| WheelSample {
+            stamp: t,
+            left: a,
+            right: a,
+        };
+        let r = wheel_rates(&[
+            s(0.0, 0.0),
+            s(0.0, 0.0),
+            s(1.0, 2.0),
+            s(1.0, 2.0),
+            s(2.0, 3.0),
+        ]);
+        assert_eq!(r.len(), 2);
+        assert!(r.iter().all(|r| r.left.is_finite()));
+        assert_eq!(r[1].left, 1.0);
+    }
+}

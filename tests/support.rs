@@ -1,0 +1,59 @@
+//! Shared helpers for the integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// The shared real-data folder: `$ODOCAL_DATA`, else `../shared/data` beside
+/// the crate. Outside CI a missing folder makes the calling test skip (and say
+/// so); under CI (`CI` set) it is an error, so a broken setup cannot pass.
+pub fn shared_data(test: &str) -> Option<PathBuf> {
+    let dir = std::env::var_os("ODOCAL_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    if std::env::var_os("CI").is_some() {
+        panic!(
+            "{test}: shared data not found at {} (set ODOCAL_DATA)",
+            dir.display()
+        );
+    }
+    eprintln!(
+        "SKIP {test}: shared data not found at {} (set ODOCAL_DATA)",
+        dir.display()
+    );
+    None
+}
+
+/// A python3 that has the given modules importable, or `None` (skip outside
+/// CI, panic under CI where `.ci/run` installs them).
+pub fn python_with(test: &str, modules: &[&str]) -> Option<String> {
+    let py = std::env::var("ODOCAL_PYTHON").unwrap_or_else(|_| "python3".into());
+    let code = modules
+        .iter()
+        .map(|m| format!("import {m}"))
+        .collect::<Vec<_>>()
+        .join(";");
+    let ok = std::process::Command::new(&py)
+        .args(["-c", &code])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if ok {
+        return Some(py);
+    }
+    if std::env::var_os("CI").is_some() {
+        panic!("{test}: python modules {modules:?} missing (.ci/run installs them)");
+    }
+    eprintln!("SKIP {test}: python modules {modules:?} not installed");
+    None
+}
+
+/// A fresh, empty scratch directory for one test.
+pub fn scratch(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("odocal-test-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
