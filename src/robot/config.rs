@@ -45,8 +45,9 @@ pub struct RobotConfig {
     pub r_left: f64,
     /// Distance between the wheel contact points (m).
     pub wheel_base: f64,
-    /// Encoder ticks per wheel revolution.
-    pub ticks_per_rev: u32,
+    /// Encoder ticks per wheel revolution (may be fractional after a gear,
+    /// e.g. 691.2 × 4 on a Khepera III).
+    pub ticks_per_rev: f64,
     /// JointState name of the left wheel joint.
     pub left_joint: String,
     /// JointState name of the right wheel joint.
@@ -63,7 +64,7 @@ impl Default for RobotConfig {
             r_right: 0.32,
             r_left: 0.32,
             wheel_base: 0.65,
-            ticks_per_rev: 8800,
+            ticks_per_rev: 8800.0,
             left_joint: "left_wheel".into(),
             right_joint: "right_wheel".into(),
             laser: LaserMount::default(),
@@ -103,10 +104,11 @@ impl RobotConfig {
                 )));
             }
         }
-        if self.ticks_per_rev == 0 {
-            return Err(RobotConfigError::Invalid(
-                "ticks_per_rev must be > 0".into(),
-            ));
+        if !(self.ticks_per_rev.is_finite() && self.ticks_per_rev > 0.0) {
+            return Err(RobotConfigError::Invalid(format!(
+                "ticks_per_rev must be a positive number, got {}",
+                self.ticks_per_rev
+            )));
         }
         if ![self.laser.x, self.laser.y, self.laser.yaw]
             .iter()
@@ -135,7 +137,7 @@ impl RobotConfig {
 
     /// Wheel angle of one encoder tick (rad).
     pub fn rad_per_tick(&self) -> f64 {
-        2.0 * std::f64::consts::PI / self.ticks_per_rev as f64
+        2.0 * std::f64::consts::PI / self.ticks_per_rev
     }
 }
 
@@ -159,5 +161,18 @@ mod tests {
         assert!(RobotConfig::from_toml("wheelbase = 0.7").is_err());
         assert!(RobotConfig::from_toml("r_left = -0.3").is_err());
         assert!(RobotConfig::from_toml("r_left = nan").is_err());
+        assert!(RobotConfig::from_toml("ticks_per_rev = 0").is_err());
+    }
+
+    #[test]
+    fn bundled_robot_files_load() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scans/robots");
+        let mut n = 0;
+        for e in std::fs::read_dir(dir).unwrap() {
+            let text = std::fs::read_to_string(e.unwrap().path()).unwrap();
+            RobotConfig::from_toml(&text).unwrap();
+            n += 1;
+        }
+        assert!(n >= 4);
     }
 }
