@@ -8,6 +8,7 @@
 
 pub mod effects;
 pub mod error;
+pub mod eval;
 pub mod geom;
 pub mod io;
 pub mod motion;
