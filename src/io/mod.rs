@@ -4,4 +4,6 @@
 pub mod atomic;
 
 mod columns;
+pub mod kitti;
 pub mod relations;
+pub mod tum;
