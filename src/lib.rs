@@ -8,12 +8,14 @@
 
 pub mod effects;
 pub mod error;
+pub mod eval;
 pub mod geom;
 pub mod io;
 pub mod motion;
 pub mod recording;
 pub mod robot;
 pub mod scan;
+pub mod sim;
 pub mod traj;
 
 pub use error::InputError;

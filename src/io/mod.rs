@@ -2,3 +2,8 @@
 //! outputs. Every write goes through [`atomic`].
 
 pub mod atomic;
+
+mod columns;
+pub mod kitti;
+pub mod relations;
+pub mod tum;

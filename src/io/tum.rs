@@ -1,0 +1,101 @@
+//! TUM trajectory files: one pose a line, `t x y z qx qy qz qw` (s, m, unit
+//! quaternion), `#` comments — what evo and most tools read. Kept in full 3D so
+//! results compare one-to-one with evo; [`read_tum_2d`] gives the planar view.
+
+use super::atomic::write_atomic;
+use super::columns::{data_lines, fields, read_text};
+use crate::error::InputError;
+use crate::eval::traj3::{pose3_from_2d, Pose3, Trajectory3};
+use crate::traj::Trajectory;
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use std::io::{self, Write};
+use std::path::Path;
+
+const KIND: &str = "TUM";
+
+/// Reads a TUM file as a 3D trajectory.
+pub fn read_tum(path: &Path) -> Result<Trajectory3, InputError> {
+    parse_tum(&read_text(path)?, &path.display().to_string())
+}
+
+/// Reads a TUM file and keeps x, y and yaw (rotation about z).
+pub fn read_tum_2d(path: &Path) -> Result<Trajectory, InputError> {
+    Ok(read_tum(path)?.to_2d())
+}
+
+/// Parses TUM text; `file` names the source in errors. Errors name the line:
+/// wrong field count, non-numbers, NaN/inf, a zero quaternion, stamps that do
+/// not strictly increase; also fewer than two poses.
+pub fn parse_tum(text: &str, file: &str) -> Result<Trajectory3, InputError> {
+    let mut stamps: Vec<f64> = Vec::new();
+    let mut poses = Vec::new();
+    let mut last_line = 0;
+    for (line_no, line) in data_lines(text) {
+        let [t, x, y, z, qx, qy, qz, qw] = fields::<8>(file, KIND, line_no, line)?;
+        let at = || format!("line {line_no}");
+        let q = Quaternion::new(qw, qx, qy, qz);
+        if !(q.norm() > 1e-9) {
+            return Err(InputError::new(file, "zero quaternion")
+                .topic(KIND)
+                .at(at()));
+        }
+        if let Some(&prev) = stamps.last() {
+            if t <= prev {
+                let what = if t == prev { "duplicate" } else { "decreasing" };
+                return Err(InputError::new(
+                    file,
+                    format!("{what} timestamp {t} (line {last_line} has {prev}); stamps must strictly increase"),
+                )
+                .topic(KIND)
+                .at(at()));
+            }
+        }
+        stamps.push(t);
+        poses.push(Isometry3::from_parts(
+            Translation3::new(x, y, z),
+            UnitQuaternion::from_quaternion(q),
+        ));
+        last_line = line_no;
+    }
+    if stamps.len() < 2 {
+        return Err(InputError::new(
+            file,
+            format!("{} pose(s); a trajectory needs at least 2", stamps.len()),
+        )
+        .topic(KIND));
+    }
+    Ok(Trajectory3 { stamps, poses })
+}
+
+fn write_line(w: &mut impl Write, t: f64, p: &Pose3) -> io::Result<()> {
+    let v = p.translation.vector;
+    let q = p.rotation.coords; // (x, y, z, w)
+    writeln!(
+        w,
+        "{t} {} {} {} {} {} {} {}",
+        v.x, v.y, v.z, q.x, q.y, q.z, q.w
+    )
+}
+
+/// Writes a 3D trajectory as TUM text (shortest exact decimal of every value),
+/// atomically.
+pub fn write_tum(path: &Path, traj: &Trajectory3) -> io::Result<()> {
+    write_atomic(path, |w| {
+        writeln!(w, "# timestamp tx ty tz qx qy qz qw")?;
+        for (t, p) in traj.stamps.iter().zip(&traj.poses) {
+            write_line(w, *t, p)?;
+        }
+        Ok(())
+    })
+}
+
+/// Writes a planar trajectory as TUM text (z = 0, rotation about z), atomically.
+pub fn write_tum_2d(path: &Path, traj: &Trajectory) -> io::Result<()> {
+    write_atomic(path, |w| {
+        writeln!(w, "# timestamp tx ty tz qx qy qz qw")?;
+        for (t, p) in traj.stamps.iter().zip(&traj.poses) {
+            write_line(w, *t, &pose3_from_2d(p))?;
+        }
+        Ok(())
+    })
+}
