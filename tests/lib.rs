@@ -1,4 +1,5 @@
 //! Integration tests, compiled as one binary.
 
+mod io_crosscheck;
 mod io_read;
 mod support;

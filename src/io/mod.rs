@@ -5,10 +5,13 @@ pub mod atomic;
 pub mod carmen;
 pub mod cdr;
 pub mod mcap_read;
+pub mod mcap_write;
 pub mod ros_msgs;
 pub mod ros_schema;
 
-pub use mcap_read::{read_mcap, ReadOptions, TopicConfig};
+pub use carmen::read_carmen;
+pub use mcap_read::{read_mcap, read_mcap_bytes, ReadOptions, TopicConfig};
+pub use mcap_write::{encode_mcap, write_mcap, WriteError, WriteOptions};
 
 use crate::error::InputError;
 use crate::recording::Recording;
