@@ -1,5 +1,7 @@
 //! Integration tests, compiled as one binary.
 
+mod io_crosscheck;
+mod io_read;
 mod support;
 
 mod eval_evo;
