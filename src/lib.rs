@@ -12,6 +12,7 @@ pub mod eval;
 pub mod geom;
 pub mod io;
 pub mod motion;
+pub mod pipeline;
 pub mod recording;
 pub mod robot;
 pub mod scan;

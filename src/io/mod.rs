@@ -3,16 +3,16 @@
 
 pub mod atomic;
 
-mod columns;
-pub mod kitti;
-pub mod relations;
-pub mod tum;
 pub mod carmen;
 pub mod cdr;
+mod columns;
+pub mod kitti;
 pub mod mcap_read;
 pub mod mcap_write;
+pub mod relations;
 pub mod ros_msgs;
 pub mod ros_schema;
+pub mod tum;
 
 pub use carmen::read_carmen;
 pub use mcap_read::{read_mcap, read_mcap_bytes, ReadOptions, TopicConfig};

@@ -159,9 +159,7 @@ impl World {
     ) {
         for (i, r) in out.iter_mut().enumerate() {
             let a = first + i as f64 * increment;
-            *r = self
-                .cast_ray(origin, a, max_range)
-                .unwrap_or(f64::INFINITY);
+            *r = self.cast_ray(origin, a, max_range).unwrap_or(f64::INFINITY);
         }
     }
 

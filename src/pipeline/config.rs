@@ -1,0 +1,85 @@
+//! The configuration file (`--config CFG.toml`) and robot file (`--robot`):
+//! one table per stage, each the stage's own parameter struct with defaults.
+
+use super::PipelineError;
+use crate::error::InputError;
+use crate::eval::EvalOptions;
+use crate::io::TopicConfig;
+use crate::robot::RobotConfig;
+use crate::sim::SimConfig;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Every stage's settings; a TOML file may give any subset of the tables.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Config {
+    /// Topic names read from (and written to) ROS 2 bags.
+    pub topics: TopicConfig,
+    /// Simulator settings.
+    pub sim: SimConfig,
+    /// Evaluation settings.
+    pub eval: EvalOptions,
+}
+
+fn read_text(path: &Path) -> Result<String, PipelineError> {
+    std::fs::read_to_string(path).map_err(|e| {
+        InputError::new(path.display().to_string(), format!("cannot read: {e}")).into()
+    })
+}
+
+impl Config {
+    /// Loads `path`, or the defaults when `None`. Unknown keys are refused.
+    pub fn load(path: Option<&Path>) -> Result<Self, PipelineError> {
+        let Some(path) = path else {
+            return Ok(Self::default());
+        };
+        let text = read_text(path)?;
+        toml::from_str(&text).map_err(|e| {
+            InputError::new(path.display().to_string(), e.message().to_string())
+                .at(span_position(&text, e.span()))
+                .into()
+        })
+    }
+}
+
+/// Loads a robot file, or the default wheelchair when `None`.
+pub fn load_robot(path: Option<&Path>) -> Result<RobotConfig, PipelineError> {
+    let Some(path) = path else {
+        return Ok(RobotConfig::default());
+    };
+    let text = read_text(path)?;
+    RobotConfig::from_toml(&text)
+        .map_err(|e| InputError::new(path.display().to_string(), e.to_string()).into())
+}
+
+fn span_position(text: &str, span: Option<std::ops::Range<usize>>) -> String {
+    match span {
+        Some(s) => format!(
+            "line {}",
+            text[..s.start.min(text.len())].lines().count().max(1)
+        ),
+        None => "whole file".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_round_trip_and_unknown_keys_fail_with_a_line() {
+        let c = Config::default();
+        let text = toml::to_string(&c).unwrap();
+        assert_eq!(toml::from_str::<Config>(&text).unwrap(), c);
+        let dir = std::env::temp_dir().join(format!("odocal-cfg-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("bad.toml");
+        std::fs::write(&p, "[topics]\nscan = \"/laser\"\n\n[icpp]\nx = 1\n").unwrap();
+        let e = Config::load(Some(&p)).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("bad.toml"), "{e}");
+        assert!(e.to_string().contains("line"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,10 @@
+//! Wires the stages for the command line: load inputs, run the math modules,
+//! write outputs atomically, and return summaries the binary prints.
+
+mod config;
+mod error;
+pub mod evaluate;
+pub mod simulate;
+
+pub use config::{load_robot, Config};
+pub use error::PipelineError;

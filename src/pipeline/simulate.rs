@@ -1,0 +1,71 @@
+//! `odocal simulate`: run the simulator and write the ROS 2 bag (and the truth
+//! JSON, kept apart so tools reading the bag never see the effects).
+
+use super::PipelineError;
+use crate::effects::Effect;
+use crate::io::{self, TopicConfig, WriteOptions};
+use crate::robot::RobotConfig;
+use crate::sim::{self, SimConfig, Truth};
+use serde::Serialize;
+use std::path::Path;
+
+/// What `odocal simulate --json` prints.
+#[derive(Debug, Clone, Serialize)]
+pub struct SimulateSummary {
+    /// The bag written.
+    pub out: String,
+    /// The truth file written, if any.
+    pub truth: Option<String>,
+    /// Scenario name.
+    pub scenario: String,
+    /// Seed of every random process.
+    pub seed: u64,
+    /// Length of the run (s).
+    pub duration_s: f64,
+    /// Laser scans written.
+    pub scans: usize,
+    /// Encoder samples written.
+    pub wheel_samples: usize,
+    /// Gyro samples written.
+    pub gyro_samples: usize,
+    /// Reference poses written.
+    pub reference_poses: usize,
+    /// True path length (m).
+    pub path_length_m: f64,
+    /// Injected effects as SPECs.
+    pub effects: Vec<String>,
+}
+
+/// Simulates and writes `out` (MCAP) and optionally `truth_path` (JSON), both atomically.
+pub fn run(
+    cfg: &SimConfig,
+    topics: &TopicConfig,
+    robot: &RobotConfig,
+    effects: &[Effect],
+    out: &Path,
+    truth_path: Option<&Path>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(SimulateSummary, Truth), PipelineError> {
+    let (rec, truth) = sim::simulate(cfg, robot, effects, progress)?;
+    let mut opts = WriteOptions::for_robot(robot);
+    opts.topics = topics.clone();
+    io::write_mcap(out, &rec, &opts).map_err(|e| PipelineError::write(out, e))?;
+    if let Some(tp) = truth_path {
+        io::atomic::write_bytes_atomic(tp, truth.to_json().as_bytes())
+            .map_err(|e| PipelineError::write(tp, e))?;
+    }
+    let summary = SimulateSummary {
+        out: out.display().to_string(),
+        truth: truth_path.map(|p| p.display().to_string()),
+        scenario: truth.scenario.clone(),
+        seed: truth.seed,
+        duration_s: truth.duration_s,
+        scans: rec.scans.len(),
+        wheel_samples: rec.wheels.len(),
+        gyro_samples: rec.gyro.len(),
+        reference_poses: rec.reference.len(),
+        path_length_m: truth.trajectory().path_length(),
+        effects: effects.iter().map(|e| e.to_string()).collect(),
+    };
+    Ok((summary, truth))
+}
