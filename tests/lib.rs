@@ -2,3 +2,5 @@
 
 mod support;
 mod eval_evo;
+mod eval_align;
+mod eval_inputs;
