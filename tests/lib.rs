@@ -1,5 +1,6 @@
 //! Integration tests, compiled as one binary.
 
+mod io_read;
 mod support;
 mod eval_evo;
 mod eval_align;
