@@ -5,3 +5,4 @@ mod support;
 mod eval_evo;
 mod eval_align;
 mod eval_inputs;
+mod eval_relations;

@@ -28,4 +28,4 @@ pub use report::{evaluate, EvalDetail, EvalOptions, EvalReport, TrajectoryMetric
 pub use rpe::{rpe, DeltaUnit, Rpe, RpeDelta};
 pub use stats::Stats;
 pub use sync::{sync, Matched, SyncOptions};
-pub use traj3::{Pose3, Trajectory3};
+pub use traj3::{trajectory_from_stamped, Pose3, Trajectory3};
