@@ -79,11 +79,11 @@ fn eval_tum_bad_input_is_named_by_line() {
 #[test]
 fn eval_tum_round_trips_exactly() {
     let dir = support::scratch("eval_tum_round_trips_exactly");
-    let text = format!(
-        "# t x y z qx qy qz qw\n1700000000.123456 1.5 -2.25 0.125 0 0 0.3826834323650898 0.9238795325112867\n\
-         1700000000.223456 1.6 -2.2 0.1 0.1 0.2 0.3 0.9273618495495703\n"
+    let text = concat!(
+        "# t x y z qx qy qz qw\n1700000000.123456 1.5 -2.25 0.125 0 0 0.3826834323650898 0.9238795325112867\n",
+        "1700000000.223456 1.6 -2.2 0.1 0.1 0.2 0.3 0.9273618495495703\n"
     );
-    let t = parse_tum(&text, "a").unwrap();
+    let t = parse_tum(text, "a").unwrap();
     write_tum(&dir.join("a.tum"), &t).unwrap();
     let back = read_tum(&dir.join("a.tum")).unwrap();
     assert_eq!(back.stamps, t.stamps);

@@ -156,3 +156,73 @@ pub fn against_reference(
         },
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::pose;
+    use crate::traj::Trajectory;
+
+    #[test]
+    fn json_has_design_keys() {
+        let mut t = Trajectory::default();
+        for i in 0..50 {
+            let a = i as f64 * 0.1;
+            t.push(a, pose(3.0 * a.cos(), 2.0 * a.sin(), a));
+        }
+        let reference = Trajectory3::from_2d(&t);
+        let mut e2 = t.clone();
+        for p in &mut e2.poses {
+            p.translation.x += 0.1;
+        }
+        let estimate = Trajectory3::from_2d(&e2);
+        let rels = [Relation {
+            t1: 0.0,
+            t2: 2.0,
+            delta: crate::geom::between(&t.poses[0], &t.poses[20]),
+        }];
+        let r = evaluate(
+            &estimate,
+            Some(&reference),
+            Some(&rels),
+            &EvalOptions::default(),
+        )
+        .unwrap();
+        let v = serde_json::to_value(&r).unwrap();
+        let keys: Vec<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+        for k in [
+            "matched",
+            "ape",
+            "ape_rot_deg",
+            "rpe",
+            "rpe_rot_deg",
+            "relations",
+            "drift_percent",
+            "final_error",
+        ] {
+            assert!(keys.contains(&k), "missing {k} in {keys:?}");
+        }
+        for k in ["rmse", "mean", "median", "std", "min", "max"] {
+            assert!(v["ape"][k].is_f64() && v["rpe_rot_deg"][k].is_f64(), "{k}");
+        }
+        for k in [
+            "count",
+            "trans_mean",
+            "trans_std",
+            "rot_mean_deg",
+            "rot_std_deg",
+        ] {
+            assert!(
+                !v["relations"][k].is_null() && !v["relations"]["local"][k].is_null(),
+                "{k}"
+            );
+        }
+        assert_eq!(v["matched"], 50);
+        assert!((v["ape"]["mean"].as_f64().unwrap() - 0.1).abs() < 1e-12);
+        assert!((v["final_error"].as_f64().unwrap() - 0.1).abs() < 1e-12);
+        // Only relations: no trajectory keys.
+        let r = evaluate(&estimate, None, Some(&rels), &EvalOptions::default()).unwrap();
+        let v = serde_json::to_value(&r).unwrap();
+        assert!(v.get("ape").is_none() && v["relations"]["count"] == 1);
+    }
+}

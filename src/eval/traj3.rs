@@ -23,7 +23,11 @@ impl Trajectory3 {
     /// Builds from parallel vectors; `None` if lengths differ or stamps do not
     /// strictly increase (NaN included).
     pub fn from_parts(stamps: Vec<f64>, poses: Vec<Pose3>) -> Option<Self> {
-        if stamps.len() != poses.len() || stamps.windows(2).any(|w| !(w[1] > w[0])) {
+        if stamps.len() != poses.len()
+            || stamps
+                .windows(2)
+                .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+        {
             return None;
         }
         Some(Self { stamps, poses })
