@@ -102,7 +102,7 @@ fn eval_alignment_recovers_random_transforms_exactly() {
             );
             assert!(undo.isometry.rotation.angle() < 1e-9, "{kind:?} {undo}");
             assert!(
-                m.ape.max < 1e-8 && m.ape_rot_deg.max < 1e-6,
+                m.ape.max < 1e-8 && m.ape_rot_deg.unwrap().max < 1e-6,
                 "{kind:?} {:?}",
                 m.ape
             );
@@ -142,7 +142,7 @@ fn eval_planar_alignment_ignores_what_it_cannot_fix() {
         .trajectory
         .unwrap()
     };
-    assert!(run(Alignment::Se2).ape_rot_deg.min > 10.0);
+    assert!(run(Alignment::Se2).ape_rot_deg.unwrap().min > 10.0);
     assert!(run(Alignment::Se3).ape.max < 1e-8);
     // Origin alignment: the first poses coincide, so the rigid motion is gone.
     assert!(run(Alignment::Origin).ape.max < 1e-8);

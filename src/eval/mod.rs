@@ -25,7 +25,7 @@ pub use ape::{ape, Ape};
 pub use error::EvalError;
 pub use relations::{relations, Relation, RelationError, RelationStats, RelationSummary};
 pub use report::{evaluate, EvalDetail, EvalOptions, EvalReport, TrajectoryMetrics};
-pub use rpe::{rpe, DeltaUnit, Rpe, RpeDelta};
+pub use rpe::{rpe, rpe_positions, DeltaUnit, Rpe, RpeDelta};
 pub use stats::Stats;
 pub use sync::{sync, Matched, SyncOptions};
 pub use traj3::{trajectory_from_stamped, Pose3, Trajectory3};
