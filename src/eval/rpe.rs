@@ -219,4 +219,63 @@ mod tests {
             vec![(0, 2), (2, 4)]
         );
     }
+
+    #[test]
+    fn scale_error_shows_as_known_relative_error_in_every_unit() {
+        // Straight line at 1 m/s, 10 Hz; the estimate reads 2 % long.
+        let n = 101;
+        let m = Matched {
+            ref_stamps: (0..n).map(|i| i as f64 * 0.1).collect(),
+            est_stamps: (0..n).map(|i| i as f64 * 0.1).collect(),
+            reference: (0..n)
+                .map(|i| Pose3::translation(i as f64 * 0.1, 0.0, 0.0))
+                .collect(),
+            estimate: (0..n)
+                .map(|i| Pose3::translation(i as f64 * 0.102, 0.0, 0.0))
+                .collect(),
+        };
+        let s = rpe(
+            &m,
+            &RpeDelta {
+                value: 1.0,
+                unit: DeltaUnit::Seconds,
+            },
+        )
+        .unwrap();
+        // Stamps i·0.1 reach a 1 s step at 10 frames (or 11 by rounding).
+        assert!(s.pairs.len() >= 9 && s.pairs.iter().all(|(i, j)| j - i == 10 || j - i == 11));
+        for (&(i, j), e) in s.pairs.iter().zip(&s.trans_errors) {
+            assert!((e - 0.002 * (j - i) as f64).abs() < 1e-12);
+        }
+        let f = rpe(
+            &m,
+            &RpeDelta {
+                value: 5.0,
+                unit: DeltaUnit::Frames,
+            },
+        )
+        .unwrap();
+        assert_eq!(f.pairs.len(), 20);
+        assert!((f.trans.mean - 0.01).abs() < 1e-12 && f.trans.std < 1e-12);
+        assert!(f.rot_deg.unwrap().max == 0.0);
+        // 1.02 m of estimate path: every 10th frame (10 × 0.102 ≥ 1.02).
+        let d = rpe(
+            &m,
+            &RpeDelta {
+                value: 1.02,
+                unit: DeltaUnit::Metres,
+            },
+        )
+        .unwrap();
+        assert!(d.pairs.iter().all(|(i, j)| j - i == 10 || j - i == 11));
+        let p = rpe_positions(
+            &m,
+            &RpeDelta {
+                value: 5.0,
+                unit: DeltaUnit::Frames,
+            },
+        )
+        .unwrap();
+        assert!((p.trans.mean - 0.01).abs() < 1e-12 && p.rot_deg.is_none());
+    }
 }
