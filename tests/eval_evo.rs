@@ -67,8 +67,8 @@ fn close(ours: f64, evo: f64) -> bool {
     (ours - evo).abs() <= 1e-6 * ours.abs().max(evo.abs()) + 1e-12
 }
 
-fn check_stats(case: &str, key: &str, ours: &eval::Stats, evo: &serde_json::Value) {
-    let ours = serde_json::to_value(ours).unwrap();
+fn check_stats(case: &str, key: &str, ours: &Option<eval::Stats>, evo: &serde_json::Value) {
+    let ours = serde_json::to_value(ours.expect("present")).unwrap();
     for k in ["rmse", "mean", "median", "std", "min", "max"] {
         let (a, b) = (ours[k].as_f64().unwrap(), evo[k].as_f64().unwrap());
         assert!(close(a, b), "{case} {key}.{k}: ours {a} vs evo {b}");
@@ -128,6 +128,7 @@ fn crosscheck(test: &str, seed: u64, dt_ref: f64, dt_est: f64, clock: f64) {
             },
             align,
             rpe_delta,
+            position_only: false,
         };
         let r = eval::evaluate(&estimate, Some(&reference), None, &opts).unwrap();
         let m = r.trajectory.unwrap();
@@ -138,11 +139,27 @@ fn crosscheck(test: &str, seed: u64, dt_ref: f64, dt_est: f64, clock: f64) {
             "{name}: matched"
         );
         assert!(m.matched > 100, "{name}: enough pairs to be meaningful");
-        check_stats(name, "ape", &m.ape, &e["ape"]);
+        check_stats(name, "ape", &Some(m.ape), &e["ape"]);
         check_stats(name, "ape_rot_deg", &m.ape_rot_deg, &e["ape_rot_deg"]);
-        check_stats(name, "rpe", &m.rpe, &e["rpe"]);
+        check_stats(name, "rpe", &Some(m.rpe), &e["rpe"]);
         check_stats(name, "rpe_rot_deg", &m.rpe_rot_deg, &e["rpe_rot_deg"]);
     }
+    // Position-only reference: APE translation and RPE point distance.
+    let opts = EvalOptions {
+        sync,
+        align: Alignment::Se3,
+        rpe_delta: frames,
+        position_only: true,
+    };
+    let m = eval::evaluate(&estimate, Some(&reference), None, &opts)
+        .unwrap()
+        .trajectory
+        .unwrap();
+    let e = &evo["cases"]["points_se3"];
+    assert_eq!(m.matched as u64, e["matched"].as_u64().unwrap());
+    check_stats("points_se3", "ape", &Some(m.ape), &e["ape"]);
+    check_stats("points_se3", "rpe", &Some(m.rpe), &e["rpe"]);
+    assert!(m.ape_rot_deg.is_none() && m.rpe_rot_deg.is_none());
 }
 
 #[test]

@@ -6,3 +6,6 @@ mod support;
 
 mod eval_evo;
 mod sim_scenario;
+mod eval_align;
+mod eval_inputs;
+mod eval_relations;

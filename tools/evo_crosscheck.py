@@ -14,6 +14,8 @@ Cases (evo CLI equivalents):
   rpe_m      evo_rpe ... --delta 1 --delta_unit m   (no alignment)
   se3_rpe_m  evo_rpe ... -a --delta 1 --delta_unit m
   interp     ... --sync_method interpolation        (no alignment)
+  points_se3 evo_ape ... -a -r trans_part / evo_rpe ... -a -r point_distance
+             (position-only references: only `ape` and `rpe` are reported)
 Each case reports `matched`, `ape` (-r trans_part), `ape_rot_deg` (-r angle_deg),
 `rpe` and `rpe_rot_deg` with rmse/mean/median/std/min/max. With --cli, the
 `se3` case is also run through the evo_ape/evo_rpe command lines (--save_results
@@ -88,12 +90,20 @@ def generate(directory, seed):
 
 
 def run_case(ref, est, args, align=False, scale=False, origin=False, unit=metrics.Unit.frames,
-             interpolate=False):
+             interpolate=False, points=False):
     method = SyncMethod.interpolation if interpolate else SyncMethod.nearest_time
     r, e = sync.associate_trajectories(
         ref, est, sync_method=method, max_diff=args.t_max_diff, offset_2=args.t_offset
     )
     out = {"matched": int(r.num_poses)}
+    if points:
+        res = ape(copy.deepcopy(r), copy.deepcopy(e), PR.translation_part, align=align,
+                  correct_scale=scale)
+        out["ape"] = stats(res)
+        res = rpe(copy.deepcopy(r), copy.deepcopy(e), PR.point_distance, delta=1, delta_unit=unit,
+                  align=align, correct_scale=scale)
+        out["rpe"] = stats(res)
+        return out
     for key, rel in (("ape", PR.translation_part), ("ape_rot_deg", PR.rotation_angle_deg)):
         res = ape(copy.deepcopy(r), copy.deepcopy(e), rel, align=align, correct_scale=scale,
                   align_origin=origin)
@@ -152,6 +162,7 @@ def main():
         "rpe_m": run_case(ref, est, args, unit=m),
         "se3_rpe_m": run_case(ref, est, args, align=True, unit=m),
         "interp": run_case(ref, est, args, interpolate=True),
+        "points_se3": run_case(ref, est, args, align=True, points=True),
     }
     if args.cli:
         cases["se3_cli"] = run_cli(args.ref, args.est, args, ["-a"])

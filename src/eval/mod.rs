@@ -8,6 +8,26 @@
 //! estimate onto the reference, [`ape()`] / [`rpe()`] / [`relations()`] measure,
 //! [`evaluate`] runs them all for the command line. Pure functions over
 //! trajectories; reading files is `io`'s job.
+//!
+//! ```
+//! use odocal::eval::{evaluate, Alignment, EvalOptions, Trajectory3};
+//! use odocal::geom::pose;
+//! use odocal::traj::Trajectory;
+//!
+//! let mut truth = Trajectory::default();
+//! let mut odom = Trajectory::default();
+//! for i in 0..100 {
+//!     let t = i as f64 * 0.1;
+//!     truth.push(t, pose(t.cos(), t.sin(), t + 1.57));
+//!     odom.push(t, pose(1.02 * t.cos(), 1.02 * t.sin(), t + 1.57)); // 2 % too long
+//! }
+//! let opts = EvalOptions { align: Alignment::Sim2, ..Default::default() };
+//! let r = evaluate(&Trajectory3::from_2d(&odom), Some(&Trajectory3::from_2d(&truth)), None, &opts)?;
+//! let m = r.trajectory.unwrap();
+//! assert_eq!(m.matched, 100);
+//! assert!(m.ape.rmse < 1e-9); // Sim(2) absorbs the scale error
+//! # Ok::<(), odocal::eval::EvalError>(())
+//! ```
 
 pub mod align;
 pub mod ape;
@@ -25,7 +45,7 @@ pub use ape::{ape, Ape};
 pub use error::EvalError;
 pub use relations::{relations, Relation, RelationError, RelationStats, RelationSummary};
 pub use report::{evaluate, EvalDetail, EvalOptions, EvalReport, TrajectoryMetrics};
-pub use rpe::{rpe, DeltaUnit, Rpe, RpeDelta};
+pub use rpe::{rpe, rpe_positions, DeltaUnit, Rpe, RpeDelta};
 pub use stats::Stats;
 pub use sync::{sync, Matched, SyncOptions};
-pub use traj3::{Pose3, Trajectory3};
+pub use traj3::{trajectory_from_stamped, Pose3, Trajectory3};

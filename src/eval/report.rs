@@ -5,7 +5,7 @@
 use super::align::{align, Alignment};
 use super::ape::{ape, Ape};
 use super::relations::{relations, Relation, RelationStats};
-use super::rpe::{rpe, Rpe, RpeDelta};
+use super::rpe::{rpe, rpe_positions, Rpe, RpeDelta};
 use super::stats::Stats;
 use super::sync::{sync, Matched, SyncOptions};
 use super::traj3::{path_length, Trajectory3};
@@ -23,6 +23,9 @@ pub struct EvalOptions {
     pub align: Alignment,
     /// RPE step.
     pub rpe_delta: RpeDelta,
+    /// The reference has positions only (e.g. PointStamped): rotation figures
+    /// are null, the RPE is evo's point distance, origin alignment is refused.
+    pub position_only: bool,
 }
 
 /// The figures against a reference trajectory (JSON keys of design.md).
@@ -32,16 +35,16 @@ pub struct TrajectoryMetrics {
     pub matched: usize,
     /// APE translation (m).
     pub ape: Stats,
-    /// APE rotation angle (deg).
-    pub ape_rot_deg: Stats,
+    /// APE rotation angle (deg); null for a position-only reference.
+    pub ape_rot_deg: Option<Stats>,
     /// RPE translation (m).
     pub rpe: Stats,
-    /// RPE rotation angle (deg).
-    pub rpe_rot_deg: Stats,
+    /// RPE rotation angle (deg); null for a position-only reference.
+    pub rpe_rot_deg: Option<Stats>,
     /// Seed 000's RMSE x,y (m) after alignment.
     pub rmse_xy: f64,
-    /// Seed 000's RMSE θ (rad) after alignment.
-    pub rmse_theta: f64,
+    /// Seed 000's RMSE θ (rad) after alignment; null for a position-only reference.
+    pub rmse_theta: Option<f64>,
     /// Final position error over reference path length, in % (seed 002's path
     /// error); null when the reference does not move.
     pub drift_percent: Option<f64>,
@@ -125,10 +128,21 @@ pub fn against_reference(
     reference: &Trajectory3,
     opts: &EvalOptions,
 ) -> Result<(TrajectoryMetrics, EvalDetail), EvalError> {
+    if opts.position_only && opts.align == Alignment::Origin {
+        return Err(EvalError::InvalidOption(
+            "origin alignment needs the reference's orientation; the reference has positions only"
+                .into(),
+        ));
+    }
     let matched = sync(reference, estimate, &opts.sync)?;
     let (aligned, transform) = align(&matched, opts.align)?;
     let a = ape(&aligned)?;
-    let r = rpe(&aligned, &opts.rpe_delta)?;
+    let r = if opts.position_only {
+        rpe_positions(&aligned, &opts.rpe_delta)?
+    } else {
+        rpe(&aligned, &opts.rpe_delta)?
+    };
+    let rot = !opts.position_only;
     let last = aligned.len() - 1;
     let final_error = (aligned.estimate[last].translation.vector
         - aligned.reference[last].translation.vector)
@@ -137,11 +151,11 @@ pub fn against_reference(
     let metrics = TrajectoryMetrics {
         matched: aligned.len(),
         ape: a.trans,
-        ape_rot_deg: a.rot_deg,
+        ape_rot_deg: rot.then_some(a.rot_deg),
         rpe: r.trans,
         rpe_rot_deg: r.rot_deg,
         rmse_xy: a.rmse_xy,
-        rmse_theta: a.rmse_theta,
+        rmse_theta: rot.then_some(a.rmse_theta),
         drift_percent: (path > 0.0).then(|| 100.0 * final_error / path),
         final_error,
         path_length: path,
@@ -155,4 +169,85 @@ pub fn against_reference(
             rpe: r,
         },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::pose;
+    use crate::traj::Trajectory;
+
+    #[test]
+    fn json_has_design_keys() {
+        let mut t = Trajectory::default();
+        for i in 0..50 {
+            let a = i as f64 * 0.1;
+            t.push(a, pose(3.0 * a.cos(), 2.0 * a.sin(), a));
+        }
+        let reference = Trajectory3::from_2d(&t);
+        let mut e2 = t.clone();
+        for p in &mut e2.poses {
+            p.translation.x += 0.1;
+        }
+        let estimate = Trajectory3::from_2d(&e2);
+        let rels = [Relation {
+            t1: 0.0,
+            t2: 2.0,
+            delta: crate::geom::between(&t.poses[0], &t.poses[20]),
+        }];
+        let r = evaluate(
+            &estimate,
+            Some(&reference),
+            Some(&rels),
+            &EvalOptions::default(),
+        )
+        .unwrap();
+        let v = serde_json::to_value(&r).unwrap();
+        let keys: Vec<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+        for k in [
+            "matched",
+            "ape",
+            "ape_rot_deg",
+            "rpe",
+            "rpe_rot_deg",
+            "relations",
+            "drift_percent",
+            "final_error",
+        ] {
+            assert!(keys.contains(&k), "missing {k} in {keys:?}");
+        }
+        for k in ["rmse", "mean", "median", "std", "min", "max"] {
+            assert!(v["ape"][k].is_f64() && v["rpe_rot_deg"][k].is_f64(), "{k}");
+        }
+        for k in [
+            "count",
+            "trans_mean",
+            "trans_std",
+            "rot_mean_deg",
+            "rot_std_deg",
+        ] {
+            assert!(
+                !v["relations"][k].is_null() && !v["relations"]["local"][k].is_null(),
+                "{k}"
+            );
+        }
+        assert_eq!(v["matched"], 50);
+        assert!((v["ape"]["mean"].as_f64().unwrap() - 0.1).abs() < 1e-12);
+        assert!((v["final_error"].as_f64().unwrap() - 0.1).abs() < 1e-12);
+        // Position-only reference: rotation figures are null, translation stays.
+        let po = EvalOptions {
+            position_only: true,
+            ..Default::default()
+        };
+        let p = evaluate(&estimate, Some(&reference), None, &po).unwrap();
+        let pv = serde_json::to_value(&p).unwrap();
+        assert!(pv["ape_rot_deg"].is_null() && pv["rpe_rot_deg"].is_null());
+        assert_eq!(pv["ape"], v["ape"]);
+        // Pure translation offset: point distances agree exactly.
+        assert!(pv["rpe"]["max"].as_f64().unwrap() < 1e-12);
+        // Only relations: no trajectory keys.
+        let r = evaluate(&estimate, None, Some(&rels), &EvalOptions::default()).unwrap();
+        let v = serde_json::to_value(&r).unwrap();
+        assert!(v.get("ape").is_none() && v["relations"]["count"] == 1);
+    }
 }

@@ -74,15 +74,15 @@ impl Default for RpeDelta {
 pub struct Rpe {
     /// Translation error statistics (m).
     pub trans: Stats,
-    /// Rotation angle statistics (rad).
-    pub rot_rad: Stats,
-    /// Rotation angle statistics (deg).
-    pub rot_deg: Stats,
+    /// Rotation angle statistics (rad); `None` for position-only RPE.
+    pub rot_rad: Option<Stats>,
+    /// Rotation angle statistics (deg); `None` for position-only RPE.
+    pub rot_deg: Option<Stats>,
     /// Index pairs (i, j) into the matched pairs.
     pub pairs: Vec<(usize, usize)>,
     /// Per-pair translation error (m).
     pub trans_errors: Vec<f64>,
-    /// Per-pair rotation error (rad).
+    /// Per-pair rotation error (rad); empty for position-only RPE.
     pub rot_errors: Vec<f64>,
 }
 
@@ -118,9 +118,10 @@ fn pairs_by_time(stamps: &[f64], delta: f64) -> Vec<(usize, usize)> {
     ids.windows(2).map(|w| (w[0], w[1])).collect()
 }
 
-/// Computes the RPE; pairs are chosen on the estimate (evo's default). An error
-/// for a delta that is not positive (or not whole, for frames) or selects no pair.
-pub fn rpe(m: &Matched, delta: &RpeDelta) -> Result<Rpe, EvalError> {
+/// The index pairs (i, j) for `delta`, chosen on the estimate (evo's default).
+/// An error for a delta that is not positive (or not whole, for frames) or
+/// that selects no pair.
+pub fn rpe_pairs(m: &Matched, delta: &RpeDelta) -> Result<Vec<(usize, usize)>, EvalError> {
     let d = delta.value;
     let valid = d.is_finite() && d > 0.0 && (delta.unit != DeltaUnit::Frames || d.fract() == 0.0);
     if !valid {
@@ -145,6 +146,12 @@ pub fn rpe(m: &Matched, delta: &RpeDelta) -> Result<Rpe, EvalError> {
             unit: delta.unit.word(),
         });
     }
+    Ok(pairs)
+}
+
+/// Computes the full-pose RPE (evo `-r trans_part` and `-r angle_deg`).
+pub fn rpe(m: &Matched, delta: &RpeDelta) -> Result<Rpe, EvalError> {
+    let pairs = rpe_pairs(m, delta)?;
     let mut trans_errors = Vec::with_capacity(pairs.len());
     let mut rot_errors = Vec::with_capacity(pairs.len());
     for &(i, j) in &pairs {
@@ -161,11 +168,36 @@ pub fn rpe(m: &Matched, delta: &RpeDelta) -> Result<Rpe, EvalError> {
     let deg: Vec<f64> = rot_errors.iter().map(|a| a.to_degrees()).collect();
     Ok(Rpe {
         trans: Stats::of(&trans_errors).ok_or_else(bad)?,
-        rot_rad: Stats::of(&rot_errors).ok_or_else(bad)?,
-        rot_deg: Stats::of(&deg).ok_or_else(bad)?,
+        rot_rad: Some(Stats::of(&rot_errors).ok_or_else(bad)?),
+        rot_deg: Some(Stats::of(&deg).ok_or_else(bad)?),
         pairs,
         trans_errors,
         rot_errors,
+    })
+}
+
+/// Position-only RPE for references without orientation (PointStamped):
+/// |‖P_j − P_i‖ − ‖Q_j − Q_i‖| (m), evo's `-r point_distance`.
+pub fn rpe_positions(m: &Matched, delta: &RpeDelta) -> Result<Rpe, EvalError> {
+    let pairs = rpe_pairs(m, delta)?;
+    let dist = |p: &[Pose3], i: usize, j: usize| {
+        (p[j].translation.vector - p[i].translation.vector).norm()
+    };
+    let trans_errors: Vec<f64> = pairs
+        .iter()
+        .map(|&(i, j)| (dist(&m.reference, i, j) - dist(&m.estimate, i, j)).abs())
+        .collect();
+    let trans = Stats::of(&trans_errors).ok_or(EvalError::NonFinite {
+        what: "matched poses",
+        index: 0,
+    })?;
+    Ok(Rpe {
+        trans,
+        rot_rad: None,
+        rot_deg: None,
+        pairs,
+        trans_errors,
+        rot_errors: Vec::new(),
     })
 }
 
@@ -186,5 +218,64 @@ mod tests {
             pairs_by_time(&[0.0, 0.5, 1.0, 1.2, 2.1], 1.0),
             vec![(0, 2), (2, 4)]
         );
+    }
+
+    #[test]
+    fn scale_error_shows_as_known_relative_error_in_every_unit() {
+        // Straight line at 1 m/s, 10 Hz; the estimate reads 2 % long.
+        let n = 101;
+        let m = Matched {
+            ref_stamps: (0..n).map(|i| i as f64 * 0.1).collect(),
+            est_stamps: (0..n).map(|i| i as f64 * 0.1).collect(),
+            reference: (0..n)
+                .map(|i| Pose3::translation(i as f64 * 0.1, 0.0, 0.0))
+                .collect(),
+            estimate: (0..n)
+                .map(|i| Pose3::translation(i as f64 * 0.102, 0.0, 0.0))
+                .collect(),
+        };
+        let s = rpe(
+            &m,
+            &RpeDelta {
+                value: 1.0,
+                unit: DeltaUnit::Seconds,
+            },
+        )
+        .unwrap();
+        // Stamps i·0.1 reach a 1 s step at 10 frames (or 11 by rounding).
+        assert!(s.pairs.len() >= 9 && s.pairs.iter().all(|(i, j)| j - i == 10 || j - i == 11));
+        for (&(i, j), e) in s.pairs.iter().zip(&s.trans_errors) {
+            assert!((e - 0.002 * (j - i) as f64).abs() < 1e-12);
+        }
+        let f = rpe(
+            &m,
+            &RpeDelta {
+                value: 5.0,
+                unit: DeltaUnit::Frames,
+            },
+        )
+        .unwrap();
+        assert_eq!(f.pairs.len(), 20);
+        assert!((f.trans.mean - 0.01).abs() < 1e-12 && f.trans.std < 1e-12);
+        assert!(f.rot_deg.unwrap().max == 0.0);
+        // 1.02 m of estimate path: every 10th frame (10 × 0.102 ≥ 1.02).
+        let d = rpe(
+            &m,
+            &RpeDelta {
+                value: 1.02,
+                unit: DeltaUnit::Metres,
+            },
+        )
+        .unwrap();
+        assert!(d.pairs.iter().all(|(i, j)| j - i == 10 || j - i == 11));
+        let p = rpe_positions(
+            &m,
+            &RpeDelta {
+                value: 5.0,
+                unit: DeltaUnit::Frames,
+            },
+        )
+        .unwrap();
+        assert!((p.trans.mean - 0.01).abs() < 1e-12 && p.rot_deg.is_none());
     }
 }

@@ -147,7 +147,8 @@ pub fn sync(
     estimate: &Trajectory3,
     opts: &SyncOptions,
 ) -> Result<Matched, EvalError> {
-    if !(opts.max_diff >= 0.0 && opts.max_diff.is_finite()) || !opts.offset.is_finite() {
+    let max_diff_ok = opts.max_diff.is_finite() && opts.max_diff >= 0.0;
+    if !max_diff_ok || !opts.offset.is_finite() {
         return Err(EvalError::InvalidOption(format!(
             "max_diff must be finite and ≥ 0 and offset finite (got {}, {})",
             opts.max_diff, opts.offset

@@ -3,6 +3,7 @@
 //! (z = 0, rotation about z) and project back by yaw.
 
 use crate::geom::{self, Pose2};
+use crate::recording::StampedPose;
 use crate::traj::Trajectory;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -22,7 +23,11 @@ impl Trajectory3 {
     /// Builds from parallel vectors; `None` if lengths differ or stamps do not
     /// strictly increase (NaN included).
     pub fn from_parts(stamps: Vec<f64>, poses: Vec<Pose3>) -> Option<Self> {
-        if stamps.len() != poses.len() || stamps.windows(2).any(|w| !(w[1] > w[0])) {
+        if stamps.len() != poses.len()
+            || stamps
+                .windows(2)
+                .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+        {
             return None;
         }
         Some(Self { stamps, poses })
@@ -71,6 +76,20 @@ impl Trajectory3 {
                 || !self.poses[i].rotation.coords.iter().all(|v| v.is_finite())
         })
     }
+}
+
+/// A planar trajectory from time-sorted stamped poses (a recording's odometry
+/// or reference), keeping the first of repeated or backward stamps; also
+/// returns how many samples were dropped.
+pub fn trajectory_from_stamped(samples: &[StampedPose]) -> (Trajectory, usize) {
+    let mut t = Trajectory::with_capacity(samples.len());
+    let mut dropped = 0;
+    for s in samples {
+        if !t.push(s.stamp, s.pose) {
+            dropped += 1;
+        }
+    }
+    (t, dropped)
 }
 
 /// Length (m) of the polyline through the positions of `poses`.

@@ -72,7 +72,8 @@ pub fn umeyama2(
     cov /= n;
     let (dot, cross) = (cov[(0, 0)] + cov[(1, 1)], cov[(1, 0)] - cov[(0, 1)]);
     let trace_ds = dot.hypot(cross);
-    if !(trace_ds > f64::EPSILON) || !(sigma_x > 0.0) {
+    // Written to reject NaN as well.
+    if trace_ds.is_nan() || trace_ds <= f64::EPSILON || sigma_x.is_nan() || sigma_x <= 0.0 {
         return Err(EvalError::DegenerateAlignment(
             "positions do not spread in the plane; SE(2)/Sim(2) alignment is not possible".into(),
         ));

@@ -34,7 +34,7 @@ pub fn parse_tum(text: &str, file: &str) -> Result<Trajectory3, InputError> {
         let [t, x, y, z, qx, qy, qz, qw] = fields::<8>(file, KIND, line_no, line)?;
         let at = || format!("line {line_no}");
         let q = Quaternion::new(qw, qx, qy, qz);
-        if !(q.norm() > 1e-9) {
+        if q.norm() <= 1e-9 {
             return Err(InputError::new(file, "zero quaternion")
                 .topic(KIND)
                 .at(at()));
