@@ -248,13 +248,15 @@ fn eval(a: EvalArgs) -> anyhow::Result<()> {
     }
     let mut read = odocal::io::ReadOptions::for_robot(&robot);
     read.topics = cfg.topics.clone();
-    let est = pipeline::evaluate::load_trajectory(&a.estimate, a.estimate_times.as_deref(), &read)?;
+    let (est, _) =
+        pipeline::evaluate::load_trajectory(&a.estimate, a.estimate_times.as_deref(), &read)?;
     let reference = match &a.reference {
-        Some(r) => Some(pipeline::evaluate::load_trajectory(
-            r,
-            a.reference_times.as_deref(),
-            &read,
-        )?),
+        Some(r) => {
+            let (t, position_only) =
+                pipeline::evaluate::load_trajectory(r, a.reference_times.as_deref(), &read)?;
+            opts.position_only |= position_only;
+            Some(t)
+        }
         None => None,
     };
     let report = pipeline::evaluate::run(&est, reference.as_ref(), a.relations.as_deref(), &opts)?;
@@ -262,32 +264,7 @@ fn eval(a: EvalArgs) -> anyhow::Result<()> {
         return print_json(&report);
     }
     if let Some(t) = &report.trajectory {
-        println!("matched poses     {}", t.matched);
-        println!(
-            "APE (m)           rmse {:.4}  mean {:.4}  median {:.4}  std {:.4}  min {:.4}  max {:.4}",
-            t.ape.rmse, t.ape.mean, t.ape.median, t.ape.std, t.ape.min, t.ape.max
-        );
-        println!(
-            "APE rot (deg)     rmse {:.4}  mean {:.4}  max {:.4}",
-            t.ape_rot_deg.rmse, t.ape_rot_deg.mean, t.ape_rot_deg.max
-        );
-        println!(
-            "RPE (m)           rmse {:.4}  mean {:.4}  max {:.4}",
-            t.rpe.rmse, t.rpe.mean, t.rpe.max
-        );
-        println!(
-            "RPE rot (deg)     rmse {:.4}  mean {:.4}  max {:.4}",
-            t.rpe_rot_deg.rmse, t.rpe_rot_deg.mean, t.rpe_rot_deg.max
-        );
-        println!(
-            "RMSE x,y (m)      {:.4}   RMSE θ (rad) {:.4}",
-            t.rmse_xy, t.rmse_theta
-        );
-        match t.drift_percent {
-            Some(d) => println!("drift             {d:.3} % of {:.1} m", t.path_length),
-            None => println!("drift             n/a (reference does not move)"),
-        }
-        println!("final error (m)   {:.4}", t.final_error);
+        print_trajectory_metrics(t);
     }
     if let Some(r) = &report.relations {
         print_relations(r);
@@ -309,4 +286,31 @@ fn print_relations(r: &odocal::eval::RelationStats) {
     if r.skipped > 0 {
         println!("relations skipped {} (outside the trajectory)", r.skipped);
     }
+}
+
+fn print_stats(name: &str, s: Option<&odocal::eval::Stats>) {
+    match s {
+        Some(s) => println!(
+            "{name:<16} rmse {:.4}  mean {:.4}  median {:.4}  std {:.4}  min {:.4}  max {:.4}",
+            s.rmse, s.mean, s.median, s.std, s.min, s.max
+        ),
+        None => println!("{name:<16} n/a (position-only reference)"),
+    }
+}
+
+fn print_trajectory_metrics(t: &odocal::eval::TrajectoryMetrics) {
+    println!("matched poses    {}", t.matched);
+    print_stats("APE (m)", Some(&t.ape));
+    print_stats("APE rot (deg)", t.ape_rot_deg.as_ref());
+    print_stats("RPE (m)", Some(&t.rpe));
+    print_stats("RPE rot (deg)", t.rpe_rot_deg.as_ref());
+    println!("RMSE x,y (m)     {:.4}", t.rmse_xy);
+    if let Some(r) = t.rmse_theta {
+        println!("RMSE θ (rad)     {r:.4}");
+    }
+    match t.drift_percent {
+        Some(d) => println!("drift            {d:.3} % of {:.1} m", t.path_length),
+        None => println!("drift            n/a (reference does not move)"),
+    }
+    println!("final error (m)  {:.4}", t.final_error);
 }

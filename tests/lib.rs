@@ -4,8 +4,8 @@ mod io_crosscheck;
 mod io_read;
 mod support;
 
-mod eval_evo;
-mod sim_scenario;
 mod eval_align;
+mod eval_evo;
 mod eval_inputs;
 mod eval_relations;
+mod sim_scenario;

@@ -17,12 +17,6 @@ pub mod tum;
 pub use carmen::read_carmen;
 pub use mcap_read::{read_mcap, read_mcap_bytes, ReadOptions, TopicConfig};
 pub use mcap_write::{encode_mcap, write_mcap, WriteError, WriteOptions};
-mod columns;
-pub mod kitti;
-pub mod relations;
-pub mod tum;
-
-pub use mcap_read::{read_mcap, ReadOptions, TopicConfig};
 
 use crate::error::InputError;
 use crate::recording::Recording;

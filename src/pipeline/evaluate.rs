@@ -9,13 +9,14 @@ use std::path::Path;
 
 /// Loads a trajectory: an MCAP's reference stream (or, without one, its
 /// odometry), a KITTI pose file when `times` is given, else a TUM file.
+/// The flag is true for position-only sources (PointStamped references).
 pub fn load_trajectory(
     path: &Path,
     times: Option<&Path>,
     read: &ReadOptions,
-) -> Result<Trajectory3, PipelineError> {
+) -> Result<(Trajectory3, bool), PipelineError> {
     if let Some(t) = times {
-        return Ok(io::kitti::read_kitti(path, t)?);
+        return Ok((io::kitti::read_kitti(path, t)?, false));
     }
     let file = path.display().to_string();
     let mut head = [0u8; 8];
@@ -24,24 +25,15 @@ pub fn load_trajectory(
         .map(|_| head.starts_with(mcap::MAGIC))
         .unwrap_or(false);
     if !is_mcap {
-        return Ok(io::tum::read_tum(path)?);
+        return Ok((io::tum::read_tum(path)?, false));
     }
     let rec = io::read_recording(path, read)?;
-    let (stream, topic) = if !rec.reference.is_empty() {
-        (&rec.reference, &read.topics.reference)
+    let stream = if !rec.reference.is_empty() {
+        &rec.reference
     } else {
-        (&rec.odom, &read.topics.odom)
+        &rec.odom
     };
-    let mut traj = crate::traj::Trajectory::with_capacity(stream.len());
-    for (i, p) in stream.iter().enumerate() {
-        // Equal stamps: keep the first pose (streams are sorted by stamp).
-        if !traj.push(p.stamp, p.pose) && traj.stamps.last() != Some(&p.stamp) {
-            return Err(InputError::new(&file, "stamps are not increasing")
-                .topic(topic.as_str())
-                .at(format!("message {i}"))
-                .into());
-        }
-    }
+    let (traj, _repeated) = eval::trajectory_from_stamped(stream);
     if traj.len() < 2 {
         return Err(InputError::new(
             &file,
@@ -52,7 +44,8 @@ pub fn load_trajectory(
         )
         .into());
     }
-    Ok(Trajectory3::from_2d(&traj))
+    let position_only = stream.iter().any(|s| !s.has_heading);
+    Ok((Trajectory3::from_2d(&traj), position_only))
 }
 
 /// Evaluates `estimate` against `reference` and/or `relations`.
