@@ -2,3 +2,5 @@
 
 mod support;
 mod sim_scenario;
+mod sim_effects;
+mod sim_sensors;
