@@ -13,6 +13,7 @@
 
 mod config;
 mod effects;
+mod grid;
 mod path;
 mod run;
 mod scenario;
