@@ -96,7 +96,10 @@ fn worlds_and_origins() -> Vec<(&'static str, World, Vec<Point2<f64>>)> {
         .map(|i| Point2::new(2.0 + (i % 20) as f64 * 1.9, 2.0 + (i / 20) as f64 * 1.9))
         .filter(|p| clutter.distance(*p) > 0.3)
         .collect();
-    vec![("corridor_loop", corridor, pts), ("cluttered_2000", clutter, free)]
+    vec![
+        ("corridor_loop", corridor, pts),
+        ("cluttered_2000", clutter, free),
+    ]
 }
 
 fn wall_time(c: &mut Criterion) {

@@ -11,7 +11,11 @@ use odocal::traj::Trajectory;
 
 /// Drives `scenario` for `duration` s with `effects` and returns the true
 /// motion, the encoder samples and the nominal odometry from them.
-fn odometry(scenario: &str, duration: f64, effects: &[Effect]) -> (Drive, Vec<WheelSample>, Trajectory) {
+fn odometry(
+    scenario: &str,
+    duration: f64,
+    effects: &[Effect],
+) -> (Drive, Vec<WheelSample>, Trajectory) {
     let mut cfg = SimConfig::default();
     cfg.scenario.name = scenario.into();
     cfg.duration_s = duration;
@@ -20,7 +24,14 @@ fn odometry(scenario: &str, duration: f64, effects: &[Effect]) -> (Drive, Vec<Wh
     let d = drive(&scn, &cfg.scenario, duration, 1.0 / cfg.integration_hz);
     let truth = TrueRobot::new(&robot, effects);
     let track = WheelTrack::new(&d, &truth);
-    let wheels = encoder_samples(&cfg.encoder, robot.ticks_per_rev, &track, &truth, cfg.seed, duration);
+    let wheels = encoder_samples(
+        &cfg.encoder,
+        robot.ticks_per_rev,
+        &track,
+        &truth,
+        cfg.seed,
+        duration,
+    );
     let start = geom::pose(d.x[0], d.y[0], d.theta[0]);
     let odo = wheel_odometry(&robot.diff_drive(), &wheels, start);
     (d, wheels, odo)
@@ -67,7 +78,10 @@ fn radius_scale_stretches_the_path_by_the_expected_factor() {
     let ratio = true_len / odo.path_length();
     assert!((ratio - (1.0 + s)).abs() < 2e-4, "ratio {ratio}");
     // Unequal radii bend the nominal path: heading error grows with distance.
-    let e = [Effect::RadiusScale { right: 0.01, left: -0.01 }];
+    let e = [Effect::RadiusScale {
+        right: 0.01,
+        left: -0.01,
+    }];
     let (d, _, odo) = odometry("square", 60.0, &e);
     let t_end = *odo.stamps.last().unwrap();
     let err = geom::between(&true_pose(&d, t_end), odo.poses.last().unwrap());
@@ -89,7 +103,11 @@ fn wheel_base_scale_and_turn_slip_scale_the_nominal_heading_change() {
 
 #[test]
 fn radius_step_changes_the_odometry_scale_at_its_time() {
-    let e = [Effect::RadiusStep { time: 30.0, right: 0.0064, left: 0.0064 }];
+    let e = [Effect::RadiusStep {
+        time: 30.0,
+        right: 0.0064,
+        left: 0.0064,
+    }];
     let (d, _, odo) = odometry("corridor-loop", 60.0, &e);
     // Speed ratio true/nominal: 1 before, (0.32 + 0.0064)/0.32 = 1.02 after.
     let speed_ratio = |t0: f64, t1: f64| {
@@ -99,7 +117,9 @@ fn radius_step_changes_the_odometry_scale_at_its_time() {
             .windows(2)
             .map(|p| (p[1].translation.vector - p[0].translation.vector).norm())
             .sum();
-        let truth: f64 = (((t0 / d.dt) as usize)..((t1 / d.dt) as usize)).map(|k| d.v[k] * d.dt).sum();
+        let truth: f64 = (((t0 / d.dt) as usize)..((t1 / d.dt) as usize))
+            .map(|k| d.v[k] * d.dt)
+            .sum();
         truth / nominal
     };
     let before = speed_ratio(20.0, 29.9);

@@ -267,7 +267,10 @@ impl SimConfig {
             ("scenario.max_speed", self.scenario.max_speed),
             ("scenario.max_turn_rate", self.scenario.max_turn_rate),
             ("scenario.max_accel", self.scenario.max_accel),
-            ("scenario.max_angular_accel", self.scenario.max_angular_accel),
+            (
+                "scenario.max_angular_accel",
+                self.scenario.max_angular_accel,
+            ),
         ];
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -300,8 +303,7 @@ impl SimConfig {
             return bad("cruise_speed/turn_rate must not exceed max_speed/max_turn_rate".into());
         }
         let l = &self.laser;
-        if l.range_min >= l.range_max || l.fov_deg > 360.0 || l.beams() < 2 || l.beams() > 100_000
-        {
+        if l.range_min >= l.range_max || l.fov_deg > 360.0 || l.beams() < 2 || l.beams() > 100_000 {
             return bad("laser: need range_min < range_max, fov ≤ 360°, 2..100000 beams".into());
         }
         if self.integration_hz < l.rate_hz.max(self.encoder.rate_hz).max(self.gyro.rate_hz) {
@@ -326,8 +328,10 @@ mod tests {
 
     #[test]
     fn bad_values_are_refused() {
-        let mut c = SimConfig::default();
-        c.duration_s = f64::NAN;
+        let c = SimConfig {
+            duration_s: f64::NAN,
+            ..Default::default()
+        };
         assert!(c.validate().is_err());
         let mut c = SimConfig::default();
         c.laser.range_min = 30.0;

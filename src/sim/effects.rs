@@ -147,11 +147,17 @@ mod tests {
     #[test]
     fn turn_slip_widens_the_effective_base_and_gain_over_reads() {
         let robot = RobotConfig::default();
-        let t = TrueRobot::new(&robot, &[Effect::TurnSlip { k: 0.1 }, Effect::EncoderGain { k: 0.02 }]);
+        let t = TrueRobot::new(
+            &robot,
+            &[Effect::TurnSlip { k: 0.1 }, Effect::EncoderGain { k: 0.02 }],
+        );
         let (r, l) = t.wheel_rates(0.0, 0.0, 1.0);
         let nominal = robot.diff_drive();
         let (_, w_nom) = nominal.body_velocity(r, l);
-        assert!((w_nom - 1.1).abs() < 1e-12, "nominal model over-reads the turn");
+        assert!(
+            (w_nom - 1.1).abs() < 1e-12,
+            "nominal model over-reads the turn"
+        );
         assert!((t.measured_rate(-2.0) - (-2.0 * 1.04)).abs() < 1e-12);
     }
 }

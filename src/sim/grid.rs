@@ -48,8 +48,14 @@ impl Grid {
             for iy in iy0..=iy1 {
                 for ix in ix0..=ix1 {
                     let eps = 1e-9;
-                    let bx = [x0 + ix as f64 * cell - eps, x0 + (ix + 1) as f64 * cell + eps];
-                    let by = [y0 + iy as f64 * cell - eps, y0 + (iy + 1) as f64 * cell + eps];
+                    let bx = [
+                        x0 + ix as f64 * cell - eps,
+                        x0 + (ix + 1) as f64 * cell + eps,
+                    ];
+                    let by = [
+                        y0 + iy as f64 * cell - eps,
+                        y0 + (iy + 1) as f64 * cell + eps,
+                    ];
                     if segment_touches_box(s, bx, by) {
                         lists[iy * nx + ix].push(k as u32);
                     }
@@ -93,7 +99,8 @@ impl Grid {
         let (ty0, ty1) = ((self.y0 - oy) * iy_inv, (gy1 - oy) * iy_inv);
         let t_enter = tx0.min(tx1).max(ty0.min(ty1)).max(0.0);
         let t_exit = tx0.max(tx1).min(ty0.max(ty1)).min(max);
-        if !(t_enter <= t_exit) {
+        // Both are NaN-free: f64::min/max drop a NaN operand.
+        if t_enter > t_exit {
             return None;
         }
         let px = ox + dx * t_enter;

@@ -68,5 +68,7 @@ fn mix(mut z: u64) -> u64 {
 
 /// The generator of one stream (and one item of it, e.g. a scan index).
 fn stream_rng(seed: u64, stream: u64, index: u64) -> StdRng {
-    StdRng::seed_from_u64(mix(mix(seed) ^ mix(stream.wrapping_mul(0x1000_0000_01B3) ^ mix(index))))
+    StdRng::seed_from_u64(mix(
+        mix(seed) ^ mix(stream.wrapping_mul(0x1000_0000_01B3) ^ mix(index))
+    ))
 }

@@ -101,7 +101,12 @@ impl Path {
         for i in 1..n {
             s[i] = s[i - 1] + (points[i] - points[i - 1]).norm();
         }
-        let length = s[n - 1] + if closed { (points[0] - points[n - 1]).norm() } else { 0.0 };
+        let length = s[n - 1]
+            + if closed {
+                (points[0] - points[n - 1]).norm()
+            } else {
+                0.0
+            };
         let idx = |i: isize| -> usize {
             if closed {
                 i.rem_euclid(n as isize) as usize
@@ -205,10 +210,18 @@ mod tests {
     #[test]
     fn rounded_square_has_expected_length_and_curvature() {
         let r = 1.0;
-        let p = Path::rounded(&[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]], r, true)
-            .unwrap();
+        let p = Path::rounded(
+            &[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]],
+            r,
+            true,
+        )
+        .unwrap();
         let expected = 40.0 - 4.0 * (2.0 * r) + 4.0 * (std::f64::consts::FRAC_PI_2 * r);
-        assert!((p.length - expected).abs() < 1e-3, "{} vs {expected}", p.length);
+        assert!(
+            (p.length - expected).abs() < 1e-3,
+            "{} vs {expected}",
+            p.length
+        );
         let kmax = p.curvature.iter().cloned().fold(0.0, f64::max);
         assert!((kmax - 1.0 / r).abs() < 0.02, "{kmax}");
         assert!(p.curvature.iter().all(|k| *k > -1e-6), "counter-clockwise");

@@ -7,7 +7,7 @@ use super::scenario::{drive, Scenario};
 use super::sensors::{
     encoder_samples, gyro_samples, laser_scans, reference_poses, sample_times, WheelTrack,
 };
-use super::truth::{TruePose, TrueParameters, Truth};
+use super::truth::{TrueParameters, TruePose, Truth};
 use super::SimError;
 use crate::effects::Effect;
 use crate::geom::wrap_angle;

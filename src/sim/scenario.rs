@@ -71,7 +71,11 @@ impl Scenario {
                         )))
                     }
                 };
-                (sc.name.clone(), WorldRef::Name(w.into()), RouteSource::Builtin)
+                (
+                    sc.name.clone(),
+                    WorldRef::Name(w.into()),
+                    RouteSource::Builtin,
+                )
             }
         };
         let world = resolve_world(cfg.world.world.as_ref().unwrap_or(&default_world))?;
@@ -117,7 +121,12 @@ fn resolve_world(r: &WorldRef) -> Result<World, SimError> {
     }
 }
 
-fn smooth(waypoints: &[[f64; 2]], radius: f64, closed: bool, sc: &ScenarioConfig) -> Result<Route, SimError> {
+fn smooth(
+    waypoints: &[[f64; 2]],
+    radius: f64,
+    closed: bool,
+    sc: &ScenarioConfig,
+) -> Result<Route, SimError> {
     let mut p = Path::rounded(waypoints, radius, closed)?;
     p.plan_speed(sc.cruise_speed, sc.turn_rate, 0.8 * sc.max_accel);
     Ok(Route::Smooth(p))
@@ -125,7 +134,11 @@ fn smooth(waypoints: &[[f64; 2]], radius: f64, closed: bool, sc: &ScenarioConfig
 
 fn custom_route(spec: &ScenarioSpec, sc: &ScenarioConfig) -> Result<Route, SimError> {
     if spec.stop_and_turn {
-        let w: Vec<_> = spec.waypoints.iter().map(|p| Point2::new(p[0], p[1])).collect();
+        let w: Vec<_> = spec
+            .waypoints
+            .iter()
+            .map(|p| Point2::new(p[0], p[1]))
+            .collect();
         if w.len() < 2 || w.windows(2).any(|p| (p[1] - p[0]).norm() < 0.1) {
             return Err(SimError::Scenario(format!(
                 "scenario '{}': need ≥ 2 waypoints, 0.1 m apart",
@@ -143,7 +156,12 @@ fn custom_route(spec: &ScenarioSpec, sc: &ScenarioConfig) -> Result<Route, SimEr
     smooth(&spec.waypoints, spec.corner_radius, spec.closed, sc)
 }
 
-fn builtin_route(name: &str, sc: &ScenarioConfig, world: &World, cfg: &SimConfig) -> Result<Route, SimError> {
+fn builtin_route(
+    name: &str,
+    sc: &ScenarioConfig,
+    world: &World,
+    cfg: &SimConfig,
+) -> Result<Route, SimError> {
     let square = |ccw: bool| {
         let mut w = vec![
             Point2::new(2.0, 2.0),
@@ -226,7 +244,11 @@ fn random_waypoints(world: &World, seed: u64, length: f64) -> Result<Vec<[f64; 2
     let mut total = 0.0;
     let mut stuck = 0;
     while total < length {
-        let turn_limit = if stuck > 200 { 3.1 } else { 100f64.to_radians() };
+        let turn_limit = if stuck > 200 {
+            3.1
+        } else {
+            100f64.to_radians()
+        };
         let h = heading + rng.random_range(-turn_limit..turn_limit);
         let len = rng.random_range(2.0..6.0);
         let q = p + nalgebra::Vector2::new(h.cos(), h.sin()) * len;
@@ -283,31 +305,33 @@ impl Drive {
     }
 }
 
+/// The command of step k given the pose at its start: `(v m/s, w rad/s)`.
+type Command<'a> = Box<dyn FnMut(usize, [f64; 3]) -> (f64, f64) + 'a>;
+
 /// Drives the scenario for `duration` s in steps of `dt` s.
 pub fn drive(scn: &Scenario, sc: &ScenarioConfig, duration: f64, dt: f64) -> Drive {
     let steps = (duration / dt).round().max(1.0) as usize;
-    let (start, mut cmd): ([f64; 3], Box<dyn FnMut(usize, [f64; 3]) -> (f64, f64)>) =
-        match &scn.route {
-            Route::Smooth(path) => {
-                let mut f = Follower::new(path, sc, dt);
-                let start = [path.points[0].x, path.points[0].y, path.heading[0]];
-                (start, Box::new(move |k, p| f.command(k, p)))
-            }
-            Route::StopAndTurn { waypoints, closed } => {
-                let sched = Schedule::new(waypoints, *closed, sc, duration + 1.0);
-                let d = waypoints[1] - waypoints[0];
-                let start = [waypoints[0].x, waypoints[0].y, d.y.atan2(d.x)];
-                (
-                    start,
-                    Box::new(move |k, _| {
-                        let (t0, t1) = (k as f64 * dt, (k + 1) as f64 * dt);
-                        let (d0, a0) = sched.at(t0);
-                        let (d1, a1) = sched.at(t1);
-                        ((d1 - d0) / dt, (a1 - a0) / dt)
-                    }),
-                )
-            }
-        };
+    let (start, mut cmd): ([f64; 3], Command) = match &scn.route {
+        Route::Smooth(path) => {
+            let mut f = Follower::new(path, sc, dt);
+            let start = [path.points[0].x, path.points[0].y, path.heading[0]];
+            (start, Box::new(move |k, p| f.command(k, p)))
+        }
+        Route::StopAndTurn { waypoints, closed } => {
+            let sched = Schedule::new(waypoints, *closed, sc, duration + 1.0);
+            let d = waypoints[1] - waypoints[0];
+            let start = [waypoints[0].x, waypoints[0].y, d.y.atan2(d.x)];
+            (
+                start,
+                Box::new(move |k, _| {
+                    let (t0, t1) = (k as f64 * dt, (k + 1) as f64 * dt);
+                    let (d0, a0) = sched.at(t0);
+                    let (d1, a1) = sched.at(t1);
+                    ((d1 - d0) / dt, (a1 - a0) / dt)
+                }),
+            )
+        }
+    };
     let mut d = Drive {
         dt,
         v: Vec::with_capacity(steps),
@@ -325,7 +349,11 @@ pub fn drive(scn: &Scenario, sc: &ScenarioConfig, duration: f64, dt: f64) -> Dri
         let inc = geom::arc_increment(v, w, dt);
         let (s, c) = p[2].sin_cos();
         let (dx, dy) = (inc.translation.x, inc.translation.y);
-        p = [p[0] + c * dx - s * dy, p[1] + s * dx + c * dy, p[2] + w * dt];
+        p = [
+            p[0] + c * dx - s * dy,
+            p[1] + s * dx + c * dy,
+            p[2] + w * dt,
+        ];
         d.v.push(v);
         d.w.push(w);
         d.x.push(p[0]);
@@ -362,7 +390,12 @@ impl<'a> Follower<'a> {
             w: 0.0,
             dt,
             hold_steps: (sc.start_hold_s / dt).round() as usize,
-            lim: [sc.max_speed, sc.max_turn_rate, sc.max_accel, sc.max_angular_accel],
+            lim: [
+                sc.max_speed,
+                sc.max_turn_rate,
+                sc.max_accel,
+                sc.max_angular_accel,
+            ],
         }
     }
 
@@ -465,8 +498,7 @@ impl Schedule {
         let d = amount.abs();
         let vp = peak.min((d * acc).sqrt());
         let dur = if vp > 0.0 { d / vp + vp / acc } else { 0.0 };
-        self.phases
-            .push((self.end.0, dur, amount, turn, vp, acc));
+        self.phases.push((self.end.0, dur, amount, turn, vp, acc));
         self.base.push((self.end.1, self.end.2));
         self.end.0 += dur;
         if turn {

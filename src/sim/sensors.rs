@@ -121,14 +121,23 @@ pub fn gyro_samples(
 
 /// Reference poses `world_from_base` with small white noise, like a LOAM
 /// trajectory (heading included).
-pub fn reference_poses(cfg: &ReferenceConfig, drive: &Drive, seed: u64, duration: f64) -> Vec<StampedPose> {
+pub fn reference_poses(
+    cfg: &ReferenceConfig,
+    drive: &Drive,
+    seed: u64,
+    duration: f64,
+) -> Vec<StampedPose> {
     let mut rng = stream_rng(seed, STREAM_REFERENCE, 0);
     let np = Normal::new(0.0, cfg.position_sigma).expect("validated sigma");
     let nh = Normal::new(0.0, cfg.heading_sigma).expect("validated sigma");
     sample_times(cfg.rate_hz, duration, 0.0)
         .map(|t| {
             let [x, y, th] = drive.pose_at(t);
-            let (ex, ey, eh) = (np.sample(&mut rng), np.sample(&mut rng), nh.sample(&mut rng));
+            let (ex, ey, eh) = (
+                np.sample(&mut rng),
+                np.sample(&mut rng),
+                nh.sample(&mut rng),
+            );
             StampedPose {
                 stamp: t,
                 pose: geom::pose(x + ex, y + ey, geom::wrap_angle(th + eh)),
@@ -169,7 +178,11 @@ pub fn laser_scans(
     let one = |k: usize, stamp: f64| {
         let mut rng = stream_rng(seed, STREAM_LASER, k as u64);
         let a = laser_pose(stamp);
-        let b = if cfg.sweep_motion { laser_pose(stamp + sweep) } else { a };
+        let b = if cfg.sweep_motion {
+            laser_pose(stamp + sweep)
+        } else {
+            a
+        };
         let ranges = (0..beams)
             .map(|i| {
                 let f = i as f64 / (beams - 1) as f64;

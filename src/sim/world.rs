@@ -171,9 +171,7 @@ impl World {
     ) {
         for (i, r) in out.iter_mut().enumerate() {
             let a = first + i as f64 * increment;
-            *r = self
-                .cast_ray(origin, a, max_range)
-                .unwrap_or(f64::INFINITY);
+            *r = self.cast_ray(origin, a, max_range).unwrap_or(f64::INFINITY);
         }
     }
 
@@ -253,7 +251,12 @@ mod tests {
             assert!(hits > 500, "enough hits to compare: {hits}");
             // Axis-parallel rays, exactly.
             let c = Point2::new((x0 + x1) / 2.0 + 0.01, (y0 + y1) / 2.0 + 0.01);
-            for a in [0.0, std::f64::consts::FRAC_PI_2, std::f64::consts::PI, -std::f64::consts::FRAC_PI_2] {
+            for a in [
+                0.0,
+                std::f64::consts::FRAC_PI_2,
+                std::f64::consts::PI,
+                -std::f64::consts::FRAC_PI_2,
+            ] {
                 let (g, b) = (w.cast_ray(c, a, 100.0), w.cast_ray_bvh(c, a, 100.0));
                 assert!((g.unwrap() - b.unwrap()).abs() < 1e-9);
             }
