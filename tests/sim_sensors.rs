@@ -96,6 +96,11 @@ fn streams_have_their_rates_and_encoders_count_whole_ticks() {
     assert!(rec.reference.iter().all(|p| p.has_heading));
     assert_eq!(rec.base_from_laser, Some(robot.laser.pose()));
     assert_eq!(truth.trajectory.len(), 601);
+    assert_eq!(truth.world, "corridor-loop");
+    assert_eq!(
+        truth.walls,
+        worlds::builtin("corridor-loop").unwrap().segments()
+    );
     assert!(truth.parameters.len() >= 61);
 }
 
@@ -233,7 +238,11 @@ fn fine_resolution_at_25_hz_gives_1081_beams() {
     cfg.laser.resolution_deg = 0.25;
     let (rec, _) = simulate(&cfg, &RobotConfig::default(), &[], &mut |_| {}).unwrap();
     assert!(rec.scans.iter().all(|s| s.ranges.len() == 1081));
-    assert_eq!(rec.scans.len(), 50, "25 Hz for 2 s, last sweep inside the run");
+    assert_eq!(
+        rec.scans.len(),
+        50,
+        "25 Hz for 2 s, last sweep inside the run"
+    );
     assert!((rec.scans[1].stamp - 0.04).abs() < 1e-12);
     let s = &rec.scans[0];
     assert!((s.beam_angle(1080) - 135f64.to_radians()).abs() < 1e-9);

@@ -101,6 +101,7 @@ pub fn simulate(
     let truth = Truth {
         scenario: scenario.name.clone(),
         world: scenario.world.name().to_string(),
+        walls: scenario.world.segments().to_vec(),
         seed: cfg.seed,
         duration_s: duration,
         nominal: robot.clone(),
