@@ -2,8 +2,9 @@
 //! every sensor observe the result.
 
 use super::config::SimConfig;
+use super::drive::drive;
 use super::effects::TrueRobot;
-use super::scenario::{drive, Scenario};
+use super::scenario::Scenario;
 use super::sensors::{
     encoder_samples, gyro_samples, laser_scans, reference_poses, sample_times, WheelTrack,
 };
