@@ -1,14 +1,63 @@
 //! Ray-casting throughput of the simulator's worlds: one full 541-beam LMS111
 //! scan (270°, 0.5°) per iteration, in the corridor loop and in a
-//! ~2000-segment cluttered world. Rays/s = 541 / time per iteration.
+//! ~2000-segment cluttered world. Rays/s = 541 / time per iteration. Also
+//! the whole default simulation (120 s corridor loop).
+//!
+//! The `raycast_cpu` group measures the thread's CPU time instead of wall
+//! time, so the one-core figure holds on a shared, loaded machine.
 
+use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nalgebra::Point2;
-use odocal::sim::{worlds, World};
+use odocal::robot::RobotConfig;
+use odocal::sim::{simulate, worlds, SimConfig, World};
 use std::hint::black_box;
 
-fn scan_bench(c: &mut Criterion, label: &str, world: &World, origins: &[Point2<f64>]) {
-    let mut g = c.benchmark_group("raycast");
+/// CPU time (ns) consumed by the calling thread.
+struct ThreadCpu;
+
+fn thread_cpu_ns() -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes into the timespec we own.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+impl Measurement for ThreadCpu {
+    type Intermediate = u64;
+    type Value = u64;
+    fn start(&self) -> u64 {
+        thread_cpu_ns()
+    }
+    fn end(&self, i: u64) -> u64 {
+        thread_cpu_ns() - i
+    }
+    fn add(&self, a: &u64, b: &u64) -> u64 {
+        a + b
+    }
+    fn zero(&self) -> u64 {
+        0
+    }
+    fn to_f64(&self, v: &u64) -> f64 {
+        *v as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        static WALL: WallTime = WallTime;
+        WALL.formatter()
+    }
+}
+
+fn scan_bench<M: Measurement>(
+    c: &mut Criterion<M>,
+    group: &str,
+    label: &str,
+    world: &World,
+    origins: &[Point2<f64>],
+) {
+    let mut g = c.benchmark_group(group);
     g.throughput(Throughput::Elements(541));
     let mut out = vec![0.0; 541];
     let mut k = 0usize;
@@ -24,7 +73,7 @@ fn scan_bench(c: &mut Criterion, label: &str, world: &World, origins: &[Point2<f
     g.finish();
 }
 
-fn benches(c: &mut Criterion) {
+fn worlds_and_origins() -> Vec<(&'static str, World, Vec<Point2<f64>>)> {
     let corridor = worlds::builtin("corridor-loop").unwrap();
     let pts: Vec<_> = (0..64)
         .map(|i| {
@@ -42,14 +91,45 @@ fn benches(c: &mut Criterion) {
             Point2::new(x, y)
         })
         .collect();
-    scan_bench(c, "corridor_loop", &corridor, &pts);
     let clutter = worlds::cluttered(2000, 7);
     let free: Vec<_> = (0..400)
         .map(|i| Point2::new(2.0 + (i % 20) as f64 * 1.9, 2.0 + (i / 20) as f64 * 1.9))
         .filter(|p| clutter.distance(*p) > 0.3)
         .collect();
-    scan_bench(c, "cluttered_2000", &clutter, &free);
+    vec![
+        ("corridor_loop", corridor, pts),
+        ("cluttered_2000", clutter, free),
+    ]
 }
 
-criterion_group!(raycast, benches);
-criterion_main!(raycast);
+fn wall_time(c: &mut Criterion) {
+    for (label, world, origins) in worlds_and_origins() {
+        scan_bench(c, "raycast", label, &world, &origins);
+    }
+}
+
+fn cpu_time(c: &mut Criterion<ThreadCpu>) {
+    for (label, world, origins) in worlds_and_origins() {
+        scan_bench(c, "raycast_cpu", label, &world, &origins);
+    }
+}
+
+/// The whole default run: corridor loop, 120 s, 6000 scans of 541 beams.
+fn simulate_default(c: &mut Criterion) {
+    let mut g = c.benchmark_group("simulate");
+    g.sample_size(10);
+    let cfg = SimConfig::default();
+    let robot = RobotConfig::default();
+    g.bench_function("corridor_loop_120s", |b| {
+        b.iter(|| black_box(simulate(&cfg, &robot, &[], &mut |_| {}).unwrap()))
+    });
+    g.finish();
+}
+
+criterion_group!(raycast, wall_time, simulate_default);
+criterion_group! {
+    name = raycast_cpu;
+    config = Criterion::default().with_measurement(ThreadCpu);
+    targets = cpu_time
+}
+criterion_main!(raycast, raycast_cpu);

@@ -118,8 +118,10 @@ fn square_runs_stop_turn_in_place_and_close_each_lap() {
 
 #[test]
 fn custom_json_scenarios_drive_and_bad_ones_are_refused() {
-    let mut cfg = SimConfig::default();
-    cfg.duration_s = 60.0;
+    let mut cfg = SimConfig {
+        duration_s: 60.0,
+        ..Default::default()
+    };
     cfg.scenario.custom = Some(
         ScenarioSpec::from_json(
             r#"{"name": "triangle", "world": "square-room",

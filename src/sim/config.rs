@@ -328,8 +328,10 @@ mod tests {
 
     #[test]
     fn bad_values_are_refused() {
-        let mut c = SimConfig::default();
-        c.duration_s = f64::NAN;
+        let c = SimConfig {
+            duration_s: f64::NAN,
+            ..Default::default()
+        };
         assert!(c.validate().is_err());
         let mut c = SimConfig::default();
         c.laser.range_min = 30.0;

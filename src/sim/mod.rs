@@ -12,7 +12,9 @@
 //! [`Recording`]: crate::recording::Recording
 
 mod config;
+mod drive;
 mod effects;
+mod grid;
 mod path;
 mod run;
 mod scenario;
@@ -25,10 +27,11 @@ pub use config::{
     EncoderConfig, GyroConfig, LaserConfig, ReferenceConfig, ScenarioConfig, ScenarioSpec,
     SimConfig, WorldConfig, WorldRef,
 };
+pub use drive::{drive, Drive};
 pub use effects::TrueRobot;
 pub use path::Path;
 pub use run::simulate;
-pub use scenario::{drive, Drive, Route, Scenario, BUILTIN_SCENARIOS};
+pub use scenario::{Route, Scenario, BUILTIN_SCENARIOS};
 pub use sensors::{encoder_samples, gyro_samples, laser_scans, reference_poses, WheelTrack};
 pub use truth::{TrueParameters, TruePose, Truth};
 pub use world::{World, WorldSpec};

@@ -2,8 +2,9 @@
 //! every sensor observe the result.
 
 use super::config::SimConfig;
+use super::drive::drive;
 use super::effects::TrueRobot;
-use super::scenario::{drive, Scenario};
+use super::scenario::Scenario;
 use super::sensors::{
     encoder_samples, gyro_samples, laser_scans, reference_poses, sample_times, WheelTrack,
 };
@@ -101,6 +102,7 @@ pub fn simulate(
     let truth = Truth {
         scenario: scenario.name.clone(),
         world: scenario.world.name().to_string(),
+        walls: scenario.world.segments().to_vec(),
         seed: cfg.seed,
         duration_s: duration,
         nominal: robot.clone(),

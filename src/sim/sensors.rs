@@ -4,8 +4,8 @@
 //! its noise from its own seeded generator, so adding a sensor changes no other.
 
 use super::config::{EncoderConfig, GyroConfig, LaserConfig, ReferenceConfig};
+use super::drive::Drive;
 use super::effects::TrueRobot;
-use super::scenario::Drive;
 use super::world::World;
 use super::{stream_rng, STREAM_ENCODER, STREAM_GYRO, STREAM_LASER, STREAM_REFERENCE};
 use crate::geom;

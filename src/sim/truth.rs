@@ -42,6 +42,8 @@ pub struct Truth {
     pub scenario: String,
     /// World name (`custom` for inline maps).
     pub world: String,
+    /// The world's walls `[x0, y0, x1, y1]` (m), e.g. to draw the map.
+    pub walls: Vec<[f64; 4]>,
     /// Seed of the run.
     pub seed: u64,
     /// Length of the run (s).

@@ -1,6 +1,8 @@
-//! A 2D world of wall segments (m, world frame) with fast ray casting through
-//! parry's bounding-volume hierarchy, and point clearance queries.
+//! A 2D world of wall segments (m, world frame) with fast ray casting (a
+//! uniform grid, cross-checked against parry's BVH) and point clearance
+//! queries (parry's polyline).
 
+use super::grid::Grid;
 use super::SimError;
 use nalgebra::Point2;
 use parry2d_f64::math::Vector;
@@ -38,12 +40,14 @@ impl WorldSpec {
     }
 }
 
-/// Walls as line segments with a BVH for ray casting. Units: m, world frame.
+/// Walls as line segments, binned for ray casting and in a BVH for distance
+/// queries. Units: m, world frame.
 #[derive(Clone)]
 pub struct World {
     name: String,
     segments: Vec<[f64; 4]>,
     shape: Polyline,
+    grid: Grid,
 }
 
 impl std::fmt::Debug for World {
@@ -82,6 +86,7 @@ impl World {
         }
         Ok(Self {
             name: name.to_string(),
+            grid: Grid::new(&segments),
             segments,
             shape: Polyline::new(vertices, Some(indices)),
         })
@@ -139,6 +144,13 @@ impl World {
     /// to the first wall, if one lies within `max_range` (m).
     #[inline]
     pub fn cast_ray(&self, origin: Point2<f64>, angle: f64, max_range: f64) -> Option<f64> {
+        let (s, c) = angle.sin_cos();
+        self.grid.cast(origin.x, origin.y, c, s, max_range)
+    }
+
+    /// Same as [`cast_ray`](Self::cast_ray) through parry's BVH: slower, an
+    /// independent implementation to check the grid against.
+    pub fn cast_ray_bvh(&self, origin: Point2<f64>, angle: f64, max_range: f64) -> Option<f64> {
         let (s, c) = angle.sin_cos();
         let ray = Ray::new(Vector::new(origin.x, origin.y), Vector::new(c, s));
         self.shape
@@ -210,6 +222,45 @@ mod tests {
         assert!((diag - 2f64.sqrt()).abs() < 1e-12);
         assert_eq!(w.cast_ray(o, 0.0, 2.5), None, "beyond max range");
         assert!((w.distance(Point2::new(3.5, 1.0)) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn grid_and_bvh_agree_on_random_rays() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        for w in [super::super::worlds::cluttered(600, 3), unit_box()] {
+            let [x0, y0, x1, y1] = w.bounds();
+            let mut hits = 0;
+            for _ in 0..3000 {
+                let o = Point2::new(
+                    rng.random_range(x0 - 2.0..x1 + 2.0),
+                    rng.random_range(y0 - 2.0..y1 + 2.0),
+                );
+                let a = rng.random_range(-4.0..4.0);
+                let max = rng.random_range(0.5..30.0);
+                let (g, b) = (w.cast_ray(o, a, max), w.cast_ray_bvh(o, a, max));
+                match (g, b) {
+                    (Some(g), Some(b)) => {
+                        assert!((g - b).abs() < 1e-9, "{g} vs {b}");
+                        hits += 1;
+                    }
+                    (None, None) => {}
+                    other => panic!("grid and BVH disagree: {other:?} from {o} at {a}"),
+                }
+            }
+            assert!(hits > 500, "enough hits to compare: {hits}");
+            // Axis-parallel rays, exactly.
+            let c = Point2::new((x0 + x1) / 2.0 + 0.01, (y0 + y1) / 2.0 + 0.01);
+            for a in [
+                0.0,
+                std::f64::consts::FRAC_PI_2,
+                std::f64::consts::PI,
+                -std::f64::consts::FRAC_PI_2,
+            ] {
+                let (g, b) = (w.cast_ray(c, a, 100.0), w.cast_ray_bvh(c, a, 100.0));
+                assert!((g.unwrap() - b.unwrap()).abs() < 1e-9);
+            }
+        }
     }
 
     #[test]
