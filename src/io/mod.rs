@@ -2,3 +2,4 @@
 //! outputs. Every write goes through [`atomic`].
 
 pub mod atomic;
+pub mod censi;
