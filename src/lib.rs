@@ -6,10 +6,10 @@
 //! writes formats, `pipeline` wires the stages, `viz` draws them.
 #![warn(missing_docs)]
 
+pub mod calib;
 pub mod effects;
 pub mod error;
 pub mod geom;
-pub mod calib;
 pub mod io;
 pub mod motion;
 pub mod recording;

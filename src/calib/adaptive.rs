@@ -3,6 +3,9 @@
 //! disagreement between measured and predicted velocities. KLD-sampling
 //! (Fox 2001) is offered as a second count rule.
 
+// `!(x > y)` is deliberate: it is also true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::normal::inverse_normal_cdf;
 use super::steps::{usable, CalibStep, Kind};
 use serde::{Deserialize, Serialize};
@@ -58,7 +61,7 @@ impl Default for AdaptiveParams {
         Self {
             rule: CountRule::Dispersion,
             per_particle: 1e-5,
-            n_min: 500,
+            n_min: 2000,
             n_max: 20_000,
             alpha: 1e-4,
             residual_tau: 1.0,
@@ -130,7 +133,11 @@ impl AdaptiveParams {
     pub fn residuals(&self, step: &CalibStep, v_o: f64, w_o: f64, floor: f64) -> Option<[f64; 2]> {
         let mean = |kind: Kind| {
             let (mut s, mut sw) = (0.0, 0.0);
-            for m in step.measurements().iter().filter(|m| m.kind == kind && usable(m)) {
+            for m in step
+                .measurements()
+                .iter()
+                .filter(|m| m.kind == kind && usable(m))
+            {
                 let iv = 1.0 / m.sigma.max(floor).powi(2);
                 s += m.value * iv;
                 sw += iv;

@@ -2,6 +2,9 @@
 //! II on synthetic runs with random true radii): final radius errors, velocity
 //! and odometry RMSE, time per iteration, convergence time.
 
+// `!(x > y)` is deliberate: it is also true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::params::{CalibParams, Method};
 use super::resample::Scheme;
 use super::synth::{draw_truth, generate, SynthData, SynthParams};

@@ -7,8 +7,8 @@
 mod adaptive;
 mod akf;
 mod dkf;
-mod kalman;
 pub mod experiments;
+mod kalman;
 mod nominal;
 mod normal;
 mod params;
@@ -101,7 +101,10 @@ pub trait Calibrator {
 
 /// Builds the calibrator `params.method` names, after validating `params`.
 /// `nominal` is what `none` returns (the filters start from `params.ranges`).
-pub fn build(params: &CalibParams, nominal: DiffDrive) -> Result<Box<dyn Calibrator + Send>, CalibError> {
+pub fn build(
+    params: &CalibParams,
+    nominal: DiffDrive,
+) -> Result<Box<dyn Calibrator + Send>, CalibError> {
     params.validate()?;
     Ok(match params.method {
         Method::AdaptivePf | Method::Pf => Box::new(ParticleFilter::new(params)),

@@ -135,7 +135,7 @@ impl Default for NoiseParams {
             sigma_floor: 1e-3,
             model_sigma_v: 0.01,
             model_sigma_w: 0.01,
-            kernel_shrink: 0.99,
+            kernel_shrink: 0.8,
             kalman_param_sigma: 1e-5,
             kalman_velocity_sigma: 0.05,
         }
@@ -230,8 +230,6 @@ impl CalibParams {
         if !(self.max_weight_factor.is_finite() && self.max_weight_factor > 0.0) {
             return bad("max_weight_factor must be > 0");
         }
-        self.adaptive
-            .validate()
-            .or_else(|m| bad(&m))
+        self.adaptive.validate().or_else(|m| bad(&m))
     }
 }

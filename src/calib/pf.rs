@@ -2,6 +2,9 @@
 //! Adaptive-PF rules of section V. Particles are stored as a structure of
 //! arrays; a step allocates nothing once the buffers have grown.
 
+// `!(x > y)` is deliberate: it is also true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
+
 use super::adaptive::{occupied_bins, AdaptiveParams, CountRule};
 use super::params::{CalibParams, Method, Ranges};
 use super::resample::{Resampler, Scheme};
@@ -296,7 +299,11 @@ impl ParticleFilter {
         let cols = [&self.p.rr, &self.p.rl, &self.p.d];
         let mut c = [[0.0f64; 3]; 3];
         for i in 0..w.len() {
-            let x = [cols[0][i] - mean[0], cols[1][i] - mean[1], cols[2][i] - mean[2]];
+            let x = [
+                cols[0][i] - mean[0],
+                cols[1][i] - mean[1],
+                cols[2][i] - mean[2],
+            ];
             for r in 0..3 {
                 for k in 0..=r {
                     c[r][k] += w[i] * x[r] * x[k];

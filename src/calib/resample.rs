@@ -47,7 +47,9 @@ impl std::str::FromStr for Scheme {
         Self::ALL
             .into_iter()
             .find(|x| x.as_str() == s)
-            .ok_or_else(|| format!("unknown resampler {s:?} (multinomial|stratified|systematic|residual)"))
+            .ok_or_else(|| {
+                format!("unknown resampler {s:?} (multinomial|stratified|systematic|residual)")
+            })
     }
 }
 
@@ -183,7 +185,13 @@ mod tests {
     fn systematic_is_deterministic_for_equal_weights() {
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(1);
         let w = vec![0.25; 4];
-        assert_eq!(resample(Scheme::Systematic, &w, 4, &mut rng), vec![0, 1, 2, 3]);
-        assert_eq!(resample(Scheme::Residual, &w, 8, &mut rng), vec![0, 0, 1, 1, 2, 2, 3, 3]);
+        assert_eq!(
+            resample(Scheme::Systematic, &w, 4, &mut rng),
+            vec![0, 1, 2, 3]
+        );
+        assert_eq!(
+            resample(Scheme::Residual, &w, 8, &mut rng),
+            vec![0, 0, 1, 1, 2, 2, 3, 3]
+        );
     }
 }

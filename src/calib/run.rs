@@ -147,9 +147,7 @@ pub fn run(cal: &mut dyn Calibrator, steps: &[CalibStep], nominal: DiffDrive) ->
         resets += e.weights_reset as usize;
         let dt = s.t1 - s.t0.max(covered);
         if dt > 0.0 {
-            pose *= e
-                .drive()
-                .increment(s.omega_right * dt, s.omega_left * dt);
+            pose *= e.drive().increment(s.omega_right * dt, s.omega_left * dt);
             trajectory.push(s.t1, pose);
             covered = s.t1;
         }

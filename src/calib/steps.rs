@@ -2,6 +2,9 @@
 //! observation interval, with the wheel rates averaged over exactly that
 //! interval (from interpolated wheel angles) and the gyro averaged over it.
 
+// `!(x > y)` is deliberate: it is also true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::motion::VelocityObs;
 use crate::recording::{GyroSample, WheelSample};
 use serde::{Deserialize, Serialize};
@@ -279,7 +282,10 @@ mod tests {
         let g = m[0];
         assert_eq!(g.kind, Kind::W);
         assert!((g.value - 0.56).abs() < 1e-12, "mean of t over [0.25,0.87]");
-        let k = gyro.iter().filter(|s| s.stamp > 0.25 && s.stamp < 0.87).count();
+        let k = gyro
+            .iter()
+            .filter(|s| s.stamp > 0.25 && s.stamp < 0.87)
+            .count();
         assert!((60..=63).contains(&k));
         assert!((g.sigma - 0.01 / (k as f64).sqrt()).abs() < 1e-12);
         assert_eq!(m[1].kind, Kind::V);
@@ -302,7 +308,12 @@ mod tests {
             sigma_v: 1.0,
             sigma_w: 1.0,
         };
-        let s = steps(&[o(-1.0, 0.1), o(1.9, 2.5), o(1.0, 1.0)], &wheels(), &[], 0.01);
+        let s = steps(
+            &[o(-1.0, 0.1), o(1.9, 2.5), o(1.0, 1.0)],
+            &wheels(),
+            &[],
+            0.01,
+        );
         assert!(s.iter().all(|s| s.measurements().is_empty()));
         assert!(steps(&[o(0.0, 1.0)], &wheels()[..1], &[], 0.01).is_empty());
     }

@@ -159,7 +159,13 @@ pub fn generate(p: &SynthParams, truth: DiffDrive, seed: u64) -> SynthData {
     } else {
         0.0
     };
-    let quant = |a: f64| if tick > 0.0 { (a / tick).floor() * tick } else { a };
+    let quant = |a: f64| {
+        if tick > 0.0 {
+            (a / tick).floor() * tick
+        } else {
+            a
+        }
+    };
     let mut data = SynthData {
         truth,
         radius_step: p.radius_step,

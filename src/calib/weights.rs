@@ -2,6 +2,9 @@
 //! sample size and the largest weight are derived once per step with a
 //! log-sum-exp, so no product of likelihoods ever underflows to a silent 0/0.
 
+// `!(x > y)` is deliberate: it is also true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 /// Log-weights of a particle set and what is derived from them.
 #[derive(Debug, Clone, Default)]
 pub struct Weights {
@@ -135,6 +138,7 @@ pub fn fast_exp(x: f64) -> f64 {
     }
     // exp(x) = 2^k · exp(r), r = x − k ln2 ∈ [−ln2/2, ln2/2].
     const LOG2E: f64 = std::f64::consts::LOG2_E;
+    #[allow(clippy::excessive_precision)]
     const LN2_HI: f64 = 6.931_471_803_691_238_2e-1;
     const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
     let k = (x * LOG2E).round();
@@ -188,9 +192,13 @@ mod tests {
     fn all_underflowed_weights_reset_to_uniform() {
         let mut w = Weights::from_log(&[f64::NEG_INFINITY, f64::NAN, f64::NEG_INFINITY]);
         assert!(w.was_reset());
-        assert!(w.normalized().iter().all(|&x| (x - 1.0 / 3.0).abs() < 1e-15));
+        assert!(w
+            .normalized()
+            .iter()
+            .all(|&x| (x - 1.0 / 3.0).abs() < 1e-15));
         assert_eq!(w.ess(), 3.0);
-        w.log_mut().copy_from_slice(&[f64::NEG_INFINITY, -5.0, f64::NEG_INFINITY]);
+        w.log_mut()
+            .copy_from_slice(&[f64::NEG_INFINITY, -5.0, f64::NEG_INFINITY]);
         w.normalize();
         assert!(!w.was_reset());
         assert_eq!(w.normalized()[1], 1.0);

@@ -139,7 +139,11 @@ pub fn to_streams(
     });
     let lever = base_from_laser.translation.vector.norm();
     let sxy2 = sigma_xy * sigma_xy + (lever * sigma_theta).powi(2);
-    let cov = Matrix3::from_diagonal(&nalgebra::Vector3::new(sxy2, sxy2, sigma_theta * sigma_theta));
+    let cov = Matrix3::from_diagonal(&nalgebra::Vector3::new(
+        sxy2,
+        sxy2,
+        sigma_theta * sigma_theta,
+    ));
     let inv = base_from_laser.inverse();
     for tu in tuples {
         let sm = geom::pose(tu.sm[0], tu.sm[1], tu.sm[2]);
