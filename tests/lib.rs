@@ -1,5 +1,8 @@
 //! Integration tests, compiled as one binary.
 
+mod calib_censi;
+mod calib_filters;
+mod calib_resample;
 mod eval_align;
 mod eval_evo;
 mod eval_inputs;

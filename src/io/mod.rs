@@ -5,6 +5,7 @@ pub mod atomic;
 
 pub mod carmen;
 pub mod cdr;
+pub mod censi;
 mod columns;
 pub mod kitti;
 pub mod mcap_read;

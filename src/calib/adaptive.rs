@@ -1,0 +1,253 @@
+//! The Adaptive-PF rules (seed 000, section V): the particle count follows the
+//! dispersion of the radius particles, and the process noise follows the
+//! disagreement between measured and predicted velocities. KLD-sampling
+//! (Fox 2001) is offered as a second count rule.
+
+// `!(x > y)` is deliberate: it is also true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use super::normal::inverse_normal_cdf;
+use super::steps::{usable, CalibStep, Kind};
+use serde::{Deserialize, Serialize};
+
+/// How the particle count is chosen at each resampling.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CountRule {
+    /// Fixed count.
+    Fixed,
+    /// Seed 000: N = dispersion / `per_particle`, the dispersion being the
+    /// larger weighted standard deviation of R_R and R_L.
+    #[default]
+    Dispersion,
+    /// KLD-sampling: enough particles that the KL divergence between the
+    /// sample-based and the true posterior stays below ε with probability 1−δ.
+    Kld,
+}
+
+/// Parameters of the adaptive rules.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AdaptiveParams {
+    /// Count rule used by the `adaptive-pf` method.
+    pub rule: CountRule,
+    /// Radius dispersion per particle (m): seed 000's "one particle per 0.01 mm".
+    pub per_particle: f64,
+    /// Lower clamp of the particle count.
+    pub n_min: usize,
+    /// Upper clamp of the particle count.
+    pub n_max: usize,
+    /// α of eq. 11 (s): σ_ε = α·sqrt((V_m−V_O)² + (W_m−W_O)²).
+    pub alpha: f64,
+    /// Time constant (s) of the exponential average of the residuals
+    /// V_m − V_O, W_m − W_O that enter eq. 11: white measurement noise
+    /// averages out, a persistent disagreement (the parameters changed) stays.
+    /// 0 = the paper's instantaneous residuals.
+    pub residual_tau: f64,
+    /// Lower clamp of σ_ε (m).
+    pub sigma_min: f64,
+    /// Upper clamp of σ_ε (m).
+    pub sigma_max: f64,
+    /// KLD error bound ε.
+    pub kld_epsilon: f64,
+    /// KLD confidence 1−δ (the quantile z_{1−δ} is taken of it).
+    pub kld_confidence: f64,
+    /// KLD bin sizes over (R_R, R_L, D) in m.
+    pub kld_bin: [f64; 3],
+}
+
+impl Default for AdaptiveParams {
+    fn default() -> Self {
+        Self {
+            rule: CountRule::Dispersion,
+            per_particle: 1e-5,
+            n_min: 2000,
+            n_max: 20_000,
+            alpha: 1e-4,
+            residual_tau: 1.0,
+            sigma_min: 1e-7,
+            sigma_max: 5e-3,
+            kld_epsilon: 0.05,
+            kld_confidence: 0.99,
+            kld_bin: [1e-4, 1e-4, 1e-3],
+        }
+    }
+}
+
+impl AdaptiveParams {
+    /// Checks ranges; the message names the bad field.
+    pub fn validate(&self) -> Result<(), String> {
+        let pos = |x: f64| x.is_finite() && x > 0.0;
+        if !pos(self.per_particle) {
+            return Err("adaptive.per_particle must be > 0".into());
+        }
+        if self.n_min == 0 || self.n_max < self.n_min {
+            return Err("adaptive.n_min must be ≥ 1 and ≤ n_max".into());
+        }
+        if !(self.residual_tau.is_finite() && self.residual_tau >= 0.0) {
+            return Err("adaptive.residual_tau must be ≥ 0".into());
+        }
+        if !(self.alpha.is_finite() && self.alpha >= 0.0) {
+            return Err("adaptive.alpha must be ≥ 0".into());
+        }
+        if !(pos(self.sigma_max) && self.sigma_min >= 0.0 && self.sigma_min <= self.sigma_max) {
+            return Err("adaptive.sigma_min/sigma_max must satisfy 0 ≤ min ≤ max".into());
+        }
+        if !(self.kld_epsilon > 0.0 && self.kld_confidence > 0.0 && self.kld_confidence < 1.0) {
+            return Err("adaptive.kld_epsilon > 0 and 0 < kld_confidence < 1".into());
+        }
+        if !self.kld_bin.iter().all(|&b| pos(b)) {
+            return Err("adaptive.kld_bin entries must be > 0".into());
+        }
+        Ok(())
+    }
+
+    /// Seed 000's count: `ceil(dispersion / per_particle)`, clamped.
+    pub fn dispersion_count(&self, dispersion: f64) -> usize {
+        let n = (dispersion / self.per_particle).ceil();
+        if n.is_finite() {
+            (n.max(0.0) as usize).clamp(self.n_min, self.n_max)
+        } else {
+            self.n_max
+        }
+    }
+
+    /// Fox 2001, eq. 8 with the Wilson–Hilferty approximation of the χ²
+    /// quantile: `n = (k−1)/(2ε) · (1 − 2/(9(k−1)) + sqrt(2/(9(k−1))) z_{1−δ})³`
+    /// for `k` occupied bins, clamped.
+    pub fn kld_count(&self, k: usize) -> usize {
+        if k <= 1 {
+            return self.n_min;
+        }
+        let km1 = (k - 1) as f64;
+        let z = inverse_normal_cdf(self.kld_confidence);
+        let a = 2.0 / (9.0 * km1);
+        let n = km1 / (2.0 * self.kld_epsilon) * (1.0 - a + a.sqrt() * z).powi(3);
+        (n.ceil().max(0.0) as usize).clamp(self.n_min, self.n_max)
+    }
+
+    /// The residuals of eq. 11, `(V_m − V_O, W_m − W_O)`, from the measured
+    /// (inverse-variance mean of the step's usable V and W measurements) and
+    /// predicted (weighted-mean) velocities; a missing kind gives 0. `None`
+    /// when the step has no usable measurement.
+    pub fn residuals(&self, step: &CalibStep, v_o: f64, w_o: f64, floor: f64) -> Option<[f64; 2]> {
+        let mean = |kind: Kind| {
+            let (mut s, mut sw) = (0.0, 0.0);
+            for m in step
+                .measurements()
+                .iter()
+                .filter(|m| m.kind == kind && usable(m))
+            {
+                let iv = 1.0 / m.sigma.max(floor).powi(2);
+                s += m.value * iv;
+                sw += iv;
+            }
+            (sw > 0.0).then(|| s / sw)
+        };
+        let (vm, wm) = (mean(Kind::V), mean(Kind::W));
+        if vm.is_none() && wm.is_none() {
+            return None;
+        }
+        let ev = vm.map_or(0.0, |v| v - v_o);
+        let ew = wm.map_or(0.0, |w| w - w_o);
+        (ev.is_finite() && ew.is_finite()).then_some([ev, ew])
+    }
+
+    /// Eq. 11 on (averaged) residuals: `σ_ε = α·sqrt(e_V² + e_W²)`, clamped.
+    pub fn sigma_of(&self, e: [f64; 2]) -> f64 {
+        let s = self.alpha * (e[0] * e[0] + e[1] * e[1]).sqrt();
+        if s.is_finite() {
+            s.clamp(self.sigma_min, self.sigma_max)
+        } else {
+            self.sigma_max
+        }
+    }
+
+    /// Folds one step's residuals (interval `dt` s) into the running average.
+    pub fn average(&self, ema: &mut Option<[f64; 2]>, e: [f64; 2], dt: f64) {
+        let k = if self.residual_tau > 0.0 {
+            1.0 - (-dt.max(0.0) / self.residual_tau).exp()
+        } else {
+            1.0
+        };
+        *ema = Some(match *ema {
+            None => e,
+            Some(m) => [m[0] + k * (e[0] - m[0]), m[1] + k * (e[1] - m[1])],
+        });
+    }
+}
+
+/// Counts the distinct KLD bins occupied by the particles `idx` of
+/// (rr, rl, d), using `keys` as scratch (no allocation once warm).
+pub fn occupied_bins(
+    idx: &[usize],
+    rr: &[f64],
+    rl: &[f64],
+    d: &[f64],
+    bin: [f64; 3],
+    keys: &mut Vec<u64>,
+) -> usize {
+    keys.clear();
+    for &i in idx {
+        let a = (rr[i] / bin[0]).floor() as i64 as u64;
+        let b = (rl[i] / bin[1]).floor() as i64 as u64;
+        let c = (d[i] / bin[2]).floor() as i64 as u64;
+        // Radii bins (≤ 2^21 of 0.1 mm = 200 m) and base bins pack into 64 bits.
+        keys.push((a & 0x1F_FFFF) << 42 | (b & 0x1F_FFFF) << 21 | (c & 0x1F_FFFF));
+    }
+    keys.sort_unstable();
+    keys.dedup();
+    keys.len()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dispersion_count_is_one_particle_per_hundredth_mm_clamped() {
+        let p = AdaptiveParams::default();
+        assert_eq!(p.dispersion_count(0.05), 5000);
+        assert_eq!(p.dispersion_count(1e-6), p.n_min);
+        assert_eq!(p.dispersion_count(1.0), p.n_max);
+        assert_eq!(p.dispersion_count(f64::NAN), p.n_max);
+    }
+
+    #[test]
+    fn kld_count_matches_fox_table() {
+        // Fox 2001: ε = 0.05, z = 2.326 (δ = 0.01): k = 2 → ~ 54? Direct formula check.
+        let p = AdaptiveParams {
+            n_min: 1,
+            n_max: 1_000_000,
+            ..Default::default()
+        };
+        let k = 101usize;
+        let km1 = 100.0f64;
+        let z = 2.326_347_874_040_840_8;
+        let a = 2.0 / (9.0 * km1);
+        let want = (km1 / 0.1 * (1.0 - a + a.sqrt() * z).powi(3)).ceil() as usize;
+        assert_eq!(p.kld_count(k), want);
+        // More bins → more particles; the χ² quantile exceeds its mean k−1.
+        assert!(p.kld_count(1000) > p.kld_count(100));
+        assert!(p.kld_count(k) as f64 > km1 / 0.1);
+    }
+
+    #[test]
+    fn process_sigma_follows_disagreement() {
+        let p = AdaptiveParams::default();
+        let s = CalibStep::new(0.0, 0.02, 1.0, 1.0)
+            .with(Kind::V, 1.3, 0.05)
+            .with(Kind::W, 0.4, 0.01);
+        let e = p.residuals(&s, 1.0, 0.0, 1e-3).unwrap();
+        assert!((p.sigma_of(e) - 1e-4 * 0.5).abs() < 1e-15);
+        let none = CalibStep::new(0.0, 0.02, 1.0, 1.0).with(Kind::V, 1.0, f64::INFINITY);
+        assert!(p.residuals(&none, 0.0, 0.0, 1e-3).is_none());
+        // A persistent residual survives the average, alternating noise does not.
+        let (mut a, mut b) = (None, None);
+        for i in 0..500 {
+            p.average(&mut a, [0.1, 0.0], 0.02);
+            p.average(&mut b, [if i % 2 == 0 { 0.1 } else { -0.1 }, 0.0], 0.02);
+        }
+        assert!((a.unwrap()[0] - 0.1).abs() < 1e-9 && b.unwrap()[0].abs() < 0.01);
+    }
+}

@@ -1,0 +1,102 @@
+//! Augmented extended Kalman filter: state [V, W, R_R, R_L, D], the
+//! parameters as random walks, V and W re-predicted from the wheel rates.
+
+use super::kalman::{model, prior};
+use super::params::CalibParams;
+use super::steps::{usable, CalibStep, Kind};
+use super::{Calibrator, Estimate};
+use nalgebra::{SMatrix, SVector, Vector3};
+
+type M5 = SMatrix<f64, 5, 5>;
+type V5 = SVector<f64, 5>;
+
+/// The augmented EKF baseline (`akf`).
+#[derive(Debug, Clone)]
+pub struct AugmentedKf {
+    x: V5,
+    p: M5,
+    q: V5,
+    floor: f64,
+}
+
+impl AugmentedKf {
+    /// Starts at the centre of `params.ranges` with the uniform variances.
+    pub fn new(params: &CalibParams) -> Self {
+        let (m, pm) = prior(params);
+        let mut x = V5::zeros();
+        let mut p = M5::zeros();
+        for i in 0..3 {
+            x[2 + i] = m[i];
+            p[(2 + i, 2 + i)] = pm[(i, i)];
+        }
+        let (qv, qp) = (
+            params.noise.kalman_velocity_sigma.powi(2),
+            params.noise.kalman_param_sigma.powi(2),
+        );
+        p[(0, 0)] = qv;
+        p[(1, 1)] = qv;
+        Self {
+            x,
+            p,
+            q: V5::new(qv, qv, qp, qp, qp),
+            floor: params.noise.sigma_floor,
+        }
+    }
+}
+
+impl Calibrator for AugmentedKf {
+    fn step(&mut self, s: &CalibStep) -> Estimate {
+        // Predict: V, W = f(θ); θ unchanged; F = [[0, J], [0, I]].
+        let theta = Vector3::new(self.x[2], self.x[3], self.x[4]);
+        let ([v, w], [jv, jw]) = model(&theta, s.omega_right, s.omega_left);
+        let mut f = M5::zeros();
+        for j in 0..3 {
+            f[(0, 2 + j)] = jv[j];
+            f[(1, 2 + j)] = jw[j];
+            f[(2 + j, 2 + j)] = 1.0;
+        }
+        self.x[0] = v;
+        self.x[1] = w;
+        self.p = f * self.p * f.transpose() + M5::from_diagonal(&self.q);
+        // Update: one scalar update per usable measurement (Joseph form).
+        for m in s.measurements().iter().filter(|m| usable(m)) {
+            let k = match m.kind {
+                Kind::V => 0,
+                Kind::W => 1,
+            };
+            let r = m.sigma.max(self.floor).powi(2);
+            let sv = self.p[(k, k)] + r;
+            let gain: V5 = self.p.column(k) / sv;
+            self.x += gain * (m.value - self.x[k]);
+            let mut ikh = M5::identity();
+            for i in 0..5 {
+                ikh[(i, k)] -= gain[i];
+            }
+            self.p = ikh * self.p * ikh.transpose() + gain * gain.transpose() * r;
+        }
+        self.p = 0.5 * (self.p + self.p.transpose());
+        for i in 2..5 {
+            self.x[i] = self.x[i].max(1e-6);
+        }
+        let sd = |i: usize| self.p[(i, i)].max(0.0).sqrt();
+        Estimate {
+            t: s.t1,
+            r_right: self.x[2],
+            r_left: self.x[3],
+            wheel_base: self.x[4],
+            std_r_right: sd(2),
+            std_r_left: sd(3),
+            std_wheel_base: sd(4),
+            v: self.x[0],
+            w: self.x[1],
+            particles: 0,
+            process_sigma: self.q[2].sqrt(),
+            resampled: false,
+            weights_reset: false,
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        "akf"
+    }
+}

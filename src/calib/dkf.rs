@@ -1,0 +1,95 @@
+//! Dual Kalman filter (Wan & Nelson): a state filter on [V, W] that predicts
+//! with the parameter filter's latest estimate, and a parameter filter on
+//! [R_R, R_L, D] that takes the state filter's latest estimate (with its
+//! variance) as its measurement.
+
+use super::kalman::{model, prior};
+use super::params::CalibParams;
+use super::steps::{usable, CalibStep, Kind};
+use super::{Calibrator, Estimate};
+use nalgebra::{Matrix3, Vector3};
+
+/// The dual Kalman filter baseline (`dkf`).
+#[derive(Debug, Clone)]
+pub struct DualKf {
+    theta: Vector3<f64>,
+    p_theta: Matrix3<f64>,
+    q_theta: f64,
+    q_x: f64,
+    floor: f64,
+}
+
+impl DualKf {
+    /// Starts at the centre of `params.ranges` with the uniform variances.
+    pub fn new(params: &CalibParams) -> Self {
+        let (theta, p_theta) = prior(params);
+        Self {
+            theta,
+            p_theta,
+            q_theta: params.noise.kalman_param_sigma.powi(2),
+            q_x: params.noise.kalman_velocity_sigma.powi(2),
+            floor: params.noise.sigma_floor,
+        }
+    }
+}
+
+impl Calibrator for DualKf {
+    fn step(&mut self, s: &CalibStep) -> Estimate {
+        // Parameter filter, time update: random walk.
+        self.p_theta += Matrix3::identity() * self.q_theta;
+        // State filter: predict with the latest parameters, update with the
+        // measurements (scalar updates, V and W independent given θ).
+        let ([v0, w0], _) = model(&self.theta, s.omega_right, s.omega_left);
+        let mut x = [v0, w0];
+        let mut px = [self.q_x, self.q_x];
+        let mut seen = [false, false];
+        for m in s.measurements().iter().filter(|m| usable(m)) {
+            let k = match m.kind {
+                Kind::V => 0,
+                Kind::W => 1,
+            };
+            let r = m.sigma.max(self.floor).powi(2);
+            let g = px[k] / (px[k] + r);
+            x[k] += g * (m.value - x[k]);
+            px[k] *= 1.0 - g;
+            seen[k] = true;
+        }
+        // Parameter filter, measurement update: the state estimate observes
+        // f(θ) with the state filter's posterior variance.
+        for k in 0..2 {
+            if !seen[k] {
+                continue;
+            }
+            let (f, j) = model(&self.theta, s.omega_right, s.omega_left);
+            let h = j[k];
+            let ph = self.p_theta * h;
+            let sv = h.dot(&ph) + px[k].max(self.floor * self.floor);
+            let gain = ph / sv;
+            self.theta += gain * (x[k] - f[k]);
+            let ikh = Matrix3::identity() - gain * h.transpose();
+            self.p_theta = ikh * self.p_theta * ikh.transpose() + gain * gain.transpose() * px[k];
+        }
+        self.p_theta = 0.5 * (self.p_theta + self.p_theta.transpose());
+        self.theta = self.theta.map(|t| t.max(1e-6));
+        let sd = |i: usize| self.p_theta[(i, i)].max(0.0).sqrt();
+        Estimate {
+            t: s.t1,
+            r_right: self.theta[0],
+            r_left: self.theta[1],
+            wheel_base: self.theta[2],
+            std_r_right: sd(0),
+            std_r_left: sd(1),
+            std_wheel_base: sd(2),
+            v: x[0],
+            w: x[1],
+            particles: 0,
+            process_sigma: self.q_theta.sqrt(),
+            resampled: false,
+            weights_reset: false,
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        "dkf"
+    }
+}

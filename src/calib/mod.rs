@@ -1,0 +1,115 @@
+//! Online odometry calibration: estimate the wheel radii R_R, R_L and the
+//! wheel base D of a differential drive from wheel rates and measured body
+//! velocities (ICP, gyro). Seed 000's Adaptive-PF, a fixed particle filter,
+//! Kalman baselines (dual and augmented) and the nominal model share one
+//! [`Calibrator`] trait; [`run`] drives any of them over aligned [`steps`].
+
+mod adaptive;
+mod akf;
+mod dkf;
+pub mod experiments;
+mod kalman;
+mod nominal;
+mod normal;
+mod params;
+mod pf;
+mod resample;
+mod run;
+mod steps;
+pub mod synth;
+mod trigger;
+mod weights;
+
+pub use adaptive::{occupied_bins, AdaptiveParams, CountRule};
+pub use akf::AugmentedKf;
+pub use dkf::DualKf;
+pub use nominal::Nominal;
+pub use normal::{erfc, inverse_normal_cdf};
+pub use params::{CalibParams, Method, NoiseParams, Ranges};
+pub use pf::{ParticleFilter, Particles};
+pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};
+pub use run::{run, CalibSummary, CalibrationRun, HistoryRow, Multipliers, Params3};
+pub use steps::{steps, usable, CalibStep, Kind, Measurement, MAX_GAP_STEP, MAX_MEASUREMENTS};
+pub use trigger::Trigger;
+pub use weights::{fast_exp, Weights};
+
+use crate::robot::DiffDrive;
+use serde::Serialize;
+
+/// Errors of the calibration module.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CalibError {
+    /// A configuration value is out of range (names the field).
+    #[error("calibration config: {0}")]
+    Config(String),
+    /// Nothing to calibrate from.
+    #[error("no calibration steps (no wheel data overlapping the observations)")]
+    NoSteps,
+}
+
+/// The calibrator's output after one step: parameter means and standard
+/// deviations (m), the filter's velocities, and bookkeeping.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Estimate {
+    /// End of the step (s).
+    pub t: f64,
+    /// Right wheel radius (m).
+    pub r_right: f64,
+    /// Left wheel radius (m).
+    pub r_left: f64,
+    /// Wheel base (m).
+    pub wheel_base: f64,
+    /// σ of the right radius (m).
+    pub std_r_right: f64,
+    /// σ of the left radius (m).
+    pub std_r_left: f64,
+    /// σ of the wheel base (m).
+    pub std_wheel_base: f64,
+    /// Estimated forward velocity over the step (m/s).
+    pub v: f64,
+    /// Estimated turn rate over the step (rad/s).
+    pub w: f64,
+    /// Particles used (0 for the Kalman filters and `none`).
+    pub particles: usize,
+    /// Process noise σ on the parameters used for the next step (m).
+    pub process_sigma: f64,
+    /// Whether the step resampled.
+    pub resampled: bool,
+    /// Whether every weight underflowed and the weights were reset.
+    pub weights_reset: bool,
+}
+
+impl Estimate {
+    /// The estimated kinematics.
+    pub fn drive(&self) -> DiffDrive {
+        DiffDrive {
+            r_right: self.r_right,
+            r_left: self.r_left,
+            wheel_base: self.wheel_base,
+        }
+    }
+}
+
+/// An online calibrator: consumes one aligned step, returns its estimate.
+pub trait Calibrator {
+    /// Processes one step (predict from the wheel rates, update with the
+    /// step's measurements) and returns the current estimate.
+    fn step(&mut self, step: &CalibStep) -> Estimate;
+    /// The method's name (design.md: adaptive-pf | pf | dkf | akf | none).
+    fn name(&self) -> &'static str;
+}
+
+/// Builds the calibrator `params.method` names, after validating `params`.
+/// `nominal` is what `none` returns (the filters start from `params.ranges`).
+pub fn build(
+    params: &CalibParams,
+    nominal: DiffDrive,
+) -> Result<Box<dyn Calibrator + Send>, CalibError> {
+    params.validate()?;
+    Ok(match params.method {
+        Method::AdaptivePf | Method::Pf => Box::new(ParticleFilter::new(params)),
+        Method::Dkf => Box::new(DualKf::new(params)),
+        Method::Akf => Box::new(AugmentedKf::new(params)),
+        Method::None => Box::new(Nominal::new(nominal)),
+    })
+}

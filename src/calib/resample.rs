@@ -1,0 +1,197 @@
+//! Resampling schemes with one contract: normalised weights in, ancestor
+//! indices out. All four end in one shared inverse CDF over sorted uniforms,
+//! so each is O(N) (seed 000, section IV.B; Chopin's `particles` layout).
+
+use rand::{Rng, RngExt};
+use rand_distr::{Distribution, Exp1};
+use serde::{Deserialize, Serialize};
+
+/// How ancestors are drawn from the weights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Scheme {
+    /// N independent uniforms (eq. 7).
+    Multinomial,
+    /// One uniform in each of N strata.
+    Stratified,
+    /// One uniform, N evenly spaced points (eq. 8).
+    #[default]
+    Systematic,
+    /// `floor(N ρ_i)` deterministic copies, the rest multinomial on the residuals (eq. 9).
+    Residual,
+}
+
+impl Scheme {
+    /// Every scheme, in the order of the paper's Table I.
+    pub const ALL: [Scheme; 4] = [
+        Scheme::Multinomial,
+        Scheme::Stratified,
+        Scheme::Systematic,
+        Scheme::Residual,
+    ];
+
+    /// The name used on the command line and in tables.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Self::Multinomial => "multinomial",
+            Self::Stratified => "stratified",
+            Self::Systematic => "systematic",
+            Self::Residual => "residual",
+        }
+    }
+}
+
+impl std::str::FromStr for Scheme {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|x| x.as_str() == s)
+            .ok_or_else(|| {
+                format!("unknown resampler {s:?} (multinomial|stratified|systematic|residual)")
+            })
+    }
+}
+
+/// Appends to `out` the ancestor of each sorted uniform `su[k] ∈ [0, 1)`: the
+/// smallest index whose cumulative weight exceeds it. Never returns a
+/// particle of weight 0. `w` must be non-empty with a positive sum ≈ 1.
+pub fn inverse_cdf(su: &[f64], w: &[f64], out: &mut Vec<usize>) {
+    let last = w.iter().rposition(|&x| x > 0.0).unwrap_or(w.len() - 1);
+    let mut j = 0usize;
+    let mut c = w[0];
+    for &u in su {
+        while c <= u && j < last {
+            j += 1;
+            c += w[j];
+        }
+        out.push(j);
+    }
+}
+
+/// Draws ancestors with a reusable scratch buffer (no allocation once warm).
+#[derive(Debug, Clone, Default)]
+pub struct Resampler {
+    su: Vec<f64>,
+    resid: Vec<f64>,
+}
+
+impl Resampler {
+    /// An empty resampler.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Replaces `out` by `n` ancestor indices drawn from the normalised
+    /// weights `w` with `scheme`. `n` may differ from `w.len()` (adaptive
+    /// particle counts). `w` must be non-empty, non-negative, summing to ≈ 1.
+    pub fn resample<R: Rng + ?Sized>(
+        &mut self,
+        scheme: Scheme,
+        w: &[f64],
+        n: usize,
+        rng: &mut R,
+        out: &mut Vec<usize>,
+    ) {
+        out.clear();
+        if n == 0 || w.is_empty() {
+            return;
+        }
+        out.reserve(n);
+        match scheme {
+            Scheme::Multinomial => {
+                sorted_uniforms(n, rng, &mut self.su);
+                inverse_cdf(&self.su, w, out);
+            }
+            Scheme::Stratified | Scheme::Systematic => {
+                self.su.clear();
+                let inv = 1.0 / n as f64;
+                if scheme == Scheme::Systematic {
+                    let u: f64 = rng.random();
+                    self.su.extend((0..n).map(|k| (k as f64 + u) * inv));
+                } else {
+                    self.su
+                        .extend((0..n).map(|k| (k as f64 + rng.random::<f64>()) * inv));
+                }
+                inverse_cdf(&self.su, w, out);
+            }
+            Scheme::Residual => {
+                self.resid.clear();
+                let nf = n as f64;
+                let mut copies = 0usize;
+                for (i, &wi) in w.iter().enumerate() {
+                    let x = nf * wi;
+                    let k = x.floor();
+                    for _ in 0..k as usize {
+                        out.push(i);
+                    }
+                    copies += k as usize;
+                    self.resid.push(x - k);
+                }
+                let rest = n.saturating_sub(copies);
+                if rest > 0 {
+                    let s: f64 = self.resid.iter().sum();
+                    if s > 0.0 {
+                        let inv = 1.0 / s;
+                        self.resid.iter_mut().for_each(|r| *r *= inv);
+                        sorted_uniforms(rest, rng, &mut self.su);
+                        inverse_cdf(&self.su, &self.resid, out);
+                    } else {
+                        sorted_uniforms(rest, rng, &mut self.su);
+                        inverse_cdf(&self.su, w, out);
+                    }
+                }
+                out.truncate(n);
+            }
+        }
+    }
+}
+
+/// `n` sorted independent uniforms in O(n): normalised cumulative sums of
+/// n + 1 exponential spacings.
+pub fn sorted_uniforms<R: Rng + ?Sized>(n: usize, rng: &mut R, su: &mut Vec<f64>) {
+    su.clear();
+    let mut acc = 0.0;
+    for _ in 0..n {
+        let e: f64 = Exp1.sample(rng);
+        acc += e;
+        su.push(acc);
+    }
+    let e: f64 = Exp1.sample(rng);
+    let inv = 1.0 / (acc + e);
+    su.iter_mut().for_each(|x| *x *= inv);
+}
+
+/// Convenience form of [`Resampler::resample`] that allocates its result.
+pub fn resample<R: Rng + ?Sized>(scheme: Scheme, w: &[f64], n: usize, rng: &mut R) -> Vec<usize> {
+    let mut out = Vec::with_capacity(n);
+    Resampler::new().resample(scheme, w, n, rng, &mut out);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    #[test]
+    fn inverse_cdf_skips_zero_weights() {
+        let mut out = vec![];
+        inverse_cdf(&[0.0, 0.3, 0.5, 0.99], &[0.0, 0.5, 0.0, 0.5, 0.0], &mut out);
+        assert_eq!(out, vec![1, 1, 3, 3]);
+    }
+
+    #[test]
+    fn systematic_is_deterministic_for_equal_weights() {
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(1);
+        let w = vec![0.25; 4];
+        assert_eq!(
+            resample(Scheme::Systematic, &w, 4, &mut rng),
+            vec![0, 1, 2, 3]
+        );
+        assert_eq!(
+            resample(Scheme::Residual, &w, 8, &mut rng),
+            vec![0, 0, 1, 1, 2, 2, 3, 3]
+        );
+    }
+}

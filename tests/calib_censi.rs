@@ -1,0 +1,141 @@
+//! Calibration on Censi et al.'s Khepera tuples (real data) against the
+//! authors' maximum-likelihood estimates.
+
+use odocal::calib::{build, run, steps, CalibParams, Method, Ranges};
+use odocal::io::censi;
+use odocal::motion::VelocityObs;
+use odocal::robot::DiffDrive;
+use std::path::PathBuf;
+
+/// The shared data folder (same policy as `support::shared_data`; repeated
+/// here so this file also compiles as its own test target).
+fn shared_data(test: &str) -> Option<PathBuf> {
+    let dir = std::env::var_os("ODOCAL_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    if std::env::var_os("CI").is_some() {
+        panic!("{test}: shared data not found at {}", dir.display());
+    }
+    eprintln!("SKIP {test}: shared data not found at {}", dir.display());
+    None
+}
+
+/// Khepera-sized settings: ranges ±10 % around the nominal 21 mm radius and
+/// 90 mm axle, measurement σ of the laser displacement per tuple, velocity
+/// model σ and floors scaled to a robot moving at ~1 cm/s.
+pub fn khepera_params(method: Method) -> CalibParams {
+    let mut p = CalibParams {
+        method,
+        seed: 7,
+        ranges: Ranges::around(0.021, 0.021, 0.09, 0.1),
+        ..Default::default()
+    };
+    p.noise.param_sigma = 1e-6;
+    p.noise.sigma_floor = 1e-6;
+    p.noise.model_sigma_v = 1e-4;
+    p.noise.model_sigma_w = 1e-3;
+    p.noise.kalman_param_sigma = 1e-8;
+    p.noise.kalman_velocity_sigma = 0.01;
+    p.adaptive.per_particle = 1e-6;
+    p
+}
+
+fn calibrate(set: &str, method: Method) -> Option<(DiffDrive, censi::CensiResults, usize)> {
+    let dir = shared_data("calib_censi")?.join("censi-calibration");
+    let tuples = censi::read(&dir.join(format!("{set}.tuple"))).unwrap();
+    let authors = censi::read_results(&dir.join(format!("{set}_results.json"))).unwrap();
+    // Known mount: the authors' laser pose (their estimate), σ of the laser
+    // displacement per tuple 1.5 mm and 0.3° (Hokuyo + CSM over ~1 s).
+    let (wheels, motions) = censi::to_streams(&tuples, &authors.base_from_laser(), 1.5e-3, 5e-3);
+    let obs: Vec<VelocityObs> = motions
+        .iter()
+        .filter_map(VelocityObs::from_motion)
+        .collect();
+    let st = steps(&obs, &wheels, &[], 0.0);
+    let nominal = DiffDrive {
+        r_right: 0.021,
+        r_left: 0.021,
+        wheel_base: 0.09,
+    };
+    let mut cal = build(&khepera_params(method), nominal).unwrap();
+    let r = run(cal.as_mut(), &st, nominal);
+    Some((r.final_drive(), authors, tuples.len()))
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b
+}
+
+#[test]
+fn adaptive_pf_on_lstraight_lands_within_two_percent_of_the_authors() {
+    let Some((k, a, _)) = calibrate("lstraight", Method::AdaptivePf) else {
+        return;
+    };
+    assert!(
+        rel(k.r_right, a.r_diam / 2.0) < 0.02,
+        "{} vs {}",
+        k.r_right,
+        a.r_diam / 2.0
+    );
+    assert!(
+        rel(k.r_left, a.l_diam / 2.0) < 0.02,
+        "{} vs {}",
+        k.r_left,
+        a.l_diam / 2.0
+    );
+    assert!(
+        rel(k.wheel_base, a.axle) < 0.02,
+        "{} vs {}",
+        k.wheel_base,
+        a.axle
+    );
+    // Right and left radii differ in the same sense as the authors' (E_d > 1).
+    assert!(k.r_right > k.r_left);
+}
+
+#[test]
+fn censi_tuples_parse_with_the_documented_counts() {
+    let Some(d) = shared_data("censi_tuples_parse") else {
+        return;
+    };
+    for (set, n) in [("lstraight", 4396), ("l90", 3295), ("lmov", 4345)] {
+        let t = censi::read(&d.join(format!("censi-calibration/{set}.tuple"))).unwrap();
+        assert_eq!(t.len(), n, "{set}");
+        assert!(t.iter().all(|t| t.t > 0.7 && t.t < 1.3));
+    }
+}
+
+#[test]
+#[ignore = "known gap: measured −1.3 % (radii) and −1.1 % (axle) against the authors on lstraight"]
+fn adaptive_pf_matches_the_authors_on_lstraight_within_one_percent() {
+    let Some((k, a, _)) = calibrate("lstraight", Method::AdaptivePf) else {
+        return;
+    };
+    eprintln!(
+        "lstraight: {k:?} vs authors r_R {} r_L {} axle {}",
+        a.r_diam / 2.0,
+        a.l_diam / 2.0,
+        a.axle
+    );
+    assert!(
+        rel(k.r_right, a.r_diam / 2.0) < 0.01,
+        "{} vs {}",
+        k.r_right,
+        a.r_diam / 2.0
+    );
+    assert!(
+        rel(k.r_left, a.l_diam / 2.0) < 0.01,
+        "{} vs {}",
+        k.r_left,
+        a.l_diam / 2.0
+    );
+    assert!(
+        rel(k.wheel_base, a.axle) < 0.01,
+        "{} vs {}",
+        k.wheel_base,
+        a.axle
+    );
+}
