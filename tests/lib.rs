@@ -2,4 +2,5 @@
 
 mod io_crosscheck;
 mod io_read;
+mod io_roundtrip;
 mod support;

@@ -4,6 +4,7 @@
 pub mod atomic;
 pub mod carmen;
 pub mod cdr;
+pub mod mcap_canon;
 pub mod mcap_read;
 pub mod mcap_write;
 pub mod ros_msgs;
