@@ -1,5 +1,6 @@
 //! Integration tests, compiled as one binary.
 
+mod io_bad_input;
 mod io_crosscheck;
 mod io_read;
 mod io_roundtrip;

@@ -111,7 +111,9 @@ pub fn read_mcap_bytes(
         }
         InputError::new(file, msg).at(format!("after {after} messages"))
     };
-    mcap::read::footer(bytes).map_err(|e| mcap_err(e, 0))?;
+    if let Err(e) = mcap::read::footer(bytes) {
+        return Err(truncated(bytes, file, e));
+    }
     let mut stream = mcap::read::RawMessageStream::new(bytes).map_err(|e| mcap_err(e, 0))?;
     let mut st = State::new(file, opts);
     let mut total = 0usize;
@@ -144,6 +146,37 @@ pub fn read_mcap_bytes(
         }
     }
     st.finish()
+}
+
+/// The error for a file without a valid footer: names the last message that
+/// could still be read (topic and per-topic index), so the cut can be found.
+fn truncated(bytes: &[u8], file: &str, e: mcap::McapError) -> InputError {
+    let lenient = mcap::read::RawMessageStream::new_with_options(
+        bytes,
+        mcap::read::Options::IgnoreEndMagic.into(),
+    );
+    let mut last: Option<(String, usize)> = None;
+    let mut counts: HashMap<u16, usize> = HashMap::new();
+    if let Ok(mut stream) = lenient {
+        while let Some(Ok(m)) = stream.next() {
+            let id = m.header.channel_id;
+            let c = counts.entry(id).or_insert(0);
+            if let Some(ch) = stream.get_channel(id) {
+                last = Some((ch.topic.clone(), *c));
+            }
+            *c += 1;
+        }
+    }
+    let base = format!("truncated or corrupt MCAP (no valid footer: {e})");
+    match last {
+        Some((topic, i)) => InputError::new(
+            file,
+            format!("{base}; the last readable message is this one"),
+        )
+        .topic(topic)
+        .at(format!("message {i}")),
+        None => InputError::new(file, format!("{base}; no message is readable")),
+    }
 }
 
 /// What a channel's messages become.
