@@ -117,30 +117,31 @@ pub fn read_mcap_bytes(
     let mut stream = mcap::read::RawMessageStream::new(bytes).map_err(|e| mcap_err(e, 0))?;
     let mut st = State::new(file, opts);
     let mut total = 0usize;
-    let mut roles: HashMap<u16, (String, Vec<Role>)> = HashMap::new();
-    let mut counts: HashMap<u16, usize> = HashMap::new();
+    // Per channel: topic, roles, messages seen so far.
+    let mut channels: HashMap<u16, (String, Vec<Role>, usize)> = HashMap::new();
     while let Some(msg) = stream.next() {
         let msg = msg.map_err(|e| mcap_err(e, total))?;
         total += 1;
         let id = msg.header.channel_id;
-        if !roles.contains_key(&id) {
-            let ch = stream.get_channel(id).ok_or_else(|| {
-                InputError::new(file, format!("message refers to unknown channel {id}"))
-                    .at(format!("after {total} messages"))
-            })?;
-            let r =
-                channel_roles(&ch, opts).map_err(|m| InputError::new(file, m).topic(&ch.topic))?;
-            roles.insert(id, (ch.topic.clone(), r));
-        }
-        let (topic, rs) = &roles[&id];
-        let index = counts.entry(id).or_insert(0);
-        let i = *index;
-        *index += 1;
+        let (topic, rs, count) = match channels.entry(id) {
+            std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+            std::collections::hash_map::Entry::Vacant(e) => {
+                let ch = stream.get_channel(id).ok_or_else(|| {
+                    InputError::new(file, format!("message refers to unknown channel {id}"))
+                        .at(format!("after {total} messages"))
+                })?;
+                let r = channel_roles(&ch, opts)
+                    .map_err(|m| InputError::new(file, m).topic(&ch.topic))?;
+                e.insert((ch.topic.clone(), r, 0))
+            }
+        };
+        let i = *count;
+        *count += 1;
         for role in rs {
             st.handle(*role, &msg.data, msg.header.log_time)
                 .map_err(|m| {
                     InputError::new(file, m)
-                        .topic(topic)
+                        .topic(topic.as_str())
                         .at(format!("message {i}"))
                 })?;
         }
