@@ -6,6 +6,7 @@ pub mod carmen;
 pub mod cdr;
 pub mod mcap_canon;
 pub mod mcap_read;
+mod mcap_streams;
 pub mod mcap_write;
 pub mod ros_msgs;
 pub mod ros_schema;
