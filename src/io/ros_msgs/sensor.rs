@@ -120,7 +120,7 @@ pub struct ImuMsg {
     pub header: Header,
     /// Orientation estimate.
     pub orientation: Quat,
-    /// Its covariance (row-major 3×3; −1 in [0] = no estimate).
+    /// Its covariance (row-major 3×3; element 0 = −1 means no estimate).
     pub orientation_covariance: [f64; 9],
     /// Angular velocity (rad/s).
     pub angular_velocity: Vec3,
