@@ -11,7 +11,9 @@ prints one JSON object on stdout:
                       "message_encoding": ..., "metadata": {...}, "count": N,
                       "messages": [{"index": i, "log_time": ns, ...decoded fields}]}}}
 
-Messages are indexed in file order, per topic. By default a few messages per
+Counts come from the summary statistics (checked again while decoding: the
+number of messages seen per topic must match). Messages are indexed in file
+order, per topic. By default a few messages per
 topic are decoded (first, second, quarter, middle, three quarters, last);
 `--all TOPIC` decodes every message of TOPIC. Non-finite floats are written as
 the strings "nan", "inf", "-inf" so the output is strict JSON.
@@ -98,8 +100,14 @@ def main():
         head = reader.get_header()
         summary = reader.get_summary()
         counts = {}
-        for _schema, channel, _msg in reader.iter_messages(log_time_order=False):
-            counts[channel.topic] = counts.get(channel.topic, 0) + 1
+        stats = summary.statistics
+        if stats is not None and stats.message_count == sum(stats.channel_message_counts.values()):
+            for cid, n in stats.channel_message_counts.items():
+                topic = summary.channels[cid].topic
+                counts[topic] = counts.get(topic, 0) + n
+        else:
+            for _schema, channel, _msg in reader.iter_messages(log_time_order=False):
+                counts[channel.topic] = counts.get(channel.topic, 0) + 1
         topics = {}
         wanted = {}
         for ch in summary.channels.values():
@@ -131,6 +139,9 @@ def main():
                 rec = {"index": i, "log_time": msg.log_time}
                 rec.update(decode_fields(sc.name, decoded))
                 topics[ch.topic]["messages"].append(rec)
+    for topic, v in topics.items():
+        if index.get(topic, 0) != v["count"]:
+            sys.exit(f"{path}: {topic} has {index.get(topic, 0)} messages, statistics say {v['count']}")
     json.dump({"profile": head.profile, "library": head.library, "topics": topics},
               sys.stdout, allow_nan=False)
     sys.stdout.write("\n")

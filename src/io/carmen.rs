@@ -30,7 +30,7 @@ pub fn read_carmen(path: &Path, opts: &ReadOptions) -> Result<Recording, InputEr
 /// CARMEN uses π/n for even counts (180, 360: the last beam stops short of
 /// +π/2) and π/(n−1) for odd counts (181, 361: −90°…+90° inclusive).
 pub fn flaser_increment(n: usize) -> f64 {
-    if n % 2 == 0 {
+    if n.is_multiple_of(2) {
         PI / n as f64
     } else {
         PI / (n.max(2) - 1) as f64

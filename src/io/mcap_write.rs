@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::atomic::write_bytes_atomic;
 use super::cdr::CdrWriter;
+use super::mcap_canon::canonicalize_summary;
 use super::mcap_read::TopicConfig;
 use super::ros_msgs::{
     Header, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, Pose, Quat, RosMsg,
@@ -286,7 +287,9 @@ pub fn encode_mcap(rec: &Recording, opts: &WriteOptions) -> Result<Vec<u8>, mcap
         seq[k] += 1;
     }
     w.finish()?;
-    Ok(w.into_inner().into_inner())
+    let mut bytes = w.into_inner().into_inner();
+    canonicalize_summary(&mut bytes);
+    Ok(bytes)
 }
 
 fn odometry(header: Header, opts: &WriteOptions, p: &StampedPose) -> OdometryMsg {
