@@ -9,6 +9,7 @@
 pub mod effects;
 pub mod error;
 pub mod geom;
+pub mod icp;
 pub mod io;
 pub mod motion;
 pub mod recording;
