@@ -8,6 +8,7 @@
 
 pub mod effects;
 pub mod error;
+pub mod eval;
 pub mod geom;
 pub mod icp;
 pub mod io;
@@ -15,6 +16,7 @@ pub mod motion;
 pub mod recording;
 pub mod robot;
 pub mod scan;
+pub mod sim;
 pub mod traj;
 
 pub use error::InputError;

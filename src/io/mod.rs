@@ -2,3 +2,6 @@
 //! outputs. Every write goes through [`atomic`].
 
 pub mod atomic;
+
+mod columns;
+pub mod relations;
