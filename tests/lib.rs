@@ -1,3 +1,4 @@
 //! Integration tests, compiled as one binary.
 
+mod icp_sim;
 mod support;

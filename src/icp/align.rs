@@ -53,8 +53,14 @@ impl Aligner {
         }
         let th = sin_num.atan2(cos_num);
         let (s, c) = th.sin_cos();
-        let t = [qm[0] - (c * pm[0] - s * pm[1]), qm[1] - (s * pm[0] + c * pm[1])];
-        [t[0], t[1], th].iter().all(|v| v.is_finite()).then_some([t[0], t[1], th])
+        let t = [
+            qm[0] - (c * pm[0] - s * pm[1]),
+            qm[1] - (s * pm[0] + c * pm[1]),
+        ];
+        [t[0], t[1], th]
+            .iter()
+            .all(|v| v.is_finite())
+            .then_some([t[0], t[1], th])
     }
 }
 

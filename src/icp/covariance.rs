@@ -111,7 +111,10 @@ mod tests {
         (0..n)
             .map(|i| Correspondence {
                 p: [i as f64 * 0.1 - 2.0, y],
-                q: [i as f64 * 0.1 - 2.0, y + if i % 2 == 0 { 0.01 } else { -0.01 }],
+                q: [
+                    i as f64 * 0.1 - 2.0,
+                    y + if i % 2 == 0 { 0.01 } else { -0.01 },
+                ],
                 normal: Some([0.0, 1.0]),
                 w: 1.0,
             })
@@ -128,14 +131,21 @@ mod tests {
         // add an end wall: well conditioned, x variance ~ σ²/n_end
         c.extend((0..20).map(|i| Correspondence {
             p: [3.0, i as f64 * 0.1 - 1.0],
-            q: [3.0 + if i % 2 == 0 { 0.01 } else { -0.01 }, i as f64 * 0.1 - 1.0],
+            q: [
+                3.0 + if i % 2 == 0 { 0.01 } else { -0.01 },
+                i as f64 * 0.1 - 1.0,
+            ],
             normal: Some([1.0, 0.0]),
             w: 1.0,
         }));
         let u = estimate(&c, [0.0; 3], 1.0).unwrap();
         assert!(u.conditioning > 1e-3);
         let var = 1e-4 * 100.0 / 97.0;
-        assert!((u.cov[(0, 0)] - var / 20.0).abs() / (var / 20.0) < 0.05, "{}", u.cov);
+        assert!(
+            (u.cov[(0, 0)] - var / 20.0).abs() / (var / 20.0) < 0.05,
+            "{}",
+            u.cov
+        );
         assert!((u.rms - 0.01).abs() < 1e-9);
     }
 }

@@ -73,7 +73,13 @@ impl ScanMatcher {
         params.validate()?;
         let p = &params;
         Ok(Self {
-            pre: Preprocessor::new(base_from_laser, p.min_range, p.max_range, p.gap_factor, p.max_gap),
+            pre: Preprocessor::new(
+                base_from_laser,
+                p.min_range,
+                p.max_range,
+                p.gap_factor,
+                p.max_gap,
+            ),
             threshold: AdaptiveThreshold::new(
                 p.initial_threshold,
                 p.min_threshold,
@@ -125,7 +131,10 @@ impl ScanMatcher {
             (Some(p), _) => (p, PriorSource::Given),
             (None, Some((inc, vdt))) if dt.is_finite() && dt > 0.0 => {
                 let (ds, dth) = geom::arc_of_increment(&inc);
-                (geom::arc_increment(ds / vdt, dth / vdt, dt), PriorSource::ConstantVelocity)
+                (
+                    geom::arc_increment(ds / vdt, dth / vdt, dt),
+                    PriorSource::ConstantVelocity,
+                )
             }
             _ => (Pose2::identity(), PriorSource::None),
         };
@@ -168,7 +177,8 @@ impl ScanMatcher {
 
     fn match_pair(&mut self, t0: f64, t1: f64, prior: &Pose2, source: PriorSource) -> Motion {
         let p = &self.params;
-        self.pre.downsample(&self.cur.pts, p.beam_stride, p.voxel_size, &mut self.src);
+        self.pre
+            .downsample(&self.cur.pts, p.beam_stride, p.voxel_size, &mut self.src);
         let init = geom::xyt(&(self.ref_from_last * prior));
         let set = RegisterSettings {
             threshold: self.threshold.threshold(),
@@ -183,12 +193,16 @@ impl ScanMatcher {
         self.info.reference_points = self.reference.len();
         let ref_from_cur = geom::pose(reg.pose[0], reg.pose[1], reg.pose[2]);
         let motion = geom::between(&self.ref_from_last, &ref_from_cur);
-        let min_inliers = (p.min_correspondences as f64).max(p.min_inlier_fraction * self.src.len() as f64);
+        let min_inliers =
+            (p.min_correspondences as f64).max(p.min_inlier_fraction * self.src.len() as f64);
         let failure = if (reg.inliers as f64) < min_inliers {
             Some(PairFailure::TooFewCorrespondences)
         } else if !reg.converged {
             Some(PairFailure::NotConverged)
-        } else if reg.uncertainty.is_none_or(|u| u.conditioning < p.degenerate_ratio) {
+        } else if reg
+            .uncertainty
+            .is_none_or(|u| u.conditioning < p.degenerate_ratio)
+        {
             Some(PairFailure::Degenerate)
         } else if !self.plausible(&motion, prior, source, t1 - t0) {
             Some(PairFailure::Implausible)
@@ -236,7 +250,9 @@ impl ScanMatcher {
         let p = &self.params;
         let [x, y, th] = geom::xyt(motion);
         let slack = p.min_threshold;
-        if (x * x + y * y).sqrt() > p.max_speed * dt + slack || th.abs() > p.max_turn_rate * dt + slack {
+        if (x * x + y * y).sqrt() > p.max_speed * dt + slack
+            || th.abs() > p.max_turn_rate * dt + slack
+        {
             return false;
         }
         if source == PriorSource::None {
@@ -244,7 +260,8 @@ impl ScanMatcher {
         }
         let [dx, dy, dth] = geom::xyt(&geom::between(prior, motion));
         let prior_len = prior.translation.vector.norm();
-        (dx * dx + dy * dy).sqrt() <= p.prior_trans_tol + p.prior_rel_tol * prior_len && dth.abs() <= p.prior_rot_tol
+        (dx * dx + dy * dy).sqrt() <= p.prior_trans_tol + p.prior_rel_tol * prior_len
+            && dth.abs() <= p.prior_rot_tol
     }
 
     /// After a successful match: the current scan becomes the reference (scan
@@ -256,7 +273,10 @@ impl ScanMatcher {
         }
         self.ref_from_last = ref_from_cur;
         self.last_cov = cov;
-        let key = self.keyframes.back().map(|k| geom::between(&k.0, &ref_from_cur));
+        let key = self
+            .keyframes
+            .back()
+            .map(|k| geom::between(&k.0, &ref_from_cur));
         let new_key = key.is_none_or(|d| {
             d.translation.vector.norm() > self.params.keyframe_dist
                 || geom::heading(&d).abs() > self.params.keyframe_angle
@@ -266,7 +286,8 @@ impl ScanMatcher {
                 self.keyframes.pop_front();
             }
             self.keyframes.push_back((ref_from_cur, self.cur.clone()));
-            self.reference.set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
+            self.reference
+                .set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
         }
     }
 
@@ -283,7 +304,8 @@ impl ScanMatcher {
         if self.params.local_map {
             self.keyframes.clear();
             self.keyframes.push_back((ref_from_cur, self.cur.clone()));
-            self.reference.set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
+            self.reference
+                .set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
             self.ref_from_last = ref_from_cur;
         } else {
             self.reference.set(&self.cur);

@@ -71,7 +71,8 @@ impl Preprocessor {
             let rot = self.base_from_laser.rotation;
             self.dirs.clear();
             self.dirs.extend((0..layout.2).map(|i| {
-                let d = rot * nalgebra::Vector2::new(scan.beam_angle(i).cos(), scan.beam_angle(i).sin());
+                let d = rot
+                    * nalgebra::Vector2::new(scan.beam_angle(i).cos(), scan.beam_angle(i).sin());
                 [d.x, d.y]
             }));
             self.layout = layout;
@@ -92,7 +93,8 @@ impl Preprocessor {
             if let Some((li, lr)) = last {
                 let q = out.pts[out.pts.len() - 1];
                 let gap = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
-                let allowed = (self.gap_factor * r.max(lr) * spacing * (i - li) as f64).min(self.max_gap);
+                let allowed =
+                    (self.gap_factor * r.max(lr) * spacing * (i - li) as f64).min(self.max_gap);
                 let n = out.link.len();
                 out.link[n - 1] = i - li <= 2 && gap <= allowed;
             }
@@ -106,7 +108,13 @@ impl Preprocessor {
     /// Thins `src` into `out`: every `stride`-th point, then at most one point
     /// per `voxel` × `voxel` cell (first come, in beam order); `voxel = 0`
     /// keeps all.
-    pub fn downsample(&mut self, src: &[[f64; 2]], stride: usize, voxel: f64, out: &mut Vec<[f64; 2]>) {
+    pub fn downsample(
+        &mut self,
+        src: &[[f64; 2]],
+        stride: usize,
+        voxel: f64,
+        out: &mut Vec<[f64; 2]>,
+    ) {
         out.clear();
         self.cells.clear();
         for p in src.iter().step_by(stride.max(1)) {
@@ -139,8 +147,18 @@ mod tests {
 
     #[test]
     fn invalid_readings_are_dropped_and_points_land_in_base_frame() {
-        let mut pre = Preprocessor::new(pose(-0.45, 0.0, std::f64::consts::PI), 0.0, 10.0, 6.0, 0.5);
-        let s = scan(vec![2.0, f32::NAN, 2.0, f32::INFINITY, 0.2, 15.0, 2.0, 2.01]);
+        let mut pre =
+            Preprocessor::new(pose(-0.45, 0.0, std::f64::consts::PI), 0.0, 10.0, 6.0, 0.5);
+        let s = scan(vec![
+            2.0,
+            f32::NAN,
+            2.0,
+            f32::INFINITY,
+            0.2,
+            15.0,
+            2.0,
+            2.01,
+        ]);
         let mut out = ScanPoints::default();
         pre.points(&s, &mut out);
         assert_eq!(out.pts.len(), 4);

@@ -43,7 +43,10 @@ impl Reference {
 
     /// Replaces the content with several point sets, each mapped by a pose
     /// `frame_from_set` first; links never cross from one set to the next.
-    pub fn set_many<'a>(&mut self, sets: impl Iterator<Item = (&'a crate::geom::Pose2, &'a ScanPoints)>) {
+    pub fn set_many<'a>(
+        &mut self,
+        sets: impl Iterator<Item = (&'a crate::geom::Pose2, &'a ScanPoints)>,
+    ) {
         self.pts.clear();
         self.link.clear();
         for (pose, s) in sets {
@@ -73,41 +76,52 @@ impl Reference {
     /// The closest point to `q` on the reference polyline: the nearest
     /// reference point, moved onto the linked segment on either side of it
     /// when that is closer (Besl & McKay's closest point on the model shape).
+    /// `None` when the reference is empty, or when the closest point is an
+    /// isolated sample or the open end of a surface: those move with the
+    /// viewpoint (sampling, occlusion edges) and would pull the estimate
+    /// towards zero motion.
     pub fn closest(&self, q: [f64; 2]) -> Option<Closest> {
         let tree = self.tree.as_ref()?;
-        let nn = tree.query(&q).nearest_one::<SquaredEuclidean<f64>>().execute();
+        let nn = tree
+            .query(&q)
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute();
         let j = nn.item as usize;
         let a = self.pts[j];
-        let mut best = Closest {
-            target: a,
-            normal: None,
-        };
-        let mut best_d2 = f64::INFINITY;
+        let before = j > 0 && self.link[j - 1];
+        let after = self.link[j] && j + 1 < self.pts.len();
+        let mut best: Option<(f64, bool, Closest)> = None;
         let mut try_seg = |b: [f64; 2]| {
             let (ux, uy) = (b[0] - a[0], b[1] - a[1]);
             let len2 = ux * ux + uy * uy;
             if len2 <= 0.0 {
                 return;
             }
-            let s = (((q[0] - a[0]) * ux + (q[1] - a[1]) * uy) / len2).clamp(0.0, 1.0);
+            let s_raw = ((q[0] - a[0]) * ux + (q[1] - a[1]) * uy) / len2;
+            let s = s_raw.clamp(0.0, 1.0);
             let f = [a[0] + s * ux, a[1] + s * uy];
             let d2 = (q[0] - f[0]).powi(2) + (q[1] - f[1]).powi(2);
-            if d2 < best_d2 {
-                best_d2 = d2;
+            if best.as_ref().is_none_or(|b| d2 < b.0) {
                 let len = len2.sqrt();
-                best = Closest {
+                let c = Closest {
                     target: f,
                     normal: Some([-uy / len, ux / len]),
                 };
+                best = Some((d2, s_raw < 0.0, c));
             }
         };
-        if j > 0 && self.link[j - 1] {
+        if before {
             try_seg(self.pts[j - 1]);
         }
-        if self.link[j] && j + 1 < self.pts.len() {
+        if after {
             try_seg(self.pts[j + 1]);
         }
-        Some(best)
+        match best {
+            // Beyond the vertex on a surface that ends there: open end.
+            Some((_, true, _)) if !(before && after) => None,
+            Some((_, _, c)) => Some(c),
+            None => None,
+        }
     }
 }
 
@@ -127,10 +141,10 @@ mod tests {
         let c = r.closest([0.3, 0.2]).unwrap();
         assert!((c.target[0] - 0.3).abs() < 1e-12 && c.target[1].abs() < 1e-12);
         assert!(c.normal.unwrap()[1].abs() > 0.999);
-        // an unlinked point is matched as a point, without a normal
-        let c = r.closest([5.2, 5.1]).unwrap();
-        assert_eq!(c.target, [5.0, 5.0]);
-        assert!(c.normal.is_none());
+        // isolated samples and open ends give no correspondence
+        assert!(r.closest([5.2, 5.1]).is_none());
+        assert!(r.closest([-0.2, 0.1]).is_none());
+        assert!(r.closest([1.2, 0.1]).is_none());
     }
 
     #[test]

@@ -20,6 +20,15 @@ pub struct RegisterSettings {
     pub cov_inflation: f64,
 }
 
+/// Lever arm (m) that makes rotation steps comparable with translation steps.
+const LEVER: f64 = 5.0;
+/// Largest extrapolation factor of one accelerated step.
+const MAX_EXTRAPOLATION: f64 = 20.0;
+
+fn norm_l(d: &[f64; 3]) -> f64 {
+    (d[0] * d[0] + d[1] * d[1] + (d[2] * LEVER).powi(2)).sqrt()
+}
+
 /// Outcome of one registration.
 #[derive(Debug, Clone)]
 pub struct Registration {
@@ -62,6 +71,10 @@ pub fn register(
         inliers: 0,
         uncertainty: None,
     };
+    if reference.is_empty() {
+        return out;
+    }
+    let mut last_step: Option<[f64; 3]> = None;
     for it in 1..=set.max_iterations {
         out.iterations = it;
         let (s, c) = pose[2].sin_cos();
@@ -70,7 +83,7 @@ pub fn register(
         for &p in source {
             let q = [c * p[0] - s * p[1] + pose[0], s * p[0] + c * p[1] + pose[1]];
             let Some(cl) = reference.closest(q) else {
-                return out;
+                continue;
             };
             let r2 = (q[0] - cl.target[0]).powi(2) + (q[1] - cl.target[1]).powi(2);
             if r2 > gate2 {
@@ -92,14 +105,39 @@ pub fn register(
         let Some(next) = aligner.solve() else {
             return out;
         };
-        let step = ((next[0] - pose[0]).powi(2) + (next[1] - pose[1]).powi(2)).sqrt()
-            + crate::geom::wrap_angle(next[2] - pose[2]).abs();
+        let d = [
+            next[0] - pose[0],
+            next[1] - pose[1],
+            crate::geom::wrap_angle(next[2] - pose[2]),
+        ];
+        let step = (d[0] * d[0] + d[1] * d[1]).sqrt() + d[2].abs();
         pose = [next[0], next[1], crate::geom::wrap_angle(next[2])];
-        out.pose = pose;
         if step < set.convergence {
             out.converged = true;
+            out.pose = pose;
             break;
         }
+        // Besl & McKay's acceleration: along a sliding direction the closed-form
+        // step shrinks geometrically (ratio ρ); when two successive steps are
+        // nearly parallel, jump to the limit of that series, δ ρ / (1 − ρ).
+        if let Some(prev) = last_step {
+            let dot = d[0] * prev[0] + d[1] * prev[1] + d[2] * prev[2] * LEVER * LEVER;
+            let (n1, n0) = (norm_l(&d), norm_l(&prev));
+            let rho = n1 / n0;
+            if dot > 0.99 * n1 * n0 && rho < 0.95 {
+                let k = (rho / (1.0 - rho)).min(MAX_EXTRAPOLATION);
+                pose = [
+                    pose[0] + k * d[0],
+                    pose[1] + k * d[1],
+                    crate::geom::wrap_angle(pose[2] + k * d[2]),
+                ];
+                last_step = None;
+                out.pose = pose;
+                continue;
+            }
+        }
+        last_step = Some(d);
+        out.pose = pose;
     }
     out.uncertainty = covariance::estimate(corrs, pose, set.cov_inflation);
     out

@@ -77,8 +77,16 @@ pub fn summarise(motions: &[Motion], wall_s: f64) -> IcpStats {
             *s.failures.entry(f.as_str().to_string()).or_default() += 1;
         }
     }
-    s.mean_iterations = if ran > 0 { iters as f64 / ran as f64 } else { 0.0 };
-    s.pairs_per_s = if wall_s > 0.0 { s.pairs as f64 / wall_s } else { 0.0 };
+    s.mean_iterations = if ran > 0 {
+        iters as f64 / ran as f64
+    } else {
+        0.0
+    };
+    s.pairs_per_s = if wall_s > 0.0 {
+        s.pairs as f64 / wall_s
+    } else {
+        0.0
+    };
     s
 }
 
