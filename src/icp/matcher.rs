@@ -204,7 +204,7 @@ impl ScanMatcher {
             .is_none_or(|u| u.conditioning < p.degenerate_ratio)
         {
             Some(PairFailure::Degenerate)
-        } else if !self.plausible(&motion, prior, source, t1 - t0) {
+        } else if !self.agrees_with_prior(&motion, prior, source) {
             Some(PairFailure::Implausible)
         } else {
             None
@@ -220,6 +220,10 @@ impl ScanMatcher {
             m.inliers = reg.inliers as u32;
             return m;
         }
+        // A geometrically sound match that the robot could not have driven
+        // in dt (bursts of scans stamped milliseconds apart): the stamps are
+        // wrong, not the geometry. The motion is kept for the trajectory but
+        // flagged, so it never becomes a velocity observation.
         let u = reg.uncertainty.expect("checked above");
         let cov = if self.params.local_map {
             // motion = inv(W_last) W_cur, both registered against the map.
@@ -228,8 +232,11 @@ impl ScanMatcher {
         } else {
             u.cov
         };
+        let time_ok = self.within_limits(&motion, &cov, t1 - t0);
         self.threshold.update(&geom::between(prior, &motion));
-        self.velocity = Some((motion, t1 - t0));
+        if time_ok {
+            self.velocity = Some((motion, t1 - t0));
+        }
         self.advance(ref_from_cur, u.cov);
         let [dx, dy, dtheta] = geom::xyt(&motion);
         Motion {
@@ -241,23 +248,27 @@ impl ScanMatcher {
             cov,
             iterations: reg.iterations,
             inliers: reg.inliers as u32,
-            failure: None,
+            failure: (!time_ok).then_some(PairFailure::BadTime),
         }
     }
 
-    /// Whether a matched motion agrees with the prior and the robot's limits.
-    fn plausible(&self, motion: &Pose2, prior: &Pose2, source: PriorSource, dt: f64) -> bool {
+    /// Whether a matched motion is within the robot's speed and turn-rate
+    /// limits over `dt`, allowing 3σ of its covariance plus a small slack.
+    fn within_limits(&self, motion: &Pose2, cov: &Matrix3<f64>, dt: f64) -> bool {
         let p = &self.params;
         let [x, y, th] = geom::xyt(motion);
-        let slack = p.min_threshold;
-        if (x * x + y * y).sqrt() > p.max_speed * dt + slack
-            || th.abs() > p.max_turn_rate * dt + slack
-        {
-            return false;
-        }
+        let st = (cov[(0, 0)] + cov[(1, 1)]).max(0.0).sqrt();
+        let sr = cov[(2, 2)].max(0.0).sqrt();
+        (x * x + y * y).sqrt() <= p.max_speed * dt + 3.0 * st + p.speed_slack
+            && th.abs() <= p.max_turn_rate * dt + 3.0 * sr + p.turn_slack
+    }
+
+    /// Whether a matched motion agrees with an informative prior.
+    fn agrees_with_prior(&self, motion: &Pose2, prior: &Pose2, source: PriorSource) -> bool {
         if source == PriorSource::None {
             return true;
         }
+        let p = &self.params;
         let [dx, dy, dth] = geom::xyt(&geom::between(prior, motion));
         let prior_len = prior.translation.vector.norm();
         (dx * dx + dy * dy).sqrt() <= p.prior_trans_tol + p.prior_rel_tol * prior_len

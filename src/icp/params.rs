@@ -59,6 +59,10 @@ pub struct IcpParams {
     pub max_speed: f64,
     /// See `max_speed` (rad/s).
     pub max_turn_rate: f64,
+    /// Slack on `max_speed` × dt beyond 3σ of the match (m).
+    pub speed_slack: f64,
+    /// Slack on `max_turn_rate` × dt beyond 3σ of the match (rad).
+    pub turn_slack: f64,
     /// Match against a local map of recent keyframes instead of the previous scan.
     pub local_map: bool,
     /// Keyframes kept in the local map.
@@ -94,7 +98,9 @@ impl Default for IcpParams {
             prior_rel_tol: 0.5,
             prior_rot_tol: 0.35,
             max_speed: 3.0,
-            max_turn_rate: 4.0,
+            max_turn_rate: 3.0,
+            speed_slack: 0.01,
+            turn_slack: 0.01,
             local_map: false,
             keyframes: 5,
             keyframe_dist: 0.3,
@@ -132,6 +138,8 @@ impl IcpParams {
             ("prior_rot_tol", self.prior_rot_tol),
             ("max_speed", self.max_speed),
             ("max_turn_rate", self.max_turn_rate),
+            ("speed_slack", self.speed_slack),
+            ("turn_slack", self.turn_slack),
             ("keyframe_dist", self.keyframe_dist),
             ("keyframe_angle", self.keyframe_angle),
         ];
