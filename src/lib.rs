@@ -11,6 +11,7 @@ pub mod effects;
 pub mod error;
 pub mod eval;
 pub mod geom;
+pub mod icp;
 pub mod io;
 pub mod motion;
 pub mod pipeline;

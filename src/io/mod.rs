@@ -3,6 +3,8 @@
 
 pub mod atomic;
 
+mod columns;
+pub mod relations;
 pub mod carmen;
 pub mod cdr;
 pub mod censi;
