@@ -2,9 +2,6 @@
 //! outputs. Every write goes through [`atomic`].
 
 pub mod atomic;
-
-mod columns;
-pub mod relations;
 pub mod carmen;
 pub mod cdr;
 pub mod censi;
