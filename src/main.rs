@@ -23,8 +23,71 @@ struct Cli {
 enum Command {
     /// Simulate the wheelchair in a 2D world and write a ROS 2 bag (MCAP).
     Simulate(SimulateArgs),
+    /// Scan matching: consecutive scans into motions with covariance, and a trajectory.
+    Icp(IcpArgs),
+    /// Estimate wheel radii and wheel base online (Adaptive-PF, PF, DKF, AKF, none).
+    Calibrate(CalibrateArgs),
     /// Evaluate a trajectory against a reference and/or relations (evo's numbers).
     Eval(EvalArgs),
+}
+
+#[derive(Args)]
+struct IcpArgs {
+    /// Recording (ROS 2 MCAP or CARMEN log).
+    #[arg(long, value_name = "REC")]
+    input: PathBuf,
+    /// Trajectory output (TUM).
+    #[arg(long, value_name = "TRAJ.tum")]
+    out: PathBuf,
+    /// Per-pair motions with covariance and quality (CSV).
+    #[arg(long, value_name = "MOTIONS.csv")]
+    motions: Option<PathBuf>,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    common: Common,
+}
+
+#[derive(Args)]
+struct CalibrateArgs {
+    /// Recording (ROS 2 MCAP or CARMEN log); ICP runs inside.
+    #[arg(long, value_name = "REC", required_unless_present = "motions_csv")]
+    input: Option<PathBuf>,
+    /// Instead of a recording: ICP motions (CSV, as `odocal icp --motions` writes)...
+    #[arg(
+        long = "motions",
+        value_name = "MOTIONS.csv",
+        requires = "wheels_csv",
+        conflicts_with = "input"
+    )]
+    motions_csv: Option<PathBuf>,
+    /// ...and wheel angles `t,left,right` or rates `t0,t1,omega_right,omega_left` (CSV).
+    #[arg(long = "wheels", value_name = "WHEELS.csv", requires = "motions_csv")]
+    wheels_csv: Option<PathBuf>,
+    /// Calibrator: adaptive-pf, pf, dkf, akf, none.
+    #[arg(long)]
+    method: Option<odocal::calib::Method>,
+    /// Resampling scheme: multinomial, stratified, systematic, residual.
+    #[arg(long)]
+    resampler: Option<odocal::calib::Scheme>,
+    /// When to resample: every, neff, max-weight.
+    #[arg(long)]
+    trigger: Option<odocal::calib::Trigger>,
+    /// Initial particle count.
+    #[arg(long, value_name = "N")]
+    particles: Option<usize>,
+    /// Seed of every random draw.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Output directory: calibration.csv, trajectory.tum, summary.json.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    common: Common,
 }
 
 #[derive(Args)]
@@ -118,6 +181,8 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Simulate(a) => simulate(a),
+        Command::Icp(a) => icp(a),
+        Command::Calibrate(a) => calibrate(a),
         Command::Eval(a) => eval(a),
     };
     match result {
@@ -313,4 +378,117 @@ fn print_trajectory_metrics(t: &odocal::eval::TrajectoryMetrics) {
         None => println!("drift            n/a (reference does not move)"),
     }
     println!("final error (m)  {:.4}", t.final_error);
+}
+
+fn read_recording(
+    path: &Path,
+    cfg: &Config,
+    robot: &odocal::robot::RobotConfig,
+) -> Result<odocal::recording::Recording, PipelineError> {
+    let mut read = odocal::io::ReadOptions::for_robot(robot);
+    read.topics = cfg.topics.clone();
+    Ok(odocal::io::read_recording(path, &read)?)
+}
+
+fn icp(a: IcpArgs) -> anyhow::Result<()> {
+    let (cfg, robot) = load_common(&a.common)?;
+    let start = std::time::Instant::now();
+    let rec = read_recording(&a.input, &cfg, &robot)?;
+    let out = pipeline::icp::run(&rec, &robot, &cfg.icp)?;
+    pipeline::icp::write(&out, &a.out, a.motions.as_deref())?;
+    let mut stats = out.stats.clone();
+    // Wall time of the whole command (decoding included), as users time it.
+    stats.wall_s = start.elapsed().as_secs_f64();
+    stats.pairs_per_s = stats.pairs as f64 / stats.wall_s.max(1e-9);
+    if a.json {
+        return print_json(&stats);
+    }
+    eprintln!(
+        "{} pairs ({} failed), {:.1} iterations on average, {:.2} s ({:.0} pairs/s); trajectory {:.1} m -> {}",
+        stats.pairs,
+        stats.failed_pairs,
+        stats.mean_iterations,
+        stats.wall_s,
+        stats.pairs_per_s,
+        out.trajectory.path_length(),
+        a.out.display()
+    );
+    Ok(())
+}
+
+fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
+    let (mut cfg, robot) = load_common(&a.common)?;
+    if let Some(m) = a.method {
+        cfg.calib.method = m;
+    }
+    if let Some(r) = a.resampler {
+        cfg.calib.resampler = r;
+    }
+    if let Some(t) = a.trigger {
+        cfg.calib.trigger = t;
+    }
+    if let Some(n) = a.particles {
+        cfg.calib.particles = Some(n);
+    }
+    if let Some(s) = a.seed {
+        cfg.calib.seed = s;
+    }
+    let input = match (&a.input, &a.motions_csv, &a.wheels_csv) {
+        (Some(rec_path), _, _) => {
+            let rec = read_recording(rec_path, &cfg, &robot)?;
+            let out = pipeline::icp::run(&rec, &robot, &cfg.icp)?;
+            pipeline::calibrate::CalibInput {
+                observations: out.observations(),
+                wheels: rec.wheels,
+                gyro: rec.gyro,
+            }
+        }
+        (None, Some(m), Some(w)) => {
+            let motions = odocal::io::csv::read_motions(m).map_err(PipelineError::from)?;
+            pipeline::calibrate::CalibInput {
+                observations: motions
+                    .iter()
+                    .filter_map(odocal::motion::VelocityObs::from_motion)
+                    .collect(),
+                wheels: odocal::io::csv::read_wheels(w).map_err(PipelineError::from)?,
+                gyro: Vec::new(),
+            }
+        }
+        _ => {
+            return Err(bad(
+                "calibrate needs --input REC, or --motions and --wheels",
+            ))
+        }
+    };
+    if input.wheels.len() < 2 {
+        return Err(bad(
+            "the input has no wheel encoder data (JointState) to calibrate",
+        ));
+    }
+    let run = pipeline::calibrate::run(&input, &robot, &cfg.calib, &cfg.measurements)?;
+    pipeline::calibrate::write(&a.out, &run)?;
+    if a.json {
+        return print_json(&run.summary);
+    }
+    let s = &run.summary;
+    eprintln!(
+        "{}: R_R {:.5} ± {:.5} m, R_L {:.5} ± {:.5} m, D {:.5} ± {:.5} m after {} steps ({:.3} ms/step)",
+        s.method,
+        s.final_params.r_right,
+        s.std.r_right,
+        s.final_params.r_left,
+        s.std.r_left,
+        s.final_params.wheel_base,
+        s.std.wheel_base,
+        s.iterations,
+        s.mean_iteration_ms
+    );
+    eprintln!(
+        "diff_drive_controller multipliers: right_wheel_radius {:.5}, left_wheel_radius {:.5}, wheel_separation {:.5}; outputs in {}",
+        s.multipliers.right_wheel_radius,
+        s.multipliers.left_wheel_radius,
+        s.multipliers.wheel_separation,
+        a.out.display()
+    );
+    Ok(())
 }

@@ -6,6 +6,7 @@ pub mod carmen;
 pub mod cdr;
 pub mod censi;
 mod columns;
+pub mod csv;
 pub mod kitti;
 pub mod mcap_canon;
 pub mod mcap_read;

@@ -1,9 +1,12 @@
 //! The configuration file (`--config CFG.toml`) and robot file (`--robot`):
 //! one table per stage, each the stage's own parameter struct with defaults.
 
+use super::calibrate::MeasurementConfig;
 use super::PipelineError;
+use crate::calib::CalibParams;
 use crate::error::InputError;
 use crate::eval::EvalOptions;
+use crate::icp::IcpParams;
 use crate::io::TopicConfig;
 use crate::robot::RobotConfig;
 use crate::sim::SimConfig;
@@ -18,6 +21,12 @@ pub struct Config {
     pub topics: TopicConfig,
     /// Simulator settings.
     pub sim: SimConfig,
+    /// Scan matching settings.
+    pub icp: IcpParams,
+    /// Calibrator settings.
+    pub calib: CalibParams,
+    /// Which measurements feed the calibrator, and their σ.
+    pub measurements: MeasurementConfig,
     /// Evaluation settings.
     pub eval: EvalOptions,
 }

@@ -1,9 +1,11 @@
 //! Wires the stages for the command line: load inputs, run the math modules,
 //! write outputs atomically, and return summaries the binary prints.
 
+pub mod calibrate;
 mod config;
 mod error;
 pub mod evaluate;
+pub mod icp;
 pub mod simulate;
 
 pub use config::{load_robot, Config};
