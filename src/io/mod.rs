@@ -2,3 +2,5 @@
 //! outputs. Every write goes through [`atomic`].
 
 pub mod atomic;
+/// The tables transcribed from the seed papers.
+pub mod seed_tables;
