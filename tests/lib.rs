@@ -1,5 +1,7 @@
 //! Integration tests, compiled as one binary.
 
+mod classic_ga;
+mod classic_heading_pf;
 mod classic_seed_tables;
 mod classic_umbmark;
 mod support;
