@@ -1,5 +1,6 @@
 //! Integration tests, compiled as one binary.
 
+mod classic_compare;
 mod classic_ga;
 mod classic_heading_pf;
 mod classic_seed_tables;
