@@ -93,6 +93,8 @@ pub struct SimRun {
     pub wheels: Vec<WheelSample>,
     /// True `world_from_base` at the same stamps, starting at the identity.
     pub truth: Trajectory,
+    /// Stamp (s) at which each planned segment ended (empty when unknown).
+    pub segment_ends: Vec<f64>,
 }
 
 /// The UMBmark square of side `side` (m): four legs, each followed by a 90°
@@ -167,6 +169,7 @@ pub fn drive_segments(
         right: 0.0,
     }];
     let mut traj = Trajectory::with_capacity(1024);
+    let mut segment_ends = Vec::with_capacity(segments.len());
     traj.push(0.0, pose);
     for seg in segments {
         let (ds, dth) = seg.motion();
@@ -194,10 +197,12 @@ pub fn drive_segments(
             });
             traj.push(t, pose);
         }
+        segment_ends.push(t);
     }
     SimRun {
         wheels,
         truth: traj,
+        segment_ends,
     }
 }
 

@@ -15,6 +15,7 @@ mod ga;
 mod heading_gain;
 mod heading_pf;
 mod square;
+mod square_fit;
 mod tacho;
 mod umbmark;
 
@@ -36,6 +37,7 @@ pub use heading_pf::{
     HeadingReading, HeadingSourceParams, PathErrorRow, PfExperimentParams, SeedPathError,
 };
 pub use square::{square_report, CornerError, SquareCorner, SquareReport};
+pub use square_fit::{fit_square_effects, square_odometry_corners, SquareEffectFit};
 pub use tacho::{fit_tachometer, LinearFit, TachoCalibration, TachoReading};
 pub use umbmark::{
     umbmark, umbmark_experiment, umbmark_runs, UmbmarkExperiment, UmbmarkResult, UmbmarkRun,
