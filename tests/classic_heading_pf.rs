@@ -1,8 +1,9 @@
 //! Seed 002's heading-fusion particle filter on simulated irregular paths.
 
 use odocal::classic::{
-    drive_segments, heading_pf, heading_pf_experiment, irregular_path, simulate_heading,
-    DriveParams, HeadingPfParams, HeadingSourceParams, PfExperimentParams, SeedPathError,
+    drive_segments, heading_pf, heading_pf_experiment, irregular_path, path_error_markdown,
+    simulate_heading, DriveParams, HeadingPfParams, HeadingSourceParams, PfExperimentParams,
+    SeedPathError,
 };
 use odocal::geom::Pose2;
 use odocal::robot::{wheel_odometry, DiffDrive};
@@ -106,4 +107,7 @@ fn table_2_experiment_orders_the_scenarios_like_the_seed() {
         "heading fusion helps"
     );
     assert!((params.k_left / p.truth.k_left - 1.0).abs() < 0.01);
+    let md = path_error_markdown(&rows);
+    assert_eq!(md.lines().count(), 5);
+    assert!(md.contains("| calibrated_odometry | 22 |") && md.contains("| 0.234 |"));
 }

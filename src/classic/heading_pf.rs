@@ -412,3 +412,19 @@ pub fn heading_pf_experiment(
     }
     Ok((rows, ga.params))
 }
+
+/// The rows as a markdown table in the layout of seed 002's Table 2, ours
+/// next to the seed's (`*` = the seed's vehicle could not complete the path).
+pub fn path_error_markdown(rows: &[PathErrorRow]) -> String {
+    let mut s = String::from("| scenario | length (m) | error (% of length), odocal | ± std | seed 002 |\n|---|---|---|---|---|\n");
+    for r in rows {
+        let seed = r
+            .seed_error_percent
+            .map_or("*".to_string(), |v| format!("{v}"));
+        s.push_str(&format!(
+            "| {} | {} | {:.3} | {:.3} | {} |\n",
+            r.scenario, r.length_m, r.error_percent, r.error_std, seed
+        ));
+    }
+    s
+}

@@ -33,8 +33,9 @@ pub use ga::{
 };
 pub use heading_gain::{fit_heading_gain, HeadingGain, HeadingTrial};
 pub use heading_pf::{
-    calibration_runs, heading_pf, heading_pf_experiment, simulate_heading, HeadingPfParams,
-    HeadingReading, HeadingSourceParams, PathErrorRow, PfExperimentParams, SeedPathError,
+    calibration_runs, heading_pf, heading_pf_experiment, path_error_markdown, simulate_heading,
+    HeadingPfParams, HeadingReading, HeadingSourceParams, PathErrorRow, PfExperimentParams,
+    SeedPathError,
 };
 pub use square::{square_report, CornerError, SquareCorner, SquareReport};
 pub use square_fit::{fit_square_effects, square_odometry_corners, SquareEffectFit};
