@@ -115,3 +115,55 @@ fn classic_methods_side_by_side() {
         .iter()
         .all(|r| r.rmse_xy.is_finite() && r.path_error_percent.is_finite()));
 }
+
+#[test]
+fn classic_methods_on_the_simulator_squares() {
+    use odocal::classic::sim_run;
+    use odocal::effects::Effect;
+    use odocal::robot::RobotConfig;
+    let robot = RobotConfig::default();
+    let effects = [
+        Effect::RadiusScale {
+            right: 0.005,
+            left: -0.003,
+        },
+        Effect::WheelBaseScale { scale: 0.015 },
+    ];
+    let nominal = robot.diff_drive();
+    let truth = DiffDrive {
+        r_right: 0.32 * 1.005,
+        r_left: 0.32 * 0.997,
+        wheel_base: 0.65 * 1.015,
+    };
+    let sq = sim_run(&robot, &effects, CompareScenario::Square, 3).unwrap();
+    let l = sq.truth.path_length();
+    assert!((l - 24.0).abs() < 0.1, "one loop of the 6 m square: {l} m");
+    let p = CompareParams {
+        runs_per_direction: 2,
+        evaluation_runs: 1,
+        ga: GaParams {
+            generations: 60,
+            ..GaParams::default()
+        },
+        pf: HeadingPfParams {
+            particles: 100,
+            ..HeadingPfParams::default()
+        },
+        ..CompareParams::default()
+    };
+    let rows = compare_classic(&nominal, Some(&truth), &p, |sc, seed| {
+        sim_run(&robot, &effects, sc, seed).unwrap()
+    })
+    .unwrap();
+    println!("{}", markdown_table(&rows));
+    let by = |m| rows.iter().find(|r| r.method == m).unwrap();
+    let none = by(ClassicMethod::None);
+    for m in [ClassicMethod::Umbmark, ClassicMethod::Ga] {
+        assert!(by(m).rmse_xy < 0.3 * none.rmse_xy, "{m:?}");
+    }
+    let um = by(ClassicMethod::Umbmark).final_params;
+    assert!(
+        (um.r_right / um.r_left - truth.r_right / truth.r_left).abs() < 1e-3,
+        "{um:?}"
+    );
+}

@@ -14,6 +14,7 @@ mod error;
 mod ga;
 mod heading_gain;
 mod heading_pf;
+mod sim_runs;
 mod square;
 mod square_fit;
 mod tacho;
@@ -37,6 +38,7 @@ pub use heading_pf::{
     HeadingPfParams, HeadingReading, HeadingSourceParams, PathErrorRow, PfExperimentParams,
     SeedPathError,
 };
+pub use sim_runs::sim_run;
 pub use square::{square_report, CornerError, SquareCorner, SquareReport};
 pub use square_fit::{fit_square_effects, square_odometry_corners, SquareEffectFit};
 pub use tacho::{fit_tachometer, LinearFit, TachoCalibration, TachoReading};
