@@ -45,7 +45,7 @@ fn classic_methods_side_by_side() {
             CompareScenario::SquareCcw => square_segments(6.0, Turn::Ccw),
             CompareScenario::Evaluation => irregular_path(40.0, seed),
         };
-        drive_segments(&nominal, &truth, &segs, &drive, seed)
+        Ok::<_, String>(drive_segments(&nominal, &truth, &segs, &drive, seed))
     })
     .unwrap();
     println!("{}", markdown_table(&rows));
@@ -118,7 +118,7 @@ fn classic_methods_side_by_side() {
 
 #[test]
 fn classic_methods_on_the_simulator_squares() {
-    use odocal::classic::sim_run;
+    use odocal::classic::{compare_on_simulator, sim_run};
     use odocal::effects::Effect;
     use odocal::robot::RobotConfig;
     let robot = RobotConfig::default();
@@ -151,10 +151,12 @@ fn classic_methods_on_the_simulator_squares() {
         },
         ..CompareParams::default()
     };
-    let rows = compare_classic(&nominal, Some(&truth), &p, |sc, seed| {
-        sim_run(&robot, &effects, sc, seed).unwrap()
-    })
-    .unwrap();
+    let rows = compare_on_simulator(&robot, &effects, &p).unwrap();
+    // A failing run is an error, not a panic.
+    let err = compare_classic(&nominal, None, &p, |_, _| {
+        Err::<odocal::classic::SimRun, _>("no such scenario")
+    });
+    assert!(err.unwrap_err().to_string().contains("no such scenario"));
     println!("{}", markdown_table(&rows));
     let by = |m| rows.iter().find(|r| r.method == m).unwrap();
     let none = by(ClassicMethod::None);

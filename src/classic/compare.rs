@@ -228,15 +228,21 @@ fn total_turn(t: &Trajectory) -> f64 {
 /// runs. `simulate(scenario, seed)` must return the recorded wheels and the
 /// true trajectory of one run; square runs are those a robot believing
 /// `nominal` drives. `truth`, when known, gives the parameter errors.
-pub fn compare_classic<F>(
+pub fn compare_classic<F, E>(
     nominal: &DiffDrive,
     truth: Option<&DiffDrive>,
     p: &CompareParams,
     mut simulate: F,
 ) -> Result<Vec<ClassicResult>, ClassicError>
 where
-    F: FnMut(CompareScenario, u64) -> SimRun,
+    F: FnMut(CompareScenario, u64) -> Result<SimRun, E>,
+    E: std::fmt::Display,
 {
+    let mut simulate = |sc, seed| {
+        simulate(sc, seed).map_err(|e| {
+            ClassicError::invalid("comparison runs", format!("{sc:?} (seed {seed}): {e}"))
+        })
+    };
     let mut squares = Vec::new();
     for (k, (sc, dir)) in [
         (CompareScenario::Square, Turn::Cw),
@@ -250,7 +256,7 @@ where
                 .seed
                 .wrapping_mul(7919)
                 .wrapping_add((k * p.runs_per_direction + i) as u64);
-            squares.push((dir, simulate(sc, seed)));
+            squares.push((dir, simulate(sc, seed)?));
         }
     }
     let evals: Vec<SimRun> = (0..p.evaluation_runs)
@@ -260,7 +266,7 @@ where
                 p.seed.wrapping_mul(104_729).wrapping_add(i as u64),
             )
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     let mut out = Vec::new();
     let mut push = |method,
                     k: DiffDrive,

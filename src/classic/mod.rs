@@ -38,7 +38,7 @@ pub use heading_pf::{
     HeadingPfParams, HeadingReading, HeadingSourceParams, PathErrorRow, PfExperimentParams,
     SeedPathError,
 };
-pub use sim_runs::sim_run;
+pub use sim_runs::{compare_on_simulator, sim_run};
 pub use square::{square_report, CornerError, SquareCorner, SquareReport};
 pub use square_fit::{fit_square_effects, square_odometry_corners, SquareEffectFit};
 pub use tacho::{fit_tachometer, LinearFit, TachoCalibration, TachoReading};

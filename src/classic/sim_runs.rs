@@ -4,8 +4,9 @@
 //! misread by the nominal model (the mirror image of a robot driving by
 //! odometry); UMBmark's first-order formulas are the same in both cases.
 
-use super::compare::CompareScenario;
+use super::compare::{compare_classic, ClassicResult, CompareParams, CompareScenario};
 use super::drive::SimRun;
+use super::error::ClassicError;
 use crate::effects::Effect;
 use crate::geom;
 use crate::robot::RobotConfig;
@@ -75,5 +76,22 @@ pub fn sim_run(
         wheels,
         truth: t,
         segment_ends: Vec::new(),
+    })
+}
+
+/// [`compare_classic`] on the simulator: the chair is `robot` with `effects`
+/// applied (their true parameters at t = 0 give the parameter errors).
+pub fn compare_on_simulator(
+    robot: &RobotConfig,
+    effects: &[Effect],
+    p: &CompareParams,
+) -> Result<Vec<ClassicResult>, ClassicError> {
+    let truth = crate::sim::TrueRobot::new(robot, effects).at(0.0);
+    let p = CompareParams {
+        ticks_per_rev: robot.ticks_per_rev,
+        ..p.clone()
+    };
+    compare_classic(&robot.diff_drive(), Some(&truth), &p, |sc, seed| {
+        sim_run(robot, effects, sc, seed)
     })
 }
