@@ -66,7 +66,7 @@ pub fn heading_pf(
 ) -> Result<Trajectory, ClassicError> {
     const M: &str = "heading pf";
     check_finite(M, "heading", headings.iter().flat_map(|h| [h.0, h.1]))?;
-    if p.particles == 0 || !(p.heading_sigma > 0.0) {
+    if p.particles == 0 || p.heading_sigma.is_nan() || p.heading_sigma <= 0.0 {
         return Err(ClassicError::invalid(
             M,
             "need particles > 0 and heading_sigma > 0",
@@ -85,7 +85,7 @@ pub fn heading_pf(
     let mut prev = *first;
     let mut hi = headings.partition_point(|h| h.0 < first.stamp);
     for s in &wheels[1..] {
-        if !(s.stamp > prev.stamp) {
+        if s.stamp.is_nan() || s.stamp <= prev.stamp {
             continue;
         }
         // Propagate: calibrated odometry increment plus noise ∝ distance and turn.

@@ -87,7 +87,7 @@ pub fn fit_square_effects(
     } else {
         Turn::Cw
     };
-    if !(side > 0.0) {
+    if side.is_nan() || side <= 0.0 {
         return Err(ClassicError::invalid(
             M,
             "the actual square must start along +x",
