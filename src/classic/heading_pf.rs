@@ -268,7 +268,8 @@ pub struct PfExperimentParams {
 
 impl Default for PfExperimentParams {
     /// The seed's AGV: true k1, k2, b = its GA result; believed k = 3.75e-4
-    /// m/pulse (mid-box), b = 0.37 m; 1000 pulses/rev; 2 % wheel slip per step.
+    /// m/pulse (mid-box), b = 0.37 m; 1000 pulses/rev; 0.5 % wheel slip per
+    /// 50 ms step (the level at which calibrated odometry comes nearest the seed's).
     fn default() -> Self {
         Self {
             lengths: vec![22.0, 47.0, 100.0],
@@ -286,7 +287,7 @@ impl Default for PfExperimentParams {
             },
             calibration_runs: 15,
             drive: DriveParams {
-                slip_sigma: 0.02,
+                slip_sigma: 0.005,
                 ..DriveParams::default()
             },
             heading: HeadingSourceParams::default(),
