@@ -41,7 +41,9 @@ pub use heading_pf::{
 pub use sim_runs::{compare_on_simulator, sim_run};
 pub use square::{square_report, CornerError, SquareCorner, SquareReport};
 pub use square_fit::{fit_square_effects, square_odometry_corners, SquareEffectFit};
-pub use tacho::{fit_tachometer, LinearFit, TachoCalibration, TachoReading};
+pub use tacho::{
+    fit_tachometer, simulate_tachometer_table, LinearFit, TachoCalibration, TachoReading,
+};
 pub use umbmark::{
     umbmark, umbmark_experiment, umbmark_runs, UmbmarkExperiment, UmbmarkResult, UmbmarkRun,
 };

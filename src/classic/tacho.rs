@@ -2,7 +2,7 @@
 //! tachometer, fitted per wheel as `true = slope · encoder + intercept`
 //! (least squares, encoder reading as regressor), then applied to encoder rates.
 
-use super::encoder::{rad_s_to_rpm, rpm_to_rad_s};
+use super::encoder::{rad_s_to_rpm, rpm_to_rad_s, EncoderChain};
 use super::error::{check_finite, ClassicError};
 use crate::recording::WheelSample;
 use serde::Serialize;
@@ -151,9 +151,50 @@ impl TachoCalibration {
     }
 }
 
+/// The table a tachometer session would give on wheels whose encoders over-read
+/// as the `encoder_gain` effect describes, ω_meas = ω (1 + k |ω|) (k in s/rad),
+/// read out through `chain` (whole pulses per period) at the given true speeds (rpm).
+pub fn simulate_tachometer_table(
+    chain: &EncoderChain,
+    k_right: f64,
+    k_left: f64,
+    tacho_rpm: &[f64],
+) -> Vec<TachoReading> {
+    let read = |rpm: f64, k: f64| {
+        let w = rpm_to_rad_s(rpm);
+        chain.rpm_reading(rad_s_to_rpm(w * (1.0 + k * w.abs())))
+    };
+    tacho_rpm
+        .iter()
+        .map(|&t| TachoReading {
+            tachometer_rpm: t,
+            right_encoder_rpm: read(t, k_right),
+            left_encoder_rpm: read(t, k_left),
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn encoder_gain_is_undone_within_the_fit_residual() {
+        let speeds = [33.0, 53.0, 72.0, 92.0, 114.0, 137.0];
+        let t = simulate_tachometer_table(&EncoderChain::default(), 0.003, 0.004, &speeds);
+        assert!(t
+            .iter()
+            .all(|r| r.right_encoder_rpm > r.tachometer_rpm
+                && r.left_encoder_rpm > r.right_encoder_rpm));
+        let c = fit_tachometer(&t).unwrap();
+        assert!(c.right.slope < 1.0 && c.left.slope < c.right.slope);
+        // A wheel at 100 rpm (true) reads high; the correction brings it back
+        // to within the fit's largest residual plus one quantum.
+        let w = rpm_to_rad_s(100.0);
+        let (r, l) = c.correct_rates(w * (1.0 + 0.003 * w), w * (1.0 + 0.004 * w));
+        let tol = rpm_to_rad_s(c.left.residuals.iter().fold(0.0f64, |m, v| m.max(v.abs())) + 0.02);
+        assert!((r - w).abs() < tol && (l - w).abs() < tol, "{r} {l} {w}");
+    }
 
     #[test]
     fn exact_line_is_recovered_and_zero_stays_zero() {
