@@ -14,6 +14,7 @@ mod error;
 mod ga;
 mod heading_gain;
 mod heading_pf;
+mod pf_experiment;
 mod sim_runs;
 mod square;
 mod square_fit;
@@ -34,8 +35,10 @@ pub use ga::{
 };
 pub use heading_gain::{fit_heading_gain, HeadingGain, HeadingTrial};
 pub use heading_pf::{
-    calibration_runs, heading_pf, heading_pf_experiment, path_error_markdown, simulate_heading,
-    HeadingPfParams, HeadingReading, HeadingSourceParams, PathErrorRow, PfExperimentParams,
+    heading_pf, simulate_heading, HeadingPfParams, HeadingReading, HeadingSourceParams,
+};
+pub use pf_experiment::{
+    calibration_runs, heading_pf_experiment, path_error_markdown, PathErrorRow, PfExperimentParams,
     SeedPathError,
 };
 pub use sim_runs::{compare_on_simulator, sim_run};
