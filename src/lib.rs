@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 
 pub mod calib;
+pub mod classic;
 pub mod effects;
 pub mod error;
 pub mod eval;

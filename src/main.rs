@@ -8,6 +8,14 @@ use odocal::pipeline::{self, Config, PipelineError};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+/// Prints a line on stdout; a closed pipe (`odocal ... | head`) is not an error.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "odocal",
@@ -188,7 +196,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("odocal: {e:#}");
+            eout!("odocal: {e:#}");
             let code = e
                 .downcast_ref::<PipelineError>()
                 .map(|p| p.exit_code())
@@ -203,7 +211,7 @@ fn bad(msg: impl Into<String>) -> anyhow::Error {
 }
 
 fn print_json<T: serde::Serialize>(v: &T) -> anyhow::Result<()> {
-    println!("{}", serde_json::to_string_pretty(v)?);
+    out!("{}", serde_json::to_string_pretty(v)?);
     Ok(())
 }
 
@@ -269,7 +277,7 @@ fn simulate(a: SimulateArgs) -> anyhow::Result<()> {
     if a.json {
         return print_json(&summary);
     }
-    eprintln!(
+    eout!(
         "wrote {} ({} scans, {:.0} s, {:.1} m of {}){}",
         summary.out,
         summary.scans,
@@ -339,7 +347,7 @@ fn eval(a: EvalArgs) -> anyhow::Result<()> {
 
 fn print_relations(r: &odocal::eval::RelationStats) {
     let line = |name: &str, s: &odocal::eval::RelationSummary| {
-        println!(
+        out!(
             "relations {name:<6} n={:<5} trans {:.3} ± {:.3} m   rot {:.2} ± {:.2} deg",
             s.count, s.trans_mean, s.trans_std, s.rot_mean_deg, s.rot_std_deg
         )
@@ -349,35 +357,35 @@ fn print_relations(r: &odocal::eval::RelationStats) {
         line("local", l);
     }
     if r.skipped > 0 {
-        println!("relations skipped {} (outside the trajectory)", r.skipped);
+        out!("relations skipped {} (outside the trajectory)", r.skipped);
     }
 }
 
 fn print_stats(name: &str, s: Option<&odocal::eval::Stats>) {
     match s {
-        Some(s) => println!(
+        Some(s) => out!(
             "{name:<16} rmse {:.4}  mean {:.4}  median {:.4}  std {:.4}  min {:.4}  max {:.4}",
             s.rmse, s.mean, s.median, s.std, s.min, s.max
         ),
-        None => println!("{name:<16} n/a (position-only reference)"),
+        None => out!("{name:<16} n/a (position-only reference)"),
     }
 }
 
 fn print_trajectory_metrics(t: &odocal::eval::TrajectoryMetrics) {
-    println!("matched poses    {}", t.matched);
+    out!("matched poses    {}", t.matched);
     print_stats("APE (m)", Some(&t.ape));
     print_stats("APE rot (deg)", t.ape_rot_deg.as_ref());
     print_stats("RPE (m)", Some(&t.rpe));
     print_stats("RPE rot (deg)", t.rpe_rot_deg.as_ref());
-    println!("RMSE x,y (m)     {:.4}", t.rmse_xy);
+    out!("RMSE x,y (m)     {:.4}", t.rmse_xy);
     if let Some(r) = t.rmse_theta {
-        println!("RMSE θ (rad)     {r:.4}");
+        out!("RMSE θ (rad)     {r:.4}");
     }
     match t.drift_percent {
-        Some(d) => println!("drift            {d:.3} % of {:.1} m", t.path_length),
-        None => println!("drift            n/a (reference does not move)"),
+        Some(d) => out!("drift            {d:.3} % of {:.1} m", t.path_length),
+        None => out!("drift            n/a (reference does not move)"),
     }
-    println!("final error (m)  {:.4}", t.final_error);
+    out!("final error (m)  {:.4}", t.final_error);
 }
 
 fn read_recording(
@@ -403,7 +411,7 @@ fn icp(a: IcpArgs) -> anyhow::Result<()> {
     if a.json {
         return print_json(&stats);
     }
-    eprintln!(
+    eout!(
         "{} pairs ({} failed), {:.1} iterations on average, {:.2} s ({:.0} pairs/s); trajectory {:.1} m -> {}",
         stats.pairs,
         stats.failed_pairs,
@@ -471,7 +479,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         return print_json(&run.summary);
     }
     let s = &run.summary;
-    eprintln!(
+    eout!(
         "{}: R_R {:.5} ± {:.5} m, R_L {:.5} ± {:.5} m, D {:.5} ± {:.5} m after {} steps ({:.3} ms/step)",
         s.method,
         s.final_params.r_right,
@@ -483,7 +491,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         s.iterations,
         s.mean_iteration_ms
     );
-    eprintln!(
+    eout!(
         "diff_drive_controller multipliers: right_wheel_radius {:.5}, left_wheel_radius {:.5}, wheel_separation {:.5}; outputs in {}",
         s.multipliers.right_wheel_radius,
         s.multipliers.left_wheel_radius,

@@ -3,6 +3,11 @@
 mod calib_censi;
 mod calib_filters;
 mod calib_resample;
+mod classic_compare;
+mod classic_ga;
+mod classic_heading_pf;
+mod classic_seed_tables;
+mod classic_umbmark;
 mod eval_align;
 mod eval_evo;
 mod eval_inputs;

@@ -15,6 +15,7 @@ pub mod mcap_write;
 pub mod relations;
 pub mod ros_msgs;
 pub mod ros_schema;
+pub mod seed_tables;
 pub mod tum;
 
 pub use carmen::read_carmen;
