@@ -196,7 +196,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eout!("odocal: {e:#}");
+            eprintln!("odocal: {e:#}");
             let code = e
                 .downcast_ref::<PipelineError>()
                 .map(|p| p.exit_code())
@@ -277,7 +277,7 @@ fn simulate(a: SimulateArgs) -> anyhow::Result<()> {
     if a.json {
         return print_json(&summary);
     }
-    eout!(
+    eprintln!(
         "wrote {} ({} scans, {:.0} s, {:.1} m of {}){}",
         summary.out,
         summary.scans,
@@ -411,7 +411,7 @@ fn icp(a: IcpArgs) -> anyhow::Result<()> {
     if a.json {
         return print_json(&stats);
     }
-    eout!(
+    eprintln!(
         "{} pairs ({} failed), {:.1} iterations on average, {:.2} s ({:.0} pairs/s); trajectory {:.1} m -> {}",
         stats.pairs,
         stats.failed_pairs,
@@ -479,7 +479,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         return print_json(&run.summary);
     }
     let s = &run.summary;
-    eout!(
+    eprintln!(
         "{}: R_R {:.5} ± {:.5} m, R_L {:.5} ± {:.5} m, D {:.5} ± {:.5} m after {} steps ({:.3} ms/step)",
         s.method,
         s.final_params.r_right,
@@ -491,7 +491,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         s.iterations,
         s.mean_iteration_ms
     );
-    eout!(
+    eprintln!(
         "diff_drive_controller multipliers: right_wheel_radius {:.5}, left_wheel_radius {:.5}, wheel_separation {:.5}; outputs in {}",
         s.multipliers.right_wheel_radius,
         s.multipliers.left_wheel_radius,
