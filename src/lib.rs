@@ -15,5 +15,6 @@ pub mod recording;
 pub mod robot;
 pub mod scan;
 pub mod traj;
+pub mod viz;
 
 pub use error::InputError;
