@@ -21,5 +21,6 @@ pub mod robot;
 pub mod scan;
 pub mod sim;
 pub mod traj;
+pub mod viz;
 
 pub use error::InputError;

@@ -23,3 +23,7 @@ mod sim_effects;
 mod sim_scenario;
 mod sim_sensors;
 mod support;
+mod viz_logger;
+mod viz_plot;
+mod viz_report;
+mod viz_rrd;

@@ -1,0 +1,421 @@
+//! [`Logger`] into a Rerun recording: an `.rrd` file (written beside the
+//! target and renamed into place on [`Logger::finish`]), a running viewer, or
+//! a freshly spawned one. Temporal data is buffered and sent in columns
+//! (`send_columns`), a chunk per few hundred rows, so recording a whole run
+//! costs little next to computing it.
+
+use super::logger::{entity, CalibEstimate, Logger, Stamp, TrajectoryKind};
+use super::subsample::systematic_subsample;
+use super::VizError;
+use crate::geom::Pose2;
+use nalgebra::Point2;
+use rerun::{
+    Color, LineStrips2D, Points2D, Radius, RecordingStream, RecordingStreamBuilder, Scalars,
+    TimeColumn,
+};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Where the recording goes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RerunSink {
+    /// An `.rrd` file (the default use).
+    File(PathBuf),
+    /// A running viewer at `host:port` or a full `rerun+http://…/proxy` URL.
+    Connect(String),
+    /// Spawn the `rerun` viewer binary found on `PATH` and stream to it.
+    Spawn,
+}
+
+/// Settings of the Rerun recording.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RerunOptions {
+    /// Application id shown in the viewer.
+    pub app_id: String,
+    /// Most particles drawn per filter step (systematic subsample by weight).
+    pub max_particles: usize,
+    /// Rows buffered per entity before a chunk is sent.
+    pub batch_rows: usize,
+}
+
+impl Default for RerunOptions {
+    fn default() -> Self {
+        RerunOptions {
+            app_id: "odocal".into(),
+            max_particles: 256,
+            batch_rows: 512,
+        }
+    }
+}
+
+/// Rows of a points entity waiting to be sent as one chunk.
+#[derive(Default)]
+struct PointRows {
+    scans: Vec<i64>,
+    times: Vec<f64>,
+    lengths: Vec<usize>,
+    positions: Vec<[f32; 2]>,
+    colors: Vec<Color>,
+    radii: Vec<Radius>,
+}
+
+/// Rows of a scalar entity waiting to be sent.
+#[derive(Default)]
+struct ScalarRows {
+    scans: Vec<i64>,
+    times: Vec<f64>,
+    values: Vec<f64>,
+}
+
+/// A [`Logger`] writing a Rerun recording (design.md's entities and
+/// timelines).
+pub struct RerunLogger {
+    rec: Option<RecordingStream>,
+    options: RerunOptions,
+    /// `(temporary, final)` paths of a file sink.
+    file: Option<(PathBuf, PathBuf)>,
+    scans: PointRows,
+    particles: PointRows,
+    scalars: BTreeMap<&'static str, ScalarRows>,
+}
+
+fn rerun_err(e: impl std::fmt::Display) -> VizError {
+    VizError::Rerun(e.to_string())
+}
+
+fn temp_rrd(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "recording.rrd".into());
+    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+}
+
+fn viewer_on_path() -> bool {
+    std::env::var_os("PATH").is_some_and(|paths| {
+        std::env::split_paths(&paths).any(|d| d.join("rerun").is_file())
+    })
+}
+
+/// Viridis-like colour for a relative weight in [0, 1].
+fn weight_color(rel: f64) -> Color {
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let x = rel.clamp(0.0, 1.0) * 4.0;
+    let i = (x.floor() as usize).min(3);
+    let f = x - i as f64;
+    let c: Vec<u8> = (0..3)
+        .map(|k| (STOPS[i][k] + f * (STOPS[i + 1][k] - STOPS[i][k])).round() as u8)
+        .collect();
+    Color::from_rgb(c[0], c[1], c[2])
+}
+
+fn rgb(c: [u8; 3]) -> Color {
+    Color::from_rgb(c[0], c[1], c[2])
+}
+
+impl RerunLogger {
+    /// Opens a recording to `sink`. A file sink writes to a temporary file
+    /// beside the target until [`Logger::finish`]; `Spawn` fails clearly when
+    /// no `rerun` binary is on `PATH`.
+    pub fn new(sink: RerunSink, options: RerunOptions) -> Result<Self, VizError> {
+        if options.max_particles == 0 || options.batch_rows == 0 {
+            return Err(VizError::Input(
+                "max_particles and batch_rows must be positive".into(),
+            ));
+        }
+        let app = rerun::ApplicationId::try_new(options.app_id.clone())
+            .map_err(|e| VizError::Input(format!("app_id: {e}")))?;
+        let builder = RecordingStreamBuilder::new(app);
+        let (rec, file) = match sink {
+            RerunSink::File(path) => {
+                if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                    std::fs::create_dir_all(dir).map_err(|e| VizError::io(dir, e))?;
+                }
+                let tmp = temp_rrd(&path);
+                (builder.save(&tmp).map_err(rerun_err)?, Some((tmp, path)))
+            }
+            RerunSink::Connect(addr) => {
+                let url = if addr.contains("://") {
+                    addr
+                } else {
+                    format!("rerun+http://{addr}/proxy")
+                };
+                (builder.connect_grpc_opts(url).map_err(rerun_err)?, None)
+            }
+            RerunSink::Spawn => {
+                if !viewer_on_path() {
+                    return Err(VizError::Rerun(
+                        "no `rerun` viewer binary on PATH (install rerun-sdk==0.36.3)".into(),
+                    ));
+                }
+                (builder.spawn().map_err(rerun_err)?, None)
+            }
+        };
+        Ok(RerunLogger {
+            rec: Some(rec),
+            options,
+            file,
+            scans: PointRows::default(),
+            particles: PointRows::default(),
+            scalars: BTreeMap::new(),
+        })
+    }
+
+    /// Records to the `.rrd` file `path` with default options.
+    pub fn to_file(path: impl Into<PathBuf>) -> Result<Self, VizError> {
+        Self::new(RerunSink::File(path.into()), RerunOptions::default())
+    }
+
+    fn rec(&self) -> Result<&RecordingStream, VizError> {
+        self.rec
+            .as_ref()
+            .ok_or_else(|| VizError::Rerun("recording already finished".into()))
+    }
+
+    fn push_scalar(&mut self, path: &'static str, at: Stamp, value: f64) -> Result<(), VizError> {
+        if !value.is_finite() {
+            return Err(VizError::Input(format!(
+                "{path}: non-finite value at scan {}",
+                at.scan
+            )));
+        }
+        let rows = self.scalars.entry(path).or_default();
+        rows.scans.push(at.scan);
+        rows.times.push(at.time);
+        rows.values.push(value);
+        if rows.values.len() >= self.options.batch_rows * 8 {
+            self.flush_scalar(path)?;
+        }
+        Ok(())
+    }
+
+    fn flush_scalar(&mut self, path: &'static str) -> Result<(), VizError> {
+        let Some(rows) = self.scalars.get_mut(path) else {
+            return Ok(());
+        };
+        if rows.values.is_empty() {
+            return Ok(());
+        }
+        let rows = std::mem::take(rows);
+        let rec = self.rec()?;
+        rec.send_columns(
+            path,
+            [
+                TimeColumn::new_sequence(entity::SCAN, rows.scans),
+                TimeColumn::new_duration_secs(entity::TIME, rows.times),
+            ],
+            Scalars::new(rows.values)
+                .columns_of_unit_batches()
+                .map_err(rerun_err)?,
+        )
+        .map_err(rerun_err)
+    }
+
+    fn flush_points(&mut self, which: &'static str) -> Result<(), VizError> {
+        let rows = match which {
+            entity::SCAN_POINTS => std::mem::take(&mut self.scans),
+            _ => std::mem::take(&mut self.particles),
+        };
+        if rows.lengths.is_empty() {
+            return Ok(());
+        }
+        let mut points = Points2D::new(rows.positions);
+        if !rows.colors.is_empty() {
+            points = points.with_colors(rows.colors);
+        }
+        if !rows.radii.is_empty() {
+            points = points.with_radii(rows.radii);
+        }
+        let rec = self.rec()?;
+        rec.send_columns(
+            which,
+            [
+                TimeColumn::new_sequence(entity::SCAN, rows.scans),
+                TimeColumn::new_duration_secs(entity::TIME, rows.times),
+            ],
+            points.columns(rows.lengths).map_err(rerun_err)?,
+        )
+        .map_err(rerun_err)
+    }
+
+    fn flush_all(&mut self) -> Result<(), VizError> {
+        self.flush_points(entity::SCAN_POINTS)?;
+        self.flush_points(entity::PARTICLES)?;
+        let keys: Vec<&'static str> = self.scalars.keys().copied().collect();
+        for k in keys {
+            self.flush_scalar(k)?;
+        }
+        Ok(())
+    }
+}
+
+impl Logger for RerunLogger {
+    fn map(&mut self, segments: &[[Point2<f64>; 2]]) -> Result<(), VizError> {
+        let strips = segments.iter().map(|[a, b]| {
+            [
+                [a.x as f32, a.y as f32],
+                [b.x as f32, b.y as f32],
+            ]
+        });
+        let strips = LineStrips2D::new(strips)
+            .with_colors([Color::from_rgb(120, 120, 120)])
+            .with_radii([Radius::new_ui_points(1.0)]);
+        self.rec()?
+            .log_static(entity::MAP, &strips)
+            .map_err(rerun_err)
+    }
+
+    fn scan(
+        &mut self,
+        at: Stamp,
+        world_from_sensor: &Pose2,
+        points: &[Point2<f64>],
+    ) -> Result<(), VizError> {
+        at.check()?;
+        self.rec()?;
+        let rows = &mut self.scans;
+        rows.scans.push(at.scan);
+        rows.times.push(at.time);
+        rows.lengths.push(points.len());
+        rows.positions.extend(points.iter().map(|p| {
+            let w = world_from_sensor * p;
+            [w.x as f32, w.y as f32]
+        }));
+        if rows.lengths.len() >= self.options.batch_rows {
+            self.flush_points(entity::SCAN_POINTS)?;
+        }
+        Ok(())
+    }
+
+    fn trajectory(&mut self, kind: TrajectoryKind, poses: &[Pose2]) -> Result<(), VizError> {
+        let strip: Vec<[f32; 2]> = poses
+            .iter()
+            .map(|p| [p.translation.x as f32, p.translation.y as f32])
+            .collect();
+        let strips = LineStrips2D::new([strip])
+            .with_colors([rgb(kind.color())])
+            .with_radii([Radius::new_ui_points(1.5)]);
+        self.rec()?
+            .log_static(kind.entity(), &strips)
+            .map_err(rerun_err)
+    }
+
+    fn particles(
+        &mut self,
+        at: Stamp,
+        r_right: &[f64],
+        r_left: &[f64],
+        weights: &[f64],
+    ) -> Result<(), VizError> {
+        at.check()?;
+        if r_right.len() != r_left.len() || r_right.len() != weights.len() {
+            return Err(VizError::Input(format!(
+                "particles: {} R_R, {} R_L, {} weights",
+                r_right.len(),
+                r_left.len(),
+                weights.len()
+            )));
+        }
+        self.rec()?;
+        let shown = systematic_subsample(weights, self.options.max_particles);
+        let w = |i: usize| {
+            let x = weights[i];
+            if x.is_finite() && x > 0.0 {
+                x
+            } else {
+                0.0
+            }
+        };
+        let wmax = shown.iter().map(|&i| w(i)).fold(0.0, f64::max);
+        let rows = &mut self.particles;
+        rows.scans.push(at.scan);
+        rows.times.push(at.time);
+        rows.lengths.push(shown.len());
+        for &i in &shown {
+            let rel = if wmax > 0.0 { w(i) / wmax } else { 1.0 };
+            rows.positions.push([r_right[i] as f32, r_left[i] as f32]);
+            rows.colors.push(weight_color(rel));
+            rows.radii.push(Radius::new_ui_points((1.5 + 3.5 * rel) as f32));
+        }
+        if rows.lengths.len() >= self.options.batch_rows {
+            self.flush_points(entity::PARTICLES)?;
+        }
+        self.push_scalar(entity::PARTICLES_SHOWN, at, shown.len() as f64)
+    }
+
+    fn estimate(&mut self, at: Stamp, e: &CalibEstimate) -> Result<(), VizError> {
+        at.check()?;
+        self.rec()?;
+        let paths = [
+            (entity::EST_R_RIGHT, e.params[0]),
+            (entity::EST_R_LEFT, e.params[1]),
+            (entity::EST_WHEEL_BASE, e.params[2]),
+            (entity::STD_R_RIGHT, e.std[0]),
+            (entity::STD_R_LEFT, e.std[1]),
+            (entity::STD_WHEEL_BASE, e.std[2]),
+            (entity::PARTICLES_COUNT, e.particles as f64),
+            (entity::PROCESS_SIGMA, e.process_sigma),
+        ];
+        if let Some((p, _)) = paths.iter().find(|(_, v)| !v.is_finite()) {
+            return Err(VizError::Input(format!(
+                "{p}: non-finite value at scan {}",
+                at.scan
+            )));
+        }
+        for (p, v) in paths {
+            self.push_scalar(p, at, v)?;
+        }
+        Ok(())
+    }
+
+    fn icp(&mut self, at: Stamp, iterations: u32, covariance_trace: f64) -> Result<(), VizError> {
+        at.check()?;
+        self.rec()?;
+        if !covariance_trace.is_finite() {
+            return Err(VizError::Input(format!(
+                "{}: non-finite value at scan {}",
+                entity::ICP_COV_TRACE,
+                at.scan
+            )));
+        }
+        self.push_scalar(entity::ICP_ITERATIONS, at, iterations as f64)?;
+        self.push_scalar(entity::ICP_COV_TRACE, at, covariance_trace)
+    }
+
+    fn finish(&mut self) -> Result<(), VizError> {
+        if self.rec.is_none() {
+            return Ok(());
+        }
+        self.flush_all()?;
+        let rec = self.rec.take().expect("checked above");
+        rec.flush_blocking().map_err(rerun_err)?;
+        // Dropping the last handle closes the sink; a file sink writes its
+        // footer and joins its writer thread.
+        drop(rec);
+        if let Some((tmp, path)) = self.file.take() {
+            let f = std::fs::File::open(&tmp).map_err(|e| VizError::io(&tmp, e))?;
+            f.sync_all().map_err(|e| VizError::io(&tmp, e))?;
+            std::fs::rename(&tmp, &path).map_err(|e| VizError::io(&path, e))?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for RerunLogger {
+    fn drop(&mut self) {
+        // Dropped without `finish` (an error path): like every odocal write,
+        // leave the previous file or none, never a partial one.
+        drop(self.rec.take());
+        if let Some((tmp, _)) = self.file.take() {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+}

@@ -1,0 +1,143 @@
+//! A Rerun recording written through `RerunLogger`, read back with the
+//! official rerun-sdk (tools/rrd_check.py): entity paths, timelines, row and
+//! point counts are what was logged.
+#![cfg(feature = "rerun")]
+
+use crate::support::{python_with, scratch};
+use crate::viz_logger::{feed, RunShape};
+use odocal::viz::{
+    entity, systematic_subsample, Logger, RerunLogger, RerunOptions, RerunSink, Stamp,
+};
+use serde_json::{json, Value};
+use std::path::Path;
+use std::process::Command;
+
+fn run_check(test: &str, rrd: &Path, expect: &Value) -> bool {
+    let Some(py) = python_with(test, &["rerun", "pyarrow"]) else {
+        return false;
+    };
+    let exp = rrd.with_extension("expect.json");
+    std::fs::write(&exp, serde_json::to_vec_pretty(expect).unwrap()).unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/rrd_check.py");
+    let out = Command::new(py)
+        .arg(script)
+        .arg(rrd)
+        .arg(&exp)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "rrd_check failed:\n{stderr}\n{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    true
+}
+
+#[test]
+fn rerun_recording_matches_what_was_logged() {
+    let dir = scratch("rerun_rrd");
+    let rrd = dir.join("run.rrd");
+    let shape = RunShape {
+        scans: 23,
+        beams: 541,
+        particles: 2000,
+        map_segments: 5,
+    };
+    let options = RerunOptions {
+        max_particles: 100,
+        // Small batches: several chunks per entity must add up.
+        batch_rows: 4,
+        ..RerunOptions::default()
+    };
+    let mut log = RerunLogger::new(RerunSink::File(rrd.clone()), options).unwrap();
+    feed(&mut log, &shape).unwrap();
+    assert!(rrd.is_file());
+
+    // The subsample the logger must have drawn at each step.
+    let steps = shape.scans - 1;
+    let w: Vec<f64> = (0..shape.particles)
+        .map(|k| {
+            let u = (k as f64 * 0.618_033_988_75).fract() - 0.5;
+            let v = (k as f64 * 0.754_877_666_2).fract() - 0.5;
+            (-(u * u + v * v) * 20.0).exp()
+        })
+        .collect();
+    let shown = systematic_subsample(&w, 100).len();
+    assert!(shown > 50 && shown <= 100, "shown {shown}");
+
+    let last_t = 10.0 + 0.1 * (shape.scans - 1) as f64;
+    let temporal = |rows: usize, first_scan: i64| {
+        json!({"rows": rows, "first": {"scan": first_scan}, "last": {"scan": shape.scans as i64 - 1, "time": last_t}})
+    };
+    let mut entities = serde_json::Map::new();
+    entities.insert(entity::MAP.into(), json!({"static": true, "rows": 1,
+        "instances": {"LineStrips2D:strips": shape.map_segments}}));
+    for t in [entity::TRAJ_ICP, entity::TRAJ_RAW, entity::TRAJ_CALIBRATED, entity::TRAJ_REFERENCE] {
+        entities.insert(t.into(), json!({"static": true, "rows": 1,
+            "instances": {"LineStrips2D:strips": 1}}));
+    }
+    let mut scan = temporal(shape.scans, 0);
+    scan["instances"] = json!({"Points2D:positions": shape.scans * shape.beams});
+    scan["first"]["time"] = json!(10.0);
+    entities.insert(entity::SCAN_POINTS.into(), scan);
+    let mut parts = temporal(steps, 1);
+    parts["instances"] = json!({"Points2D:positions": steps * shown,
+        "Points2D:colors": steps * shown, "Points2D:radii": steps * shown});
+    entities.insert(entity::PARTICLES.into(), parts);
+    for s in [
+        entity::PARTICLES_SHOWN, entity::EST_R_RIGHT, entity::EST_R_LEFT, entity::EST_WHEEL_BASE,
+        entity::STD_R_RIGHT, entity::STD_R_LEFT, entity::STD_WHEEL_BASE,
+        entity::PARTICLES_COUNT, entity::PROCESS_SIGMA, entity::ICP_ITERATIONS,
+        entity::ICP_COV_TRACE,
+    ] {
+        let mut e = temporal(steps, 1);
+        e["instances"] = json!({"Scalars:scalars": steps});
+        entities.insert(s.into(), e);
+    }
+    let expect = json!({
+        "version": "0.36.3",
+        "timelines": [entity::SCAN, entity::TIME],
+        "exact": true,
+        "entities": entities,
+    });
+    if !run_check("rerun_recording_matches_what_was_logged", &rrd, &expect) {
+        return;
+    }
+    // The checker is not vacuous: a wrong row count is reported.
+    let mut wrong = expect.clone();
+    wrong["entities"][entity::SCAN_POINTS]["rows"] = json!(shape.scans + 1);
+    let exp = rrd.with_extension("wrong.json");
+    std::fs::write(&exp, serde_json::to_vec(&wrong).unwrap()).unwrap();
+    let py = python_with("rrd_wrong", &["rerun"]).unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/rrd_check.py");
+    let out = Command::new(py).arg(script).arg(&rrd).arg(&exp).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("world/scan: 23 rows, want 24"));
+}
+
+#[test]
+fn unfinished_recording_leaves_no_file() {
+    let dir = scratch("rerun_unfinished");
+    let rrd = dir.join("partial.rrd");
+    {
+        let mut log = RerunLogger::to_file(&rrd).unwrap();
+        log.icp(Stamp::new(1, 0.1), 4, 1e-3).unwrap();
+        // dropped without finish
+    }
+    assert!(!rrd.exists());
+    let leftovers = std::fs::read_dir(&dir).unwrap().count();
+    assert_eq!(leftovers, 0, "temporary file left behind");
+}
+
+#[test]
+fn rerun_logger_rejects_bad_input() {
+    let dir = scratch("rerun_bad_input");
+    let mut log = RerunLogger::to_file(dir.join("bad.rrd")).unwrap();
+    assert!(log.particles(Stamp::new(0, 0.0), &[0.3], &[0.3, 0.31], &[1.0]).is_err());
+    assert!(log.icp(Stamp::new(0, f64::NAN), 3, 0.1).is_err());
+    assert!(log.icp(Stamp::new(0, 0.0), 3, f64::INFINITY).is_err());
+    log.finish().unwrap();
+    log.finish().unwrap();
+    assert!(dir.join("bad.rrd").is_file());
+}
