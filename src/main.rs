@@ -29,6 +29,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The main job: the whole pipeline on the bundled recording, into odocal-demo/.
+    Demo(DemoArgs),
     /// Simulate the wheelchair in a 2D world and write a ROS 2 bag (MCAP).
     Simulate(SimulateArgs),
     /// Scan matching: consecutive scans into motions with covariance, and a trajectory.
@@ -37,6 +39,30 @@ enum Command {
     Calibrate(CalibrateArgs),
     /// Evaluate a trajectory against a reference and/or relations (evo's numbers).
     Eval(EvalArgs),
+}
+
+#[derive(Args)]
+struct DemoArgs {
+    /// Output directory (report.md, plots, trajectories, demo.rrd).
+    #[arg(long, value_name = "DIR", default_value = "odocal-demo")]
+    out: PathBuf,
+    /// Another recording instead of the bundled one.
+    #[arg(long, value_name = "REC")]
+    input: Option<PathBuf>,
+    /// The simulator's truth file of the recording (radii to compare with).
+    #[arg(long, value_name = "TRUTH.json")]
+    truth: Option<PathBuf>,
+    /// Stream to a running Rerun viewer at this address instead of writing demo.rrd.
+    #[arg(long, value_name = "ADDR", conflicts_with = "spawn")]
+    connect: Option<String>,
+    /// Spawn the Rerun viewer (when installed) and stream to it.
+    #[arg(long)]
+    spawn: bool,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    common: Common,
 }
 
 #[derive(Args)]
@@ -189,6 +215,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Simulate(a) => simulate(a),
+        Command::Demo(a) => demo(a),
         Command::Icp(a) => icp(a),
         Command::Calibrate(a) => calibrate(a),
         Command::Eval(a) => eval(a),
@@ -498,5 +525,90 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         s.multipliers.wheel_separation,
         a.out.display()
     );
+    Ok(())
+}
+
+/// The bundled recording `odocal demo` runs on by default.
+const DEMO_RECORDING: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scans/wheelchair-corridor.mcap");
+/// Its truth file.
+const DEMO_TRUTH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scans/wheelchair-corridor.truth.json");
+
+#[cfg(feature = "rerun")]
+fn demo_logger(a: &DemoArgs) -> anyhow::Result<Box<dyn odocal::viz::Logger>> {
+    use odocal::viz::{RerunLogger, RerunOptions, RerunSink};
+    let sink = match (&a.connect, a.spawn) {
+        (Some(addr), _) => RerunSink::Connect(addr.clone()),
+        (None, true) => RerunSink::Spawn,
+        (None, false) => RerunSink::File(a.out.join("demo.rrd")),
+    };
+    Ok(Box::new(RerunLogger::new(sink, RerunOptions::default())?))
+}
+
+#[cfg(not(feature = "rerun"))]
+fn demo_logger(a: &DemoArgs) -> anyhow::Result<Box<dyn odocal::viz::Logger>> {
+    if a.connect.is_some() || a.spawn {
+        return Err(bad("this odocal was built without the `rerun` feature"));
+    }
+    Ok(Box::new(odocal::viz::NullLogger))
+}
+
+fn demo(a: DemoArgs) -> anyhow::Result<()> {
+    let (cfg, robot) = load_common(&a.common)?;
+    let (input, truth_path) = match &a.input {
+        Some(p) => (p.clone(), a.truth.clone()),
+        None => (
+            PathBuf::from(DEMO_RECORDING),
+            Some(a.truth.clone().unwrap_or_else(|| PathBuf::from(DEMO_TRUTH))),
+        ),
+    };
+    let truth = match &truth_path {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| {
+                PipelineError::Input(odocal::InputError::new(p.display().to_string(), format!("cannot read: {e}")))
+            })?;
+            Some(odocal::sim::Truth::from_json(&text).map_err(|e| {
+                PipelineError::Input(odocal::InputError::new(p.display().to_string(), e.to_string()))
+            })?)
+        }
+        None => None,
+    };
+    let rec = read_recording(&input, &cfg, &robot)?;
+    std::fs::create_dir_all(&a.out).map_err(|e| PipelineError::write(&a.out, e))?;
+    let mut logger = demo_logger(&a)?;
+    let pb = progress_bar("demo");
+    let name = input.display().to_string();
+    let summary = pipeline::demo::run(
+        &pipeline::demo::DemoInput {
+            recording: &rec,
+            name: &name,
+            truth: truth.as_ref(),
+            robot: &robot,
+            config: &cfg,
+        },
+        &a.out,
+        logger.as_mut(),
+        &mut |stage, f| {
+            pb.set_message(stage.to_string());
+            pb.set_position((f * 1000.0) as u64);
+        },
+    )?;
+    pb.finish_and_clear();
+    if a.json {
+        return print_json(&summary);
+    }
+    out!("odocal demo on {} ({} scans, {:.0} s) in {:.1} s", summary.input, summary.scans, summary.duration_s, summary.wall_s);
+    out!("ICP: {} pairs, {} flagged, {:.1} iterations on average", summary.icp.pairs, summary.icp.failed_pairs, summary.icp.mean_iterations);
+    for m in &summary.methods {
+        let err = m
+            .final_errors
+            .map(|e| format!("  error R_R {:+.2} mm, R_L {:+.2} mm, D {:+.1} mm", e[0] * 1e3, e[1] * 1e3, e[2] * 1e3))
+            .unwrap_or_default();
+        let ape = m.eval.as_ref().map(|e| format!("  APE {:.3} m", e.ape.rmse)).unwrap_or_default();
+        out!("{:<12} R_R {:.5} m  R_L {:.5} m  D {:.4} m{err}{ape}", m.method, m.final_params[0], m.final_params[1], m.final_params[2]);
+    }
+    out!("report: {}", a.out.join("report.md").display());
+    if cfg!(feature = "rerun") && a.connect.is_none() && !a.spawn {
+        out!("open the recording with: rerun {}", a.out.join("demo.rrd").display());
+    }
     Ok(())
 }

@@ -28,7 +28,7 @@ pub use normal::{erfc, inverse_normal_cdf};
 pub use params::{CalibParams, Method, NoiseParams, Ranges};
 pub use pf::{ParticleFilter, Particles};
 pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};
-pub use run::{run, CalibSummary, CalibrationRun, HistoryRow, Multipliers, Params3};
+pub use run::{run, run_observed, CalibSummary, CalibrationRun, HistoryRow, Multipliers, Params3};
 pub use steps::{steps, usable, CalibStep, Kind, Measurement, MAX_GAP_STEP, MAX_MEASUREMENTS};
 pub use trigger::Trigger;
 pub use weights::{fast_exp, Weights};
@@ -97,6 +97,23 @@ pub trait Calibrator {
     fn step(&mut self, step: &CalibStep) -> Estimate;
     /// The method's name (design.md: adaptive-pf | pf | dkf | akf | none).
     fn name(&self) -> &'static str;
+    /// The particle cloud after the last step, for display; `None` for
+    /// calibrators without particles.
+    fn cloud(&self) -> Option<CloudView<'_>> {
+        None
+    }
+}
+
+/// A particle filter's cloud after a step: each particle's R_R and R_L (m)
+/// and its normalised weight (same lengths).
+#[derive(Debug, Clone, Copy)]
+pub struct CloudView<'a> {
+    /// Right wheel radii (m).
+    pub r_right: &'a [f64],
+    /// Left wheel radii (m).
+    pub r_left: &'a [f64],
+    /// Normalised weights (sum 1).
+    pub weights: &'a [f64],
 }
 
 /// Builds the calibrator `params.method` names, after validating `params`.

@@ -365,6 +365,16 @@ impl ParticleFilter {
 }
 
 impl Calibrator for ParticleFilter {
+    fn cloud(&self) -> Option<super::CloudView<'_>> {
+        let p = self.particles();
+        let w = self.weights().normalized();
+        (p.rr.len() == w.len() && p.rl.len() == w.len()).then_some(super::CloudView {
+            r_right: &p.rr,
+            r_left: &p.rl,
+            weights: w,
+        })
+    }
+
     fn step(&mut self, s: &CalibStep) -> Estimate {
         let (vo, wo) = self.predict(s);
         self.reweight(s);

@@ -130,6 +130,17 @@ impl CalibrationRun {
 /// estimate after that step — what an online system knows at the step's end.
 /// With no steps the summary holds the nominal parameters and 0 iterations.
 pub fn run(cal: &mut dyn Calibrator, steps: &[CalibStep], nominal: DiffDrive) -> CalibrationRun {
+    run_observed(cal, steps, nominal, &mut |_, _| {})
+}
+
+/// Like [`run`], calling `on_step` after every step with the estimate and the
+/// calibrator's particle cloud (if it has one), e.g. to show it in a viewer.
+pub fn run_observed(
+    cal: &mut dyn Calibrator,
+    steps: &[CalibStep],
+    nominal: DiffDrive,
+    on_step: &mut dyn FnMut(&Estimate, Option<super::CloudView<'_>>),
+) -> CalibrationRun {
     let mut history = Vec::with_capacity(steps.len());
     let mut trajectory = Trajectory::with_capacity(steps.len() + 1);
     let mut pose = Pose2::identity();
@@ -152,6 +163,7 @@ pub fn run(cal: &mut dyn Calibrator, steps: &[CalibStep], nominal: DiffDrive) ->
             covered = s.t1;
         }
         history.push(HistoryRow::from(&e));
+        on_step(&e, cal.cloud());
         last = Some(e);
     }
     let (final_params, std) = match &last {

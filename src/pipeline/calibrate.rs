@@ -62,6 +62,18 @@ pub fn run(
     params: &CalibParams,
     meas: &MeasurementConfig,
 ) -> Result<CalibrationRun, PipelineError> {
+    run_observed(input, robot, params, meas, &mut |_, _| {})
+}
+
+/// Like [`run`], calling `on_step` after every filter step with the estimate
+/// and, for particle filters, a view of the particle cloud.
+pub fn run_observed(
+    input: &CalibInput,
+    robot: &RobotConfig,
+    params: &CalibParams,
+    meas: &MeasurementConfig,
+    on_step: &mut dyn FnMut(&calib::Estimate, Option<calib::CloudView<'_>>),
+) -> Result<CalibrationRun, PipelineError> {
     let params = params_for_robot(params, robot);
     let nominal = robot.diff_drive();
     let gyro: &[GyroSample] = if meas.use_gyro { &input.gyro } else { &[] };
@@ -73,7 +85,7 @@ pub fn run(
     }
     let mut c =
         calib::build(&params, nominal).map_err(|e| PipelineError::BadArgument(e.to_string()))?;
-    Ok(calib::run(c.as_mut(), &steps, nominal))
+    Ok(calib::run_observed(c.as_mut(), &steps, nominal, on_step))
 }
 
 /// Writes `DIR/calibration.csv`, `DIR/trajectory.tum` and `DIR/summary.json`.

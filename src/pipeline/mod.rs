@@ -3,6 +3,7 @@
 
 pub mod calibrate;
 mod config;
+pub mod demo;
 mod error;
 pub mod evaluate;
 pub mod icp;
