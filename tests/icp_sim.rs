@@ -228,3 +228,38 @@ fn icp_sim_corridor_is_accurate_unbiased_and_consistent() {
     let nees = mean(&e.nees);
     assert!((2.0..4.5).contains(&nees), "mean NEES {nees}");
 }
+
+#[test]
+fn icp_sim_local_map_drifts_less_than_scan_to_scan() {
+    let truth = corridor_drive(40.0, 25.0);
+    let scans = lms111_scans(&truth, 3);
+    let odom = biased_odometry(&truth, 4);
+    let run = |params: &IcpParams| {
+        let (motions, stats) =
+            match_recording(&scans, base_from_laser(), Some(&odom), params).unwrap();
+        let est = integrate(&motions);
+        // Final position error in the truth frame, and mean NEES of the pairs.
+        let end = (truth.poses[0] * est.poses.last().unwrap())
+            .translation
+            .vector
+            - truth.poses.last().unwrap().translation.vector;
+        (end.norm(), mean(&pair_errors(&motions, &truth).nees), stats)
+    };
+    let (e_s2s, nees_s2s, _) = run(&IcpParams::default());
+    let (e_map, nees_map, stats) = run(&IcpParams {
+        local_map: true,
+        keyframes: 10,
+        keyframe_dist: 0.5,
+        ..Default::default()
+    });
+    eprintln!(
+        "end error over {:.1} m: scan-to-scan {e_s2s:.3} m (NEES {nees_s2s:.2}), local map {e_map:.3} m (NEES {nees_map:.2}, {stats:?})",
+        truth.path_length()
+    );
+    assert!(stats.failed_pairs * 20 <= stats.pairs, "{stats:?}");
+    assert!((1.5..4.5).contains(&nees_map), "local-map NEES {nees_map}");
+    assert!(
+        e_map < e_s2s,
+        "local map {e_map} m vs scan to scan {e_s2s} m"
+    );
+}

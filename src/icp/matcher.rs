@@ -127,7 +127,7 @@ impl ScanMatcher {
             return None;
         };
         let dt = t1 - t0;
-        let (prior, source) = match (prior.filter(|p| pose_finite(p)), self.velocity) {
+        let (prior, source) = match (prior.filter(pose_finite), self.velocity) {
             (Some(p), _) => (p, PriorSource::Given),
             (None, Some((inc, vdt))) if dt.is_finite() && dt > 0.0 => {
                 let (ds, dth) = geom::arc_of_increment(&inc);

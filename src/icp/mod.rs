@@ -23,6 +23,9 @@
 //! `Motion::failure`, so `VelocityObs::from_motion` never turns them into
 //! observations.
 
+// `!(x > 0.0)` is deliberate throughout: it is true for NaN as well.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 mod align;
 mod covariance;
 mod matcher;
