@@ -1,6 +1,7 @@
 //! Integration tests, compiled as one binary.
 
 mod calib_censi;
+mod cli;
 mod calib_filters;
 mod calib_resample;
 mod classic_compare;

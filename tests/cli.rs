@@ -1,0 +1,185 @@
+//! The `odocal` binary end to end: the commands chain (simulate → icp →
+//! calibrate → eval → demo), print design.md's JSON keys, and answer bad input
+//! with exit code 2 and a message naming the file.
+
+use crate::support::scratch;
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn odocal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_odocal"))
+        .args(args)
+        .output()
+        .expect("run odocal")
+}
+
+fn json(out: &Output) -> Value {
+    assert!(
+        out.status.success(),
+        "odocal failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!("stdout is not one JSON object ({e}): {}", String::from_utf8_lossy(&out.stdout))
+    })
+}
+
+fn has_keys(v: &Value, keys: &[&str]) {
+    for k in keys {
+        let mut cur = v;
+        for part in k.split('.') {
+            cur = cur
+                .get(part)
+                .unwrap_or_else(|| panic!("missing key {k} in {v}"));
+        }
+    }
+}
+
+fn no_temp_files(dir: &Path) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.contains(".tmp-"), "temporary file left behind: {name}");
+    }
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn cli_pipeline_chains_and_prints_the_contract_keys() {
+    let d = scratch("cli_pipeline");
+    let bag = d.join("run.mcap");
+    let truth = d.join("truth.json");
+    let sim = json(&odocal(&[
+        "simulate", "--scenario", "square", "--duration", "30", "--seed", "5",
+        "--effect", "radius_scale:right=0.01,left=-0.01", "--out", s(&bag), "--truth", s(&truth), "--json",
+    ]));
+    assert!(sim["scans"].as_u64().unwrap() >= 1400, "{sim}");
+    let t: Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    assert_eq!(t["effect_specs"][0], "radius_scale:right=0.01,left=-0.01");
+
+    let tum = d.join("icp.tum");
+    let motions = d.join("motions.csv");
+    let icp = json(&odocal(&[
+        "icp", "--input", s(&bag), "--out", s(&tum), "--motions", s(&motions), "--json",
+    ]));
+    has_keys(&icp, &["pairs", "failed_pairs", "mean_iterations", "wall_s", "pairs_per_s"]);
+    assert_eq!(icp["pairs"].as_u64().unwrap() + 1, sim["scans"].as_u64().unwrap());
+    let header = std::fs::read_to_string(&motions).unwrap();
+    assert!(header.starts_with(
+        "t0,t1,dx,dy,dtheta,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt,iterations,inliers,valid\n"
+    ));
+
+    let cal_dir = d.join("cal");
+    let cal = json(&odocal(&[
+        "calibrate", "--input", s(&bag), "--method", "dkf", "--out", s(&cal_dir), "--json",
+    ]));
+    has_keys(
+        &cal,
+        &[
+            "method", "final.r_right", "final.r_left", "final.wheel_base", "std.r_right",
+            "std.r_left", "std.wheel_base", "iterations", "mean_iteration_ms",
+            "multipliers.left_wheel_radius", "multipliers.right_wheel_radius",
+            "multipliers.wheel_separation",
+        ],
+    );
+    assert_eq!(cal["method"], "dkf");
+    // The injected radius difference is found (right larger than left).
+    let (rr, rl) = (cal["final"]["r_right"].as_f64().unwrap(), cal["final"]["r_left"].as_f64().unwrap());
+    assert!(rr - rl > 0.003, "R_R {rr} vs R_L {rl}");
+    let csv = std::fs::read_to_string(cal_dir.join("calibration.csv")).unwrap();
+    assert!(csv.starts_with(
+        "t,r_right,r_left,wheel_base,std_r_right,std_r_left,std_wheel_base,particles,process_sigma\n"
+    ));
+    assert!(cal_dir.join("trajectory.tum").is_file() && cal_dir.join("summary.json").is_file());
+    no_temp_files(&cal_dir);
+
+    // Calibration from the intermediate files gives the same kind of answer.
+    let wheels = d.join("wheels.csv");
+    let rec = odocal::io::read_recording(&bag, &odocal::io::ReadOptions::default()).unwrap();
+    odocal::io::csv::write_wheels(&wheels, &rec.wheels).unwrap();
+    let cal2 = json(&odocal(&[
+        "calibrate", "--motions", s(&motions), "--wheels", s(&wheels), "--method", "dkf",
+        "--out", s(&d.join("cal2")), "--json",
+    ]));
+    let rr2 = cal2["final"]["r_right"].as_f64().unwrap();
+    assert!((rr2 - rr).abs() < 2e-3, "{rr2} vs {rr}");
+
+    let ev = json(&odocal(&[
+        "eval", "--estimate", s(&tum), "--reference", s(&bag), "--align", "origin", "--json",
+    ]));
+    has_keys(
+        &ev,
+        &[
+            "matched", "ape.rmse", "ape.mean", "ape.median", "ape.std", "ape.min", "ape.max",
+            "ape_rot_deg.rmse", "rpe.rmse", "rpe_rot_deg.rmse", "drift_percent", "final_error",
+        ],
+    );
+    assert!(ev["ape"]["rmse"].as_f64().unwrap() < 1.0, "{ev}");
+    no_temp_files(&d);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn cli_demo_on_a_short_recording_writes_report_plots_and_recording() {
+    let d = scratch("cli_demo");
+    let bag = d.join("run.mcap");
+    let truth = d.join("truth.json");
+    json(&odocal(&[
+        "simulate", "--scenario", "figure-eight", "--duration", "12", "--seed", "2",
+        "--out", s(&bag), "--truth", s(&truth), "--json",
+    ]));
+    let out = d.join("demo");
+    let sum = json(&odocal(&[
+        "demo", "--input", s(&bag), "--truth", s(&truth), "--out", s(&out), "--json",
+    ]));
+    assert_eq!(sum["methods"].as_array().unwrap().len(), 5);
+    for f in ["report.md", "radii.png", "particles.png", "trajectories.png", "errors.png", "summary.json"] {
+        let p = out.join(f);
+        assert!(p.is_file(), "{f} missing");
+        if f.ends_with(".png") {
+            assert_eq!(&std::fs::read(&p).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+        }
+    }
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for needle in ["## Calibration", "adaptive-pf", "dkf", "APE RMSE", "radii.png"] {
+        assert!(report.contains(needle), "report lacks {needle}");
+    }
+    if cfg!(feature = "rerun") {
+        assert!(out.join("demo.rrd").is_file());
+    }
+    no_temp_files(&out);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn cli_bad_input_exits_2_naming_the_file() {
+    let d = scratch("cli_bad");
+    let garbage = d.join("garbage.mcap");
+    std::fs::write(&garbage, b"\x89MCAP0\r\n this is not an mcap").unwrap();
+    let bad_tum = d.join("bad.tum");
+    std::fs::write(&bad_tum, "0 0 0 0 0 0 0 1\n1 0 0 nan 0 0 0 1\n").unwrap();
+    let out_tum = d.join("o.tum");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["icp", "--input", "/nonexistent/x.mcap", "--out", s(&out_tum)], "/nonexistent/x.mcap"),
+        (vec!["icp", "--input", s(&garbage), "--out", s(&out_tum)], "garbage.mcap"),
+        (vec!["eval", "--estimate", s(&bad_tum), "--reference", s(&bad_tum)], "line 2"),
+        (vec!["simulate", "--effect", "wobble", "--out", s(&d.join("x.mcap"))], "wobble"),
+        (vec!["simulate", "--scenario", "moon-base", "--out", s(&d.join("x.mcap"))], "moon-base"),
+        (vec!["calibrate", "--input", s(&garbage), "--out", s(&d.join("c"))], "garbage.mcap"),
+        (vec!["icp", "--input", s(&garbage)], "--out"),
+        (vec!["frobnicate"], "frobnicate"),
+    ];
+    for (args, needle) in cases {
+        let o = odocal(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: message lacks '{needle}': {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    assert!(!out_tum.exists(), "no output is written for bad input");
+    assert!(!d.join("x.mcap").exists());
+    std::fs::remove_dir_all(&d).unwrap();
+}
