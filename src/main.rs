@@ -376,7 +376,11 @@ fn print_relations(r: &odocal::eval::RelationStats) {
     let line = |name: &str, s: &odocal::eval::RelationSummary| {
         out!(
             "relations {name:<6} n={:<5} trans {:.3} ± {:.3} m   rot {:.2} ± {:.2} deg",
-            s.count, s.trans_mean, s.trans_std, s.rot_mean_deg, s.rot_std_deg
+            s.count,
+            s.trans_mean,
+            s.trans_std,
+            s.rot_mean_deg,
+            s.rot_std_deg
         )
     };
     line("all", &r.all);
@@ -392,7 +396,12 @@ fn print_stats(name: &str, s: Option<&odocal::eval::Stats>) {
     match s {
         Some(s) => out!(
             "{name:<16} rmse {:.4}  mean {:.4}  median {:.4}  std {:.4}  min {:.4}  max {:.4}",
-            s.rmse, s.mean, s.median, s.std, s.min, s.max
+            s.rmse,
+            s.mean,
+            s.median,
+            s.std,
+            s.min,
+            s.max
         ),
         None => out!("{name:<16} n/a (position-only reference)"),
     }
@@ -529,9 +538,15 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
 }
 
 /// The bundled recording `odocal demo` runs on by default.
-const DEMO_RECORDING: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scans/wheelchair-corridor.mcap");
+const DEMO_RECORDING: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scans/wheelchair-corridor.mcap"
+);
 /// Its truth file.
-const DEMO_TRUTH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scans/wheelchair-corridor.truth.json");
+const DEMO_TRUTH: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scans/wheelchair-corridor.truth.json"
+);
 
 #[cfg(feature = "rerun")]
 fn demo_logger(a: &DemoArgs) -> anyhow::Result<Box<dyn odocal::viz::Logger>> {
@@ -564,10 +579,16 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
     let truth = match &truth_path {
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|e| {
-                PipelineError::Input(odocal::InputError::new(p.display().to_string(), format!("cannot read: {e}")))
+                PipelineError::Input(odocal::InputError::new(
+                    p.display().to_string(),
+                    format!("cannot read: {e}"),
+                ))
             })?;
             Some(odocal::sim::Truth::from_json(&text).map_err(|e| {
-                PipelineError::Input(odocal::InputError::new(p.display().to_string(), e.to_string()))
+                PipelineError::Input(odocal::InputError::new(
+                    p.display().to_string(),
+                    e.to_string(),
+                ))
             })?)
         }
         None => None,
@@ -596,19 +617,50 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
     if a.json {
         return print_json(&summary);
     }
-    out!("odocal demo on {} ({} scans, {:.0} s) in {:.1} s", summary.input, summary.scans, summary.duration_s, summary.wall_s);
-    out!("ICP: {} pairs, {} flagged, {:.1} iterations on average", summary.icp.pairs, summary.icp.failed_pairs, summary.icp.mean_iterations);
+    out!(
+        "odocal demo on {} ({} scans, {:.0} s) in {:.1} s",
+        summary.input,
+        summary.scans,
+        summary.duration_s,
+        summary.wall_s
+    );
+    out!(
+        "ICP: {} pairs, {} flagged, {:.1} iterations on average",
+        summary.icp.pairs,
+        summary.icp.failed_pairs,
+        summary.icp.mean_iterations
+    );
     for m in &summary.methods {
         let err = m
             .final_errors
-            .map(|e| format!("  error R_R {:+.2} mm, R_L {:+.2} mm, D {:+.1} mm", e[0] * 1e3, e[1] * 1e3, e[2] * 1e3))
+            .map(|e| {
+                format!(
+                    "  error R_R {:+.2} mm, R_L {:+.2} mm, D {:+.1} mm",
+                    e[0] * 1e3,
+                    e[1] * 1e3,
+                    e[2] * 1e3
+                )
+            })
             .unwrap_or_default();
-        let ape = m.eval.as_ref().map(|e| format!("  APE {:.3} m", e.ape.rmse)).unwrap_or_default();
-        out!("{:<12} R_R {:.5} m  R_L {:.5} m  D {:.4} m{err}{ape}", m.method, m.final_params[0], m.final_params[1], m.final_params[2]);
+        let ape = m
+            .eval
+            .as_ref()
+            .map(|e| format!("  APE {:.3} m", e.ape.rmse))
+            .unwrap_or_default();
+        out!(
+            "{:<12} R_R {:.5} m  R_L {:.5} m  D {:.4} m{err}{ape}",
+            m.method,
+            m.final_params[0],
+            m.final_params[1],
+            m.final_params[2]
+        );
     }
     out!("report: {}", a.out.join("report.md").display());
     if cfg!(feature = "rerun") && a.connect.is_none() && !a.spawn {
-        out!("open the recording with: rerun {}", a.out.join("demo.rrd").display());
+        out!(
+            "open the recording with: rerun {}",
+            a.out.join("demo.rrd").display()
+        );
     }
     Ok(())
 }

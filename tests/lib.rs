@@ -1,7 +1,6 @@
 //! Integration tests, compiled as one binary.
 
 mod calib_censi;
-mod cli;
 mod calib_filters;
 mod calib_resample;
 mod classic_compare;
@@ -9,6 +8,7 @@ mod classic_ga;
 mod classic_heading_pf;
 mod classic_seed_tables;
 mod classic_umbmark;
+mod cli;
 mod eval_align;
 mod eval_evo;
 mod eval_inputs;

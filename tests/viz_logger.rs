@@ -1,9 +1,9 @@
 //! The logger contract, independent of the sink: a synthetic run fed through
 //! any `Logger`, and the do-nothing logger accepting it.
 
+use nalgebra::Point2;
 use odocal::geom::pose;
 use odocal::viz::{CalibEstimate, Logger, NullLogger, Stamp, TrajectoryKind, VizError};
-use nalgebra::Point2;
 
 /// Sizes of a synthetic run fed by [`feed`].
 pub struct RunShape {

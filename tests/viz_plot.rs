@@ -59,11 +59,7 @@ fn radius_chart() -> LineChart {
         truth(t) + (from - truth(t)) * (-(t - t0) / tau).exp()
     };
     let series = |name: &str, tau: f64, color| {
-        Series::new(
-            name,
-            t.iter().map(|&x| [x, est(x, tau, 0.3100)]).collect(),
-        )
-        .color(color)
+        Series::new(name, t.iter().map(|&x| [x, est(x, tau, 0.3100)]).collect()).color(color)
     };
     LineChart::new("Right wheel radius: estimate vs truth", "time (s)")
         .panel(
@@ -81,7 +77,16 @@ fn radius_chart() -> LineChart {
             vec![Series::new(
                 "Adaptive-PF",
                 t.iter()
-                    .map(|&x| [x, if (55.0..65.0).contains(&x) { 3000.0 } else { 500.0 }])
+                    .map(|&x| {
+                        [
+                            x,
+                            if (55.0..65.0).contains(&x) {
+                                3000.0
+                            } else {
+                                500.0
+                            },
+                        ]
+                    })
                     .collect(),
             )],
         )
@@ -133,14 +138,19 @@ fn trajectory_png_draws_every_path() {
     }
     let rot = |p: &[f64; 2], a: f64| {
         let a = a * p[0].hypot(p[1]) / 8.0;
-        [p[0] * a.cos() - p[1] * a.sin(), p[0] * a.sin() + p[1] * a.cos()]
+        [
+            p[0] * a.cos() - p[1] * a.sin(),
+            p[0] * a.sin() + p[1] * a.cos(),
+        ]
     };
     let raw: Vec<[f64; 2]> = reference.iter().map(|p| rot(p, 0.15)).collect();
     let cal: Vec<[f64; 2]> = reference.iter().map(|p| rot(p, 0.01)).collect();
     let plot = TrajectoryPlot::new(
         "Square 6 m x 6 m: odometry vs reference",
         vec![
-            PathSeries::new("reference", reference).color(TRUTH).dashed(),
+            PathSeries::new("reference", reference)
+                .color(TRUTH)
+                .dashed(),
             PathSeries::new("raw odometry", raw).color(DKF),
             PathSeries::new("calibrated (Adaptive-PF)", cal).color(APF),
         ],
@@ -173,9 +183,13 @@ fn bar_chart_png_and_shape_checks() {
         vec![0.05, 0.04, 0.035, 0.045],
         vec![0.06, 0.05, 0.04, 0.05],
     ];
-    let chart = BarChart::new("Resampling methods and triggers", methods.clone(), triggers.clone())
-        .panel("radius error (%)", err.clone(), Some(vec![vec![0.2; 4]; 3]))
-        .panel("time per iteration (ms)", ms, None);
+    let chart = BarChart::new(
+        "Resampling methods and triggers",
+        methods.clone(),
+        triggers.clone(),
+    )
+    .panel("radius error (%)", err.clone(), Some(vec![vec![0.2; 4]; 3]))
+    .panel("time per iteration (ms)", ms, None);
     bar_chart(&path, &chart).unwrap();
     let img = decode(&path);
     assert_eq!((img.width, img.height), chart.size);

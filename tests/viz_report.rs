@@ -14,8 +14,18 @@ fn report_md_contains_settings_tables_and_images() {
     r.table(
         &["method", "R_R (m)", "R_L (m)", "D (m)"],
         &[
-            vec!["adaptive-pf".to_string(), num(0.32012, 4), num(0.31987, 4), num(0.6503, 4)],
-            vec!["dkf".to_string(), num(0.3207, 4), num(f64::NAN, 4), num(0.649, 4)],
+            vec![
+                "adaptive-pf".to_string(),
+                num(0.32012, 4),
+                num(0.31987, 4),
+                num(0.6503, 4),
+            ],
+            vec![
+                "dkf".to_string(),
+                num(0.3207, 4),
+                num(f64::NAN, 4),
+                num(0.649, 4),
+            ],
         ],
     )
     .unwrap();

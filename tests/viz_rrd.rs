@@ -67,15 +67,24 @@ fn rerun_recording_matches_what_was_logged() {
     assert!(shown > 50 && shown <= 100, "shown {shown}");
 
     let last_t = 10.0 + 0.1 * (shape.scans - 1) as f64;
-    let temporal = |rows: usize, first_scan: i64| {
-        json!({"rows": rows, "first": {"scan": first_scan}, "last": {"scan": shape.scans as i64 - 1, "time": last_t}})
-    };
+    let temporal = |rows: usize, first_scan: i64| json!({"rows": rows, "first": {"scan": first_scan}, "last": {"scan": shape.scans as i64 - 1, "time": last_t}});
     let mut entities = serde_json::Map::new();
-    entities.insert(entity::MAP.into(), json!({"static": true, "rows": 1,
-        "instances": {"LineStrips2D:strips": shape.map_segments}}));
-    for t in [entity::TRAJ_ICP, entity::TRAJ_RAW, entity::TRAJ_CALIBRATED, entity::TRAJ_REFERENCE] {
-        entities.insert(t.into(), json!({"static": true, "rows": 1,
-            "instances": {"LineStrips2D:strips": 1}}));
+    entities.insert(
+        entity::MAP.into(),
+        json!({"static": true, "rows": 1,
+        "instances": {"LineStrips2D:strips": shape.map_segments}}),
+    );
+    for t in [
+        entity::TRAJ_ICP,
+        entity::TRAJ_RAW,
+        entity::TRAJ_CALIBRATED,
+        entity::TRAJ_REFERENCE,
+    ] {
+        entities.insert(
+            t.into(),
+            json!({"static": true, "rows": 1,
+            "instances": {"LineStrips2D:strips": 1}}),
+        );
     }
     let mut scan = temporal(shape.scans, 0);
     scan["instances"] = json!({"Points2D:positions": shape.scans * shape.beams});
@@ -86,9 +95,16 @@ fn rerun_recording_matches_what_was_logged() {
         "Points2D:colors": steps * shown, "Points2D:radii": steps * shown});
     entities.insert(entity::PARTICLES.into(), parts);
     for s in [
-        entity::PARTICLES_SHOWN, entity::EST_R_RIGHT, entity::EST_R_LEFT, entity::EST_WHEEL_BASE,
-        entity::STD_R_RIGHT, entity::STD_R_LEFT, entity::STD_WHEEL_BASE,
-        entity::PARTICLES_COUNT, entity::PROCESS_SIGMA, entity::ICP_ITERATIONS,
+        entity::PARTICLES_SHOWN,
+        entity::EST_R_RIGHT,
+        entity::EST_R_LEFT,
+        entity::EST_WHEEL_BASE,
+        entity::STD_R_RIGHT,
+        entity::STD_R_LEFT,
+        entity::STD_WHEEL_BASE,
+        entity::PARTICLES_COUNT,
+        entity::PROCESS_SIGMA,
+        entity::ICP_ITERATIONS,
         entity::ICP_COV_TRACE,
     ] {
         let mut e = temporal(steps, 1);
@@ -111,7 +127,12 @@ fn rerun_recording_matches_what_was_logged() {
     std::fs::write(&exp, serde_json::to_vec(&wrong).unwrap()).unwrap();
     let py = python_with("rrd_wrong", &["rerun"]).unwrap();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/rrd_check.py");
-    let out = Command::new(py).arg(script).arg(&rrd).arg(&exp).output().unwrap();
+    let out = Command::new(py)
+        .arg(script)
+        .arg(&rrd)
+        .arg(&exp)
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("world/scan: 23 rows, want 24"));
 }
@@ -134,7 +155,9 @@ fn unfinished_recording_leaves_no_file() {
 fn rerun_logger_rejects_bad_input() {
     let dir = scratch("rerun_bad_input");
     let mut log = RerunLogger::to_file(dir.join("bad.rrd")).unwrap();
-    assert!(log.particles(Stamp::new(0, 0.0), &[0.3], &[0.3, 0.31], &[1.0]).is_err());
+    assert!(log
+        .particles(Stamp::new(0, 0.0), &[0.3], &[0.3, 0.31], &[1.0])
+        .is_err());
     assert!(log.icp(Stamp::new(0, f64::NAN), 3, 0.1).is_err());
     assert!(log.icp(Stamp::new(0, 0.0), 3, f64::INFINITY).is_err());
     log.finish().unwrap();

@@ -153,9 +153,14 @@ pub fn run(
 
     progress("icp", 0.0);
     let icp_out = icp::run(rec, robot, &cfg.icp)?;
-    icp::write(&icp_out, &out.join("icp.tum"), Some(&out.join("motions.csv")))?;
+    icp::write(
+        &icp_out,
+        &out.join("icp.tum"),
+        Some(&out.join("motions.csv")),
+    )?;
 
-    let reference2 = (rec.reference.len() >= 2).then(|| eval::trajectory_from_stamped(&rec.reference).0);
+    let reference2 =
+        (rec.reference.len() >= 2).then(|| eval::trajectory_from_stamped(&rec.reference).0);
     let reference3 = reference2.as_ref().map(Trajectory3::from_2d);
     let raw = wheel_odometry(&robot.diff_drive(), &rec.wheels, Pose2::identity());
     crate::io::tum::write_tum_2d(&out.join("raw_odometry.tum"), &raw)
@@ -201,9 +206,11 @@ pub fn run(
         .map(|(m, run)| {
             let f = &run.summary.final_params;
             let final_params = [f.r_right, f.r_left, f.wheel_base];
-            let truth_end = input
-                .truth
-                .and_then(|t| t.parameters.last().map(|p| [p.r_right, p.r_left, p.wheel_base]));
+            let truth_end = input.truth.and_then(|t| {
+                t.parameters
+                    .last()
+                    .map(|p| [p.r_right, p.r_left, p.wheel_base])
+            });
             MethodResult {
                 method: m.as_str().into(),
                 final_params,
@@ -233,14 +240,31 @@ pub fn run(
     };
 
     let adaptive = &runs[0].1;
-    record(input, &icp_out, &raw, adaptive, reference2.as_ref(), t_start, logger)?;
-    plots(input, &icp_out.trajectory, &raw, &runs, reference2.as_ref(), t_start, out)?;
+    record(
+        input,
+        &icp_out,
+        &raw,
+        adaptive,
+        reference2.as_ref(),
+        t_start,
+        logger,
+    )?;
+    plots(
+        input,
+        &icp_out.trajectory,
+        &raw,
+        &runs,
+        reference2.as_ref(),
+        t_start,
+        out,
+    )?;
     let mut summary = summary;
     summary.wall_s = start.elapsed().as_secs_f64();
     report(input, &summary, out)?;
     let js = out.join("summary.json");
     let text = serde_json::to_string_pretty(&summary).expect("summary serialises");
-    crate::io::atomic::write_bytes_atomic(&js, text.as_bytes()).map_err(|e| PipelineError::write(&js, e))?;
+    crate::io::atomic::write_bytes_atomic(&js, text.as_bytes())
+        .map_err(|e| PipelineError::write(&js, e))?;
     Ok(summary)
 }
 
@@ -265,17 +289,25 @@ fn record(
     }
     let w_icp = anchor(&icp_out.trajectory, reference);
     if let Some(r) = reference {
-        logger.trajectory(TrajectoryKind::Reference, &r.poses).map_err(viz_err)?;
+        logger
+            .trajectory(TrajectoryKind::Reference, &r.poses)
+            .map_err(viz_err)?;
     }
     logger
         .trajectory(TrajectoryKind::Icp, &in_world(&icp_out.trajectory, &w_icp))
         .map_err(viz_err)?;
     logger
-        .trajectory(TrajectoryKind::RawOdometry, &in_world(raw, &anchor(raw, reference)))
+        .trajectory(
+            TrajectoryKind::RawOdometry,
+            &in_world(raw, &anchor(raw, reference)),
+        )
         .map_err(viz_err)?;
     let cal = &adaptive.trajectory;
     logger
-        .trajectory(TrajectoryKind::Calibrated, &in_world(cal, &anchor(cal, reference)))
+        .trajectory(
+            TrajectoryKind::Calibrated,
+            &in_world(cal, &anchor(cal, reference)),
+        )
         .map_err(viz_err)?;
 
     // Scans at the ICP pose (laser frame → world), ICP quality per pair.
@@ -291,7 +323,9 @@ fn record(
         }
         if i > 0 {
             if let Some(m) = icp_out.motions.get(i - 1) {
-                logger.icp(at, m.iterations, m.cov.trace()).map_err(viz_err)?;
+                logger
+                    .icp(at, m.iterations, m.cov.trace())
+                    .map_err(viz_err)?;
             }
         }
     }
@@ -352,17 +386,35 @@ fn plots(
         if *m == Method::Pf {
             continue; // diverges along D; its radii would flatten the scale of the others
         }
-        panels[0].1.push(series_over_time(m.as_str(), run, t_start, |h| h.r_right).color(color));
-        panels[1].1.push(series_over_time(m.as_str(), run, t_start, |h| h.r_left).color(color));
-        panels[2].1.push(series_over_time(m.as_str(), run, t_start, |h| h.wheel_base).color(color));
+        panels[0]
+            .1
+            .push(series_over_time(m.as_str(), run, t_start, |h| h.r_right).color(color));
+        panels[1]
+            .1
+            .push(series_over_time(m.as_str(), run, t_start, |h| h.r_left).color(color));
+        panels[2]
+            .1
+            .push(series_over_time(m.as_str(), run, t_start, |h| h.wheel_base).color(color));
     }
     if let Some(t) = input.truth {
         let get = |f: fn(&crate::sim::TrueParameters) -> f64| {
             t.parameters.iter().map(|p| [p.t, f(p)]).collect::<Vec<_>>()
         };
-        panels[0].1.push(Series::new("truth", get(|p| p.r_right)).color([0, 0, 0]).dashed());
-        panels[1].1.push(Series::new("truth", get(|p| p.r_left)).color([0, 0, 0]).dashed());
-        panels[2].1.push(Series::new("truth", get(|p| p.wheel_base)).color([0, 0, 0]).dashed());
+        panels[0].1.push(
+            Series::new("truth", get(|p| p.r_right))
+                .color([0, 0, 0])
+                .dashed(),
+        );
+        panels[1].1.push(
+            Series::new("truth", get(|p| p.r_left))
+                .color([0, 0, 0])
+                .dashed(),
+        );
+        panels[2].1.push(
+            Series::new("truth", get(|p| p.wheel_base))
+                .color([0, 0, 0])
+                .dashed(),
+        );
     }
     let mut chart = LineChart::new("Wheel radii and wheel base over time", "time (s)");
     for (label, s) in panels {
@@ -375,11 +427,15 @@ fn plots(
     let chart = LineChart::new("Adaptive-PF: particle count and process noise", "time (s)")
         .panel(
             "particles",
-            vec![series_over_time("particles", adaptive, t_start, |h| h.particles as f64)],
+            vec![series_over_time("particles", adaptive, t_start, |h| {
+                h.particles as f64
+            })],
         )
         .panel(
             "process σ (m)",
-            vec![series_over_time("process sigma", adaptive, t_start, |h| h.process_sigma)],
+            vec![series_over_time("process sigma", adaptive, t_start, |h| {
+                h.process_sigma
+            })],
         );
     plot::line_chart(&out.join("particles.png"), &chart).map_err(viz_err)?;
 
@@ -396,7 +452,10 @@ fn plots(
                 .zip(&poses)
                 .filter_map(|(&s, p)| {
                     r.pose_at(s).map(|q| {
-                        [s - t_start, (p.translation.vector - q.translation.vector).norm()]
+                        [
+                            s - t_start,
+                            (p.translation.vector - q.translation.vector).norm(),
+                        ]
                     })
                 })
                 .collect();
@@ -406,7 +465,11 @@ fn plots(
     };
     add("raw odometry", raw, TrajectoryKind::RawOdometry);
     add("ICP", icp_traj, TrajectoryKind::Icp);
-    add("calibrated (adaptive-pf)", &adaptive.trajectory, TrajectoryKind::Calibrated);
+    add(
+        "calibrated (adaptive-pf)",
+        &adaptive.trajectory,
+        TrajectoryKind::Calibrated,
+    );
     if let Some(r) = reference {
         paths.insert(
             0,
@@ -450,10 +513,16 @@ fn report(input: &DemoInput<'_>, s: &DemoSummary, out: &Path) -> Result<(), Pipe
                 input.robot.ticks_per_rev
             ),
         ),
-        ("calibrator seed".into(), input.config.calib.seed.to_string()),
+        (
+            "calibrator seed".into(),
+            input.config.calib.seed.to_string(),
+        ),
     ];
     if let Some(t) = input.truth {
-        settings.push(("scenario".into(), format!("{} (seed {})", t.scenario, t.seed)));
+        settings.push((
+            "scenario".into(),
+            format!("{} (seed {})", t.scenario, t.seed),
+        ));
         settings.push(("injected effects".into(), t.effect_specs.join("; ")));
     }
     r.kv(&settings);
@@ -478,14 +547,27 @@ fn report(input: &DemoInput<'_>, s: &DemoSummary, out: &Path) -> Result<(), Pipe
         .collect();
     r.table(
         &[
-            "method", "R_R (m)", "R_L (m)", "D (m)", "err R_R (mm)", "err R_L (mm)", "err D (mm)",
-            "settled within 0.5 % (s)", "ms / step",
+            "method",
+            "R_R (m)",
+            "R_L (m)",
+            "D (m)",
+            "err R_R (mm)",
+            "err R_L (mm)",
+            "err D (mm)",
+            "settled within 0.5 % (s)",
+            "ms / step",
         ],
         &rows,
     )
     .map_err(viz_err)?;
-    r.image("radii.png", "Radii and wheel base of each method against the truth (seed 000, Fig. 6/8).");
-    r.image("particles.png", "Adaptive-PF particle count and process noise (seed 000, Fig. 5).");
+    r.image(
+        "radii.png",
+        "Radii and wheel base of each method against the truth (seed 000, Fig. 6/8).",
+    );
+    r.image(
+        "particles.png",
+        "Adaptive-PF particle count and process noise (seed 000, Fig. 5).",
+    );
     r.heading(2, "Odometry against the reference");
     let mut rows = Vec::new();
     let mut row = |name: &str, m: &Option<TrajectoryMetrics>| {
@@ -506,18 +588,31 @@ fn report(input: &DemoInput<'_>, s: &DemoSummary, out: &Path) -> Result<(), Pipe
         row(&format!("odometry calibrated by {}", m.method), &m.eval);
     }
     r.table(
-        &["trajectory", "APE RMSE (m)", "RMSE θ (rad)", "drift (%)", "final error (m)", "RPE RMSE (m, 1 frame)"],
+        &[
+            "trajectory",
+            "APE RMSE (m)",
+            "RMSE θ (rad)",
+            "drift (%)",
+            "final error (m)",
+            "RPE RMSE (m, 1 frame)",
+        ],
         &rows,
     )
     .map_err(viz_err)?;
     r.paragraph("Every trajectory starts on the reference's pose at its first stamp (origin alignment), as a robot's dead reckoning would.");
-    r.image("trajectories.png", "Trajectories against the reference (seed 000, Fig. 7).");
+    r.image(
+        "trajectories.png",
+        "Trajectories against the reference (seed 000, Fig. 7).",
+    );
     r.image("errors.png", "Position error over time.");
     r.heading(2, "Scan matching and timing");
     r.kv(&[
         ("pairs", s.icp.pairs.to_string()),
         ("failed pairs", s.icp.failed_pairs.to_string()),
-        ("mean ICP iterations", format!("{:.1}", s.icp.mean_iterations)),
+        (
+            "mean ICP iterations",
+            format!("{:.1}", s.icp.mean_iterations),
+        ),
         ("ICP pairs per second", format!("{:.0}", s.icp.pairs_per_s)),
         ("whole demo", format!("{:.1} s", s.wall_s)),
     ]);

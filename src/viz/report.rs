@@ -49,7 +49,12 @@ impl Report {
     pub fn kv<K: AsRef<str>, V: AsRef<str>>(&mut self, pairs: &[(K, V)]) -> &mut Self {
         self.block();
         for (k, v) in pairs {
-            let _ = writeln!(self.text, "- **{}**: {}", cell(k.as_ref()), cell(v.as_ref()));
+            let _ = writeln!(
+                self.text,
+                "- **{}**: {}",
+                cell(k.as_ref()),
+                cell(v.as_ref())
+            );
         }
         self
     }
@@ -127,8 +132,12 @@ mod tests {
     #[test]
     fn table_escapes_pipes_and_pads_short_rows() {
         let mut r = Report::new();
-        r.table(&["a", "b"], &[vec!["x|y"], vec!["1", "2"]]).unwrap();
-        assert_eq!(r.as_str(), "| a | b |\n| --- | --- |\n| x\\|y |  |\n| 1 | 2 |\n");
+        r.table(&["a", "b"], &[vec!["x|y"], vec!["1", "2"]])
+            .unwrap();
+        assert_eq!(
+            r.as_str(),
+            "| a | b |\n| --- | --- |\n| x\\|y |  |\n| 1 | 2 |\n"
+        );
     }
 
     #[test]

@@ -94,9 +94,8 @@ fn temp_rrd(path: &Path) -> PathBuf {
 }
 
 fn viewer_on_path() -> bool {
-    std::env::var_os("PATH").is_some_and(|paths| {
-        std::env::split_paths(&paths).any(|d| d.join("rerun").is_file())
-    })
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join("rerun").is_file()))
 }
 
 /// Viridis-like colour for a relative weight in [0, 1].
@@ -259,12 +258,9 @@ impl RerunLogger {
 
 impl Logger for RerunLogger {
     fn map(&mut self, segments: &[[Point2<f64>; 2]]) -> Result<(), VizError> {
-        let strips = segments.iter().map(|[a, b]| {
-            [
-                [a.x as f32, a.y as f32],
-                [b.x as f32, b.y as f32],
-            ]
-        });
+        let strips = segments
+            .iter()
+            .map(|[a, b]| [[a.x as f32, a.y as f32], [b.x as f32, b.y as f32]]);
         let strips = LineStrips2D::new(strips)
             .with_colors([Color::from_rgb(120, 120, 120)])
             .with_radii([Radius::new_ui_points(1.0)]);
@@ -343,7 +339,8 @@ impl Logger for RerunLogger {
             let rel = if wmax > 0.0 { w(i) / wmax } else { 1.0 };
             rows.positions.push([r_right[i] as f32, r_left[i] as f32]);
             rows.colors.push(weight_color(rel));
-            rows.radii.push(Radius::new_ui_points((1.5 + 3.5 * rel) as f32));
+            rows.radii
+                .push(Radius::new_ui_points((1.5 + 3.5 * rel) as f32));
         }
         if rows.lengths.len() >= self.options.batch_rows {
             self.flush_points(entity::PARTICLES)?;

@@ -115,7 +115,12 @@ pub fn render_bar_chart(chart: &BarChart) -> Result<Rgb, VizError> {
                 })
             });
             let (mut ylo, yhi) = padded_range(tops, 0.08).unwrap_or((0.0, 1.0));
-            if panel.values.iter().flatten().all(|v| !v.is_finite() || *v >= 0.0) {
+            if panel
+                .values
+                .iter()
+                .flatten()
+                .all(|v| !v.is_finite() || *v >= 0.0)
+            {
                 ylo = 0.0;
             }
             let mut c = ChartBuilder::on(area)

@@ -70,7 +70,9 @@ where
     ensure_font();
     let (w, h) = size;
     if w < 200 || h < 150 || w > 8000 || h > 8000 {
-        return Err(VizError::Input(format!("plot size {w}x{h} px out of range")));
+        return Err(VizError::Input(format!(
+            "plot size {w}x{h} px out of range"
+        )));
     }
     let mut data = vec![255u8; 3 * w as usize * h as usize];
     {
