@@ -6,6 +6,7 @@
 //! writes formats, `pipeline` wires the stages, `viz` draws them.
 #![warn(missing_docs)]
 
+pub mod diagnose;
 pub mod effects;
 pub mod error;
 pub mod geom;
