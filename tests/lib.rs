@@ -1,3 +1,4 @@
 //! Integration tests, compiled as one binary.
 
 mod support;
+mod diagnose_synthetic;

@@ -91,19 +91,18 @@ impl Lsq<'_> {
         }
     }
 
-    fn jacobian(&mut self, theta: &[f64], steps: &[f64], m: usize) -> DMatrix<f64> {
-        let p = theta.len();
+    /// Forward-difference Jacobian of the residual at θ (residual `r0` given).
+    fn jacobian(&mut self, theta: &[f64], r0: &[f64], steps: &[f64]) -> DMatrix<f64> {
+        let (m, p) = (r0.len(), theta.len());
         let mut j = DMatrix::zeros(m, p);
-        let (mut rp, mut rm) = (Vec::new(), Vec::new());
+        let mut rp = Vec::new();
         let mut th = theta.to_vec();
         for c in 0..p {
             th[c] = theta[c] + steps[c];
             self.residual(&th, &mut rp);
-            th[c] = theta[c] - steps[c];
-            self.residual(&th, &mut rm);
             th[c] = theta[c];
             for r in 0..m {
-                j[(r, c)] = (rp[r] - rm[r]) / (2.0 * steps[c]);
+                j[(r, c)] = (rp[r] - r0[r]) / steps[c];
             }
         }
         j
@@ -120,12 +119,11 @@ fn lm(l: &mut Lsq, theta0: Vec<f64>, steps: &[f64], max_iter: usize) -> (Vec<f64
     let mut theta = theta0;
     let mut r = Vec::new();
     l.residual(&theta, &mut r);
-    let m = r.len();
     let mut c = cost(&r);
     let mut lambda = 1e-4;
     let mut rn = Vec::new();
     for _ in 0..max_iter {
-        let j = l.jacobian(&theta, steps, m);
+        let j = l.jacobian(&theta, &r, steps);
         let a = j.transpose() * &j;
         let g = j.transpose() * DVector::from_column_slice(&r);
         let mut improved = false;
@@ -147,7 +145,7 @@ fn lm(l: &mut Lsq, theta0: Vec<f64>, steps: &[f64], max_iter: usize) -> (Vec<f64
                 std::mem::swap(&mut r, &mut rn);
                 c = cn;
                 lambda = (lambda / 10.0).max(1e-12);
-                improved = rel > 1e-10;
+                improved = rel > 1e-9;
                 break;
             }
             lambda *= 10.0;
@@ -156,14 +154,14 @@ fn lm(l: &mut Lsq, theta0: Vec<f64>, steps: &[f64], max_iter: usize) -> (Vec<f64
             break;
         }
     }
-    let j = l.jacobian(&theta, steps, m);
+    let j = l.jacobian(&theta, &r, steps);
     (theta, j)
 }
 
 /// Fits the free parameters of `effects` (starting from their values) on the
-/// training part: LM with the given σ scales, then once more with the scales
-/// re-estimated from the residuals (profile likelihood).
-pub fn fit(part: Part, effects: &[Effect], scale0: [f64; 4], max_iter: usize) -> Fit {
+/// training part: LM with the given σ scales, then (`rounds` = 2) once more
+/// with the scales re-estimated from the residuals (profile likelihood).
+pub fn fit(part: Part, effects: &[Effect], scale0: [f64; 4], max_iter: usize, rounds: usize) -> Fit {
     let counts = part.counts();
     let theta0: Vec<f64> = effects.iter().flat_map(free_params).collect();
     let steps: Vec<f64> = effects.iter().flat_map(free_steps).collect();
@@ -175,7 +173,7 @@ pub fn fit(part: Part, effects: &[Effect], scale0: [f64; 4], max_iter: usize) ->
     };
     let mut theta = theta0;
     let mut jac = DMatrix::zeros(0, 0);
-    for _round in 0..2 {
+    for _round in 0..rounds.max(1) {
         if theta.is_empty() {
             break;
         }
@@ -188,14 +186,13 @@ pub fn fit(part: Part, effects: &[Effect], scale0: [f64; 4], max_iter: usize) ->
         // Rescale the Jacobian to the new scales instead of recomputing it.
         let mut row = 0;
         for g in 0..4 {
-            let n = if g < 3 { counts[g] } else { counts[3] };
             let f = l.scale[g] / s[g];
-            for r in row..row + n {
+            for r in row..row + counts[g] {
                 for c in 0..jac.ncols() {
                     jac[(r, c)] *= f;
                 }
             }
-            row += n;
+            row += counts[g];
         }
         l.scale = s;
     }

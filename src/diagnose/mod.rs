@@ -39,6 +39,11 @@ pub struct DiagnoseParams {
     pub holdout: f64,
     /// Minimum BIC improvement for an effect to enter the model.
     pub bic_margin: f64,
+    /// Minimum drop of the held-out χ² (σ-normalised squared residuals) that
+    /// each selected effect must bring, in order of selection; effects that
+    /// fit the training part but do not predict the held-out part are
+    /// reported as rejected, not as causes.
+    pub heldout_margin: f64,
     /// Maximum Wald p-value of an entering effect's parameters.
     pub alpha: f64,
     /// Family-wise level of the residual structure tests (mean, trend,
@@ -50,6 +55,9 @@ pub struct DiagnoseParams {
     pub ljung_box_lags: usize,
     /// Gyro averaging window (s).
     pub gyro_window: f64,
+    /// Width (s) of the centred moving average applied to the wheel angle
+    /// stream before replay (reduces and evens out encoder quantisation).
+    pub wheel_smoothing: f64,
     /// Time kept free at both ends of the wheel stream (s), bounding latency.
     pub margin: f64,
     /// Residuals beyond this many robust σ of the nominal model are outliers.
@@ -67,11 +75,13 @@ impl Default for DiagnoseParams {
         Self {
             holdout: 0.3,
             bic_margin: 10.0,
+            heldout_margin: 10.0,
             alpha: 1e-3,
             structure_alpha: 1e-3,
             bin_seconds: 1.0,
             ljung_box_lags: 10,
             gyro_window: 0.1,
+            wheel_smoothing: 0.1,
             margin: 0.25,
             outlier_sigma: 8.0,
             max_effects: 3,
@@ -90,6 +100,7 @@ impl DiagnoseParams {
         }
         for (k, v) in [
             ("bic_margin", self.bic_margin),
+            ("heldout_margin", self.heldout_margin),
             ("bin_seconds", self.bin_seconds),
             ("gyro_window", self.gyro_window),
             ("outlier_sigma", self.outlier_sigma),
@@ -102,6 +113,9 @@ impl DiagnoseParams {
             if !(v > 0.0 && v < 1.0) {
                 return bad(format!("{k} must be in (0, 1), got {v}"));
             }
+        }
+        if !(self.wheel_smoothing.is_finite() && self.wheel_smoothing >= 0.0) {
+            return bad(format!("wheel_smoothing must be ≥ 0 s, got {}", self.wheel_smoothing));
         }
         if !(self.margin.is_finite() && self.margin >= 0.0) {
             return bad(format!("margin must be ≥ 0 s, got {}", self.margin));

@@ -116,6 +116,9 @@ pub struct Diagnosis {
     pub gain: Gain,
     /// Whether structure remains after the extension (explained verdicts).
     pub remaining_structure: bool,
+    /// Effects the training data selected but the held-out part did not
+    /// confirm (the held-out χ² dropped by less than the margin).
+    pub heldout_rejected: Vec<Cause>,
     /// Every candidate tried in every selection round.
     pub candidates: Vec<CandidateScore>,
     /// Structure tests per stream on binned residuals, nominal model.
@@ -230,7 +233,7 @@ pub fn run(
     p: &DiagnoseParams,
 ) -> Result<Diagnosis, DiagnoseError> {
     let origin = m.origin();
-    let replay = Replay::new(robot, m.wheels, origin);
+    let replay = Replay::new(robot, m.wheels, origin, p.wheel_smoothing);
     let span = replay
         .span()
         .filter(|s| replay.len() >= 2 && s.1 > s.0)
@@ -296,7 +299,40 @@ pub fn run(
         step_min_rows: 30,
     };
     let sel = forward(train, &usable, &settings);
-    let model: &Fit = &sel.model;
+    // Held-out confirmation of the nested models, in order of selection.
+    let sse = |x: &Extension, scale: &[f64; 4]| {
+        let mut e: [Vec<f64>; 4] = Default::default();
+        held.normalised(x, &mut e);
+        (0..4)
+            .map(|g| e[g].iter().map(|v| (v / scale[g]).powi(2)).sum::<f64>())
+            .sum::<f64>()
+    };
+    let mut kept = 0;
+    for (k, step) in sel.steps.iter().enumerate() {
+        let prev = if k == 0 {
+            Extension::default()
+        } else {
+            Extension::from_effects(&sel.steps[k - 1].effects)
+        };
+        let drop = sse(&prev, &step.scale) - sse(&Extension::from_effects(&step.effects), &step.scale);
+        if drop < p.heldout_margin {
+            break;
+        }
+        kept = k + 1;
+    }
+    let model: &Fit = if kept == 0 { &sel.nominal } else { &sel.steps[kept - 1] };
+    let last = sel.steps.last().unwrap_or(&sel.nominal);
+    let heldout_rejected: Vec<Cause> = (kept..last.effects.len())
+        .map(|i| {
+            let (parameters, stderr) = named(last, i);
+            Cause {
+                effect: last.effects[i].name().to_string(),
+                parameters,
+                stderr,
+                delta_bic: sel.delta_bic[i],
+            }
+        })
+        .collect();
     let xm = Extension::from_effects(&model.effects);
     // Gain on the held-out part, normalised by the final training scales.
     let scale = model.scale;
@@ -367,6 +403,7 @@ pub fn run(
         causes,
         gain,
         remaining_structure: remaining,
+        heldout_rejected,
         candidates: sel.tried,
         structure_before,
         structure_after,

@@ -57,6 +57,8 @@ pub struct Selection {
     pub model: Fit,
     /// ΔBIC at which each selected effect entered (same order as `model.effects`).
     pub delta_bic: Vec<f64>,
+    /// The nested models of the selection: `steps[k]` holds the first k + 1 effects.
+    pub steps: Vec<Fit>,
     /// Every candidate tried, every round.
     pub tried: Vec<CandidateScore>,
 }
@@ -162,10 +164,11 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
     let counts = part.counts();
     let rss0 = part.rss(&Extension::default());
     let scale0 = super::fit::scales(&rss0, &counts);
-    let nominal = fit(part, &[], scale0, s.max_iter);
+    let nominal = fit(part, &[], scale0, s.max_iter, 1);
     let mut current = nominal.clone();
     let mut delta_bic = Vec::new();
     let mut tried = Vec::new();
+    let mut steps = Vec::new();
     for round in 0..s.max_effects {
         let mut best: Option<(Fit, f64)> = None;
         for name in usable {
@@ -179,7 +182,7 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
             }
             let mut effs = current.effects.clone();
             effs.push(new);
-            let f = fit(part, &effs, current.scale, s.max_iter);
+            let f = fit(part, &effs, current.scale, s.max_iter, 1);
             let sc = score(round, &f, current.bic);
             let ok = sc.identifiable && sc.delta_bic > s.bic_margin && sc.p_value < s.alpha;
             tried.push(sc.clone());
@@ -190,7 +193,9 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
         match best {
             Some((f, d)) => {
                 delta_bic.push(d);
-                current = f;
+                // The accepted model is refitted with re-estimated σ scales.
+                current = fit(part, &f.effects, f.scale, s.max_iter, 1);
+                steps.push(current.clone());
             }
             None => break,
         }
@@ -199,6 +204,7 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
         nominal,
         model: current,
         delta_bic,
+        steps,
         tried,
     }
 }

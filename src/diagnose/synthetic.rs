@@ -138,7 +138,7 @@ pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Syn
         pose *= geom::arc_increment(v, w, h);
         poses.push(pose);
         meas.push(phim);
-        wrate.push(w);
+        wrate.push(drive.eval(t_first + (i + 1) as f64 * h).1);
     }
     let idx = |t: f64| -> (usize, f64) {
         let f = ((t - t_first) / h).clamp(0.0, (n - 1) as f64);
