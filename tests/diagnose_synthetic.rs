@@ -10,7 +10,7 @@ use odocal::effects::{Effect, EFFECT_NAMES};
 use odocal::robot::RobotConfig;
 use rand::{RngExt, SeedableRng};
 
-fn run(spec: &SyntheticSpec, seed: u64) -> Diagnosis {
+pub(crate) fn run(spec: &SyntheticSpec, seed: u64) -> Diagnosis {
     let robot = RobotConfig::default();
     let s = synthesize(&robot, spec, seed);
     let m = Measured {
@@ -24,7 +24,7 @@ fn run(spec: &SyntheticSpec, seed: u64) -> Diagnosis {
 
 /// A realistic random magnitude (and sign) of an effect, and a recording
 /// length long enough for it to matter.
-fn draw(name: &str, rng: &mut rand::rngs::StdRng) -> (Effect, f64) {
+pub(crate) fn draw(name: &str, rng: &mut rand::rngs::StdRng) -> (Effect, f64) {
     let mut m = |lo: f64, hi: f64| {
         let s = if rng.random_range(0.0..1.0) < 0.5 { -1.0 } else { 1.0 };
         s * rng.random_range(lo..hi)
@@ -56,7 +56,7 @@ fn draw(name: &str, rng: &mut rand::rngs::StdRng) -> (Effect, f64) {
 
 /// Checks that the diagnosis names exactly the injected effects, with every
 /// parameter within 20 % of the truth, and gains on the held-out part.
-fn check(d: &Diagnosis, truth: &[Effect], what: &str) -> Result<(), String> {
+pub(crate) fn check(d: &Diagnosis, truth: &[Effect], what: &str) -> Result<(), String> {
     let mut named: Vec<&str> = d.causes.iter().map(|c| c.effect.as_str()).collect();
     let mut want: Vec<&str> = truth.iter().map(|e| e.name()).collect();
     named.sort();

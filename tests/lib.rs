@@ -2,3 +2,5 @@
 
 mod support;
 mod diagnose_synthetic;
+mod diagnose_encoder_table;
+mod diagnose_figures;

@@ -23,6 +23,9 @@ pub struct WheelGainFit {
     pub delta_bic: f64,
     /// The same with σ profiled out (unknown σ).
     pub delta_bic_profiled: f64,
+    /// The same with relative errors (σ ∝ ω, profiled): what one would get
+    /// if the readings' error grew with speed instead of being rounding.
+    pub delta_bic_relative: f64,
 }
 
 /// Both wheels of a table.
@@ -76,6 +79,13 @@ fn wheel(t: &[f64], m: &[f64], sigma: f64) -> WheelGainFit {
     let x: Vec<f64> = t.iter().map(|v| v * v.abs()).collect();
     let d: Vec<f64> = m.iter().zip(t).map(|(a, b)| a - b).collect();
     let (k, k_se, rss_gain) = ls(&x, &d, sigma);
+    // Relative errors: ratio q = m/t; scale: q = s; gain: q − 1 = k|t|.
+    let q: Vec<f64> = m.iter().zip(t).map(|(a, b)| a / b).collect();
+    let qm = q.iter().sum::<f64>() / n;
+    let rss_rel_scale: f64 = q.iter().map(|v| (v - qm).powi(2)).sum();
+    let abs_t: Vec<f64> = t.iter().map(|v| v.abs()).collect();
+    let q1: Vec<f64> = q.iter().map(|v| v - 1.0).collect();
+    let (_, _, rss_rel_gain) = ls(&abs_t, &q1, 1.0);
     // One parameter each: the ln n penalties cancel.
     WheelGainFit {
         scale,
@@ -86,6 +96,7 @@ fn wheel(t: &[f64], m: &[f64], sigma: f64) -> WheelGainFit {
         rss_gain,
         delta_bic: (rss_scale - rss_gain) / (sigma * sigma),
         delta_bic_profiled: n * (rss_scale / rss_gain).ln(),
+        delta_bic_relative: n * (rss_rel_scale / rss_rel_gain).ln(),
     }
 }
 
