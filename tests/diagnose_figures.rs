@@ -39,12 +39,22 @@ fn diagnose_figures() {
         errs.sort_by(|a, b| a.total_cmp(b));
         let med = errs.get(errs.len() / 2).copied().unwrap_or(f64::NAN);
         let max = errs.last().copied().unwrap_or(f64::NAN);
-        println!("{name:18} correct {ok}/{seeds}  rel. error median {:.1} % max {:.1} %", 100.0 * med, 100.0 * max);
+        println!(
+            "{name:18} correct {ok}/{seeds}  rel. error median {:.1} % max {:.1} %",
+            100.0 * med,
+            100.0 * max
+        );
     }
     let n = 100;
     let mut fp = 0;
     for seed in 0..n {
-        let d = run(&SyntheticSpec { duration: 90.0, ..Default::default() }, 9000 + seed);
+        let d = run(
+            &SyntheticSpec {
+                duration: 90.0,
+                ..Default::default()
+            },
+            9000 + seed,
+        );
         if d.verdict != Verdict::NoDiscrepancy {
             fp += 1;
         }
@@ -75,7 +85,11 @@ fn diagnose_figures() {
         for seed in 0..5u64 {
             let (ea, _) = draw(a, &mut rng);
             let (eb, _) = draw(b, &mut rng);
-            let spec = SyntheticSpec { duration: 90.0, effects: vec![ea, eb], ..Default::default() };
+            let spec = SyntheticSpec {
+                duration: 90.0,
+                effects: vec![ea, eb],
+                ..Default::default()
+            };
             if check(&run(&spec, 8000 + 10 * i as u64 + seed), &[ea, eb], "pair").is_ok() {
                 ok += 1;
             }

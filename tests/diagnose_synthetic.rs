@@ -26,27 +26,47 @@ pub(crate) fn run(spec: &SyntheticSpec, seed: u64) -> Diagnosis {
 /// length long enough for it to matter.
 pub(crate) fn draw(name: &str, rng: &mut rand::rngs::StdRng) -> (Effect, f64) {
     let mut m = |lo: f64, hi: f64| {
-        let s = if rng.random_range(0.0..1.0) < 0.5 { -1.0 } else { 1.0 };
+        let s = if rng.random_range(0.0..1.0) < 0.5 {
+            -1.0
+        } else {
+            1.0
+        };
         s * rng.random_range(lo..hi)
     };
     let e = match name {
-        "radius_scale" => Effect::RadiusScale { right: m(0.005, 0.015), left: m(0.005, 0.015) },
-        "wheel_base_scale" => Effect::WheelBaseScale { scale: m(0.02, 0.05) },
+        "radius_scale" => Effect::RadiusScale {
+            right: m(0.005, 0.015),
+            left: m(0.005, 0.015),
+        },
+        "wheel_base_scale" => Effect::WheelBaseScale {
+            scale: m(0.02, 0.05),
+        },
         "radius_step" => Effect::RadiusStep {
             time: m(25.0, 45.0).abs(),
             right: m(0.002, 0.005),
             left: m(0.002, 0.005),
         },
-        "radius_drift" => Effect::RadiusDrift { right: m(0.02, 0.04), left: m(0.02, 0.04) },
-        "encoder_gain" => Effect::EncoderGain { k: m(0.005, 0.02).abs() },
-        "latency" => Effect::Latency { delay: m(0.02, 0.06).abs() },
+        "radius_drift" => Effect::RadiusDrift {
+            right: m(0.02, 0.04),
+            left: m(0.02, 0.04),
+        },
+        "encoder_gain" => Effect::EncoderGain {
+            k: m(0.005, 0.02).abs(),
+        },
+        "latency" => Effect::Latency {
+            delay: m(0.02, 0.06).abs(),
+        },
         "laser_offset" => Effect::LaserOffset {
             x: m(0.03, 0.08),
             y: m(0.02, 0.05),
             yaw: m(0.01, 0.03),
         },
-        "gyro_bias" => Effect::GyroBias { bias: m(0.002, 0.01) },
-        "turn_slip" => Effect::TurnSlip { k: m(0.05, 0.15).abs() },
+        "gyro_bias" => Effect::GyroBias {
+            bias: m(0.002, 0.01),
+        },
+        "turn_slip" => Effect::TurnSlip {
+            k: m(0.05, 0.15).abs(),
+        },
         _ => unreachable!(),
     };
     // A drift of a few cm per hour needs minutes to show.
@@ -146,7 +166,10 @@ fn null_recordings_give_no_discrepancy_in_at_least_95_percent_of_seeds() {
         }
         named.extend(d.causes.iter().map(|c| c.effect.clone()));
     }
-    assert!(ok * 100 >= 95 * seeds, "{ok}/{seeds} no-discrepancy; named {named:?}");
+    assert!(
+        ok * 100 >= 95 * seeds,
+        "{ok}/{seeds} no-discrepancy; named {named:?}"
+    );
 }
 
 #[test]
@@ -159,7 +182,12 @@ fn mis_scaled_icp_sigma_changes_neither_the_null_nor_the_naming() {
             ..Default::default()
         };
         let d = run(&spec, seed);
-        assert_eq!(d.verdict, Verdict::NoDiscrepancy, "factor {f}: {:?}", d.causes);
+        assert_eq!(
+            d.verdict,
+            Verdict::NoDiscrepancy,
+            "factor {f}: {:?}",
+            d.causes
+        );
         let s = d.noise_scale["icp_v"];
         assert!((s * f - 1.0).abs() < 0.1, "noise scale {s} for factor {f}");
         let e = Effect::WheelBaseScale { scale: 0.03 };
@@ -212,6 +240,15 @@ fn result_serialises_with_design_keys() {
     }
     assert!(j.get("series").is_none());
     assert_eq!(d.series.t.len(), d.series.v_before.len());
-    let null = run(&SyntheticSpec { duration: 60.0, ..Default::default() }, 9);
-    assert_eq!(serde_json::to_value(&null).unwrap()["verdict"], "no-discrepancy");
+    let null = run(
+        &SyntheticSpec {
+            duration: 60.0,
+            ..Default::default()
+        },
+        9,
+    );
+    assert_eq!(
+        serde_json::to_value(&null).unwrap()["verdict"],
+        "no-discrepancy"
+    );
 }

@@ -46,8 +46,8 @@ pub fn icp_rows(motions: &[Motion], span: (f64, f64), margin: f64) -> Vec<IcpRow
                 m.cov[(1, 1)].max(0.0).sqrt() / dt,
                 m.cov[(2, 2)].max(0.0).sqrt() / dt,
             ];
-            let ok = z.iter().all(|v| v.is_finite())
-                && sigma.iter().all(|s| s.is_finite() && *s > 0.0);
+            let ok =
+                z.iter().all(|v| v.is_finite()) && sigma.iter().all(|s| s.is_finite() && *s > 0.0);
             ok.then_some(IcpRow {
                 t0: m.t0,
                 t1: m.t1,
@@ -68,10 +68,14 @@ pub fn gyro_rows(gyro: &[GyroSample], span: (f64, f64), margin: f64, window: f64
         .iter()
         .filter(|g| g.stamp.is_finite() && g.wz.is_finite())
         .collect();
-    if !(window > 0.0) || b <= a || g.len() < 2 {
+    if window.is_nan() || window <= 0.0 || b <= a || g.len() < 2 {
         return rows;
     }
-    let mut gaps: Vec<f64> = g.windows(2).map(|w| w[1].stamp - w[0].stamp).filter(|d| *d > 0.0).collect();
+    let mut gaps: Vec<f64> = g
+        .windows(2)
+        .map(|w| w[1].stamp - w[0].stamp)
+        .filter(|d| *d > 0.0)
+        .collect();
     if gaps.is_empty() {
         return rows;
     }
@@ -100,7 +104,12 @@ pub fn gyro_rows(gyro: &[GyroSample], span: (f64, f64), margin: f64, window: f64
         let n = (j - i) as f64;
         // Windows with a gap (missing samples) are skipped.
         if t1 - t0 <= window + 1e-9 && n * 2.0 * half >= 0.9 * (t1 - t0) {
-            rows.push(GyroRow { t0, t1, w: sum / n, sigma: 1.0 / n.sqrt() });
+            rows.push(GyroRow {
+                t0,
+                t1,
+                w: sum / n,
+                sigma: 1.0 / n.sqrt(),
+            });
         }
         i = j;
     }

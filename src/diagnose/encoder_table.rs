@@ -103,7 +103,7 @@ fn wheel(t: &[f64], m: &[f64], sigma: f64) -> WheelGainFit {
 /// Fits both wheels; `sigma_rpm` is the σ of (encoder − tachometer) in rpm
 /// (readings rounded to whole rpm on both instruments: √(2/12) ≈ 0.41 rpm).
 pub fn fit_table(rows: &[[f64; 3]], sigma_rpm: f64) -> Option<EncoderTableFit> {
-    if rows.len() < 3 || !(sigma_rpm > 0.0) {
+    if rows.len() < 3 || sigma_rpm.is_nan() || sigma_rpm <= 0.0 {
         return None;
     }
     let t: Vec<f64> = rows.iter().map(|r| r[0] * RPM).collect();

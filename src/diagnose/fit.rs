@@ -161,7 +161,13 @@ fn lm(l: &mut Lsq, theta0: Vec<f64>, steps: &[f64], max_iter: usize) -> (Vec<f64
 /// Fits the free parameters of `effects` (starting from their values) on the
 /// training part: LM with the given σ scales, then (`rounds` = 2) once more
 /// with the scales re-estimated from the residuals (profile likelihood).
-pub fn fit(part: Part, effects: &[Effect], scale0: [f64; 4], max_iter: usize, rounds: usize) -> Fit {
+pub fn fit(
+    part: Part,
+    effects: &[Effect],
+    scale0: [f64; 4],
+    max_iter: usize,
+    rounds: usize,
+) -> Fit {
     let counts = part.counts();
     let theta0: Vec<f64> = effects.iter().flat_map(free_params).collect();
     let steps: Vec<f64> = effects.iter().flat_map(free_steps).collect();
@@ -238,7 +244,10 @@ pub fn fit(part: Part, effects: &[Effect], scale0: [f64; 4], max_iter: usize, ro
 /// Wald statistic θᵀ Σ⁻¹ θ of the free parameters of the effect at `index`
 /// (∞ when its covariance block is singular, 0 for an empty block).
 pub fn wald(f: &Fit, index: usize) -> f64 {
-    let start: usize = f.effects[..index].iter().map(|e| free_params(e).len()).sum();
+    let start: usize = f.effects[..index]
+        .iter()
+        .map(|e| free_params(e).len())
+        .sum();
     let th = free_params(&f.effects[index]);
     let n = th.len();
     if n == 0 {

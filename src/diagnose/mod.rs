@@ -109,13 +109,19 @@ impl DiagnoseParams {
                 return bad(format!("{k} must be positive, got {v}"));
             }
         }
-        for (k, v) in [("alpha", self.alpha), ("structure_alpha", self.structure_alpha)] {
+        for (k, v) in [
+            ("alpha", self.alpha),
+            ("structure_alpha", self.structure_alpha),
+        ] {
             if !(v > 0.0 && v < 1.0) {
                 return bad(format!("{k} must be in (0, 1), got {v}"));
             }
         }
         if !(self.wheel_smoothing.is_finite() && self.wheel_smoothing >= 0.0) {
-            return bad(format!("wheel_smoothing must be ≥ 0 s, got {}", self.wheel_smoothing));
+            return bad(format!(
+                "wheel_smoothing must be ≥ 0 s, got {}",
+                self.wheel_smoothing
+            ));
         }
         if !(self.margin.is_finite() && self.margin >= 0.0) {
             return bad(format!("margin must be ≥ 0 s, got {}", self.margin));
@@ -125,7 +131,10 @@ impl DiagnoseParams {
         }
         for c in &self.candidates {
             if !EFFECT_NAMES.contains(&c.as_str()) {
-                return bad(format!("unknown candidate '{c}' (known: {})", EFFECT_NAMES.join(", ")));
+                return bad(format!(
+                    "unknown candidate '{c}' (known: {})",
+                    EFFECT_NAMES.join(", ")
+                ));
             }
         }
         Ok(())

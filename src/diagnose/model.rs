@@ -137,7 +137,11 @@ pub fn invert_gain(y: f64, k: f64) -> f64 {
 /// SE(2) composition of (x, y, θ) triples (scalar, allocation-free).
 fn compose(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
     let (s, c) = a[2].sin_cos();
-    [a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2]]
+    [
+        a[0] + c * b[0] - s * b[1],
+        a[1] + s * b[0] + c * b[1],
+        a[2] + b[2],
+    ]
 }
 
 /// SE(2) inverse of an (x, y, θ) triple.
@@ -148,7 +152,7 @@ fn inverse(a: &[f64; 3]) -> [f64; 3] {
 
 /// Odd number of samples spanning about `seconds` at the median spacing.
 fn smoothing_samples(ts: &[f64], seconds: f64) -> usize {
-    if ts.len() < 3 || !(seconds > 0.0) {
+    if ts.len() < 3 || seconds.is_nan() || seconds <= 0.0 {
         return 1;
     }
     let mut d: Vec<f64> = ts.windows(2).map(|w| w[1] - w[0]).collect();
@@ -183,8 +187,12 @@ fn smooth(ts: &[f64], r: &[f64], l: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Ve
         let d2 = (v[q] - v[c]) / (t[q] - t[c]);
         2.0 * (d2 - d1) / (t[q] - t[p])
     };
-    let ca: Vec<f64> = (0..n).map(|i| a[i] - 0.5 * var[i] * second(&a, i)).collect();
-    let cb: Vec<f64> = (0..n).map(|i| b[i] - 0.5 * var[i] * second(&b, i)).collect();
+    let ca: Vec<f64> = (0..n)
+        .map(|i| a[i] - 0.5 * var[i] * second(&a, i))
+        .collect();
+    let cb: Vec<f64> = (0..n)
+        .map(|i| b[i] - 0.5 * var[i] * second(&b, i))
+        .collect();
     (t, ca, cb)
 }
 
@@ -384,13 +392,23 @@ mod tests {
         assert!((p.v - arc.translation.x / 0.04).abs() < 1e-9);
         assert!((p.w - 0.3).abs() < 1e-9);
         // A pure mount offset with no rotation changes nothing on a straight line.
-        let mut x = Extension::default();
-        x.laser = [0.1, 0.0, 0.0];
+        let x = Extension {
+            laser: [0.1, 0.0, 0.0],
+            ..Default::default()
+        };
         let straight = Replay::new(
             &robot,
             &[
-                WheelSample { stamp: 0.0, left: 0.0, right: 0.0 },
-                WheelSample { stamp: 1.0, left: 1.0, right: 1.0 },
+                WheelSample {
+                    stamp: 0.0,
+                    left: 0.0,
+                    right: 0.0,
+                },
+                WheelSample {
+                    stamp: 1.0,
+                    left: 1.0,
+                    right: 1.0,
+                },
             ],
             0.0,
             0.0,
@@ -405,12 +423,18 @@ mod tests {
         let wheels: Vec<_> = (0..50)
             .map(|i| {
                 let t = i as f64 * 0.02;
-                WheelSample { stamp: t, left: 2.0 * t, right: 2.6 * t }
+                WheelSample {
+                    stamp: t,
+                    left: 2.0 * t,
+                    right: 2.6 * t,
+                }
             })
             .collect();
         let r = Replay::new(&robot, &wheels, 0.0, 0.0);
-        let mut x = Extension::default();
-        x.laser = [0.05, -0.03, 0.04];
+        let x = Extension {
+            laser: [0.05, -0.03, 0.04],
+            ..Default::default()
+        };
         let (t0, t1) = (0.3, 0.34);
         let (v, w) = r.body(&Extension::default(), t0, t1);
         let o = geom::arc_increment(v, w, t1 - t0);

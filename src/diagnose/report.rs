@@ -172,7 +172,9 @@ fn robust(v: &[f64]) -> (f64, f64) {
 /// Binned normalised residuals (per bin: Σ e / (scale √n)) and bin times.
 fn binned(mids: &[f64], e: &[f64], scale: f64, bin: f64) -> (Vec<f64>, Vec<f64>) {
     let (mut t, mut z) = (Vec::new(), Vec::new());
-    let Some(&t0) = mids.first() else { return (t, z) };
+    let Some(&t0) = mids.first() else {
+        return (t, z);
+    };
     let (mut k, mut s, mut n, mut ts) = (0i64, 0.0, 0usize, 0.0);
     for (m, v) in mids.iter().zip(e) {
         let kk = ((m - t0) / bin).floor() as i64;
@@ -244,7 +246,11 @@ pub fn run(
     let nominal = Extension::default();
     let before_rej = (icp.len(), gyro.len());
     {
-        let all = Part { replay: &replay, icp: &icp, gyro: &gyro };
+        let all = Part {
+            replay: &replay,
+            icp: &icp,
+            gyro: &gyro,
+        };
         let mut e: [Vec<f64>; 4] = Default::default();
         all.normalised(&nominal, &mut e);
         let rb: Vec<(f64, f64)> = e.iter().map(|v| robust(v)).collect();
@@ -280,9 +286,21 @@ pub fn run(
             "too few ICP motions in the training or held-out part".into(),
         ));
     }
-    let train = Part { replay: &replay, icp: &icp[..n_icp_train], gyro: &gyro[..n_gyro_train] };
-    let held = Part { replay: &replay, icp: &icp[i_ho..], gyro: &gyro[g_ho..] };
-    let all = Part { replay: &replay, icp: &icp, gyro: &gyro };
+    let train = Part {
+        replay: &replay,
+        icp: &icp[..n_icp_train],
+        gyro: &gyro[..n_gyro_train],
+    };
+    let held = Part {
+        replay: &replay,
+        icp: &icp[i_ho..],
+        gyro: &gyro[g_ho..],
+    };
+    let all = Part {
+        replay: &replay,
+        icp: &icp,
+        gyro: &gyro,
+    };
     let usable: Vec<String> = p
         .candidates
         .iter()
@@ -314,13 +332,18 @@ pub fn run(
         } else {
             Extension::from_effects(&sel.steps[k - 1].effects)
         };
-        let drop = sse(&prev, &step.scale) - sse(&Extension::from_effects(&step.effects), &step.scale);
+        let drop =
+            sse(&prev, &step.scale) - sse(&Extension::from_effects(&step.effects), &step.scale);
         if drop < p.heldout_margin {
             break;
         }
         kept = k + 1;
     }
-    let model: &Fit = if kept == 0 { &sel.nominal } else { &sel.steps[kept - 1] };
+    let model: &Fit = if kept == 0 {
+        &sel.nominal
+    } else {
+        &sel.steps[kept - 1]
+    };
     let last = sel.steps.last().unwrap_or(&sel.nominal);
     let heldout_rejected: Vec<Cause> = (kept..last.effects.len())
         .map(|i| {
@@ -357,7 +380,11 @@ pub fn run(
         .map(|g| {
             (
                 GROUPS[g].to_string(),
-                StreamGain { n: pb[g].len(), before: rms(&pb[g]), after: rms(&pa[g]) },
+                StreamGain {
+                    n: pb[g].len(),
+                    before: rms(&pb[g]),
+                    after: rms(&pa[g]),
+                },
             )
         })
         .collect();

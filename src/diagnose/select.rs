@@ -66,7 +66,11 @@ pub struct Selection {
 /// Named parameters of effect `i` of a fit, and their standard errors.
 pub fn named(f: &Fit, i: usize) -> (BTreeMap<String, f64>, BTreeMap<String, f64>) {
     let e = &f.effects[i];
-    let mut p: BTreeMap<String, f64> = e.params().iter().map(|(k, v)| (k.to_string(), *v)).collect();
+    let mut p: BTreeMap<String, f64> = e
+        .params()
+        .iter()
+        .map(|(k, v)| (k.to_string(), *v))
+        .collect();
     let names = super::model::free_names(e);
     let mut s = BTreeMap::new();
     for (k, se) in names.iter().zip(&f.stderr[i]) {
@@ -89,15 +93,27 @@ pub fn search_step_time(part: Part, current: &Fit, s: &SelectSettings) -> Option
     let mut cols: Vec<[Vec<f64>; 4]> = Vec::new();
     for c in 0..2 {
         let mut x = x0;
-        x.step = Some((f64::NEG_INFINITY, if c == 0 { h } else { 0.0 }, if c == 1 { h } else { 0.0 }));
+        x.step = Some((
+            f64::NEG_INFINITY,
+            if c == 0 { h } else { 0.0 },
+            if c == 1 { h } else { 0.0 },
+        ));
         let mut r: [Vec<f64>; 4] = Default::default();
         part.normalised(&x, &mut r);
         cols.push(r);
     }
     // Rows: (midpoint time from origin, j0, j1, residual), scaled per group.
     let mut rows: Vec<(f64, f64, f64, f64)> = Vec::new();
-    let mid_icp: Vec<f64> = part.icp.iter().map(|r| 0.5 * (r.t0 + r.t1) - part.replay.origin).collect();
-    let mid_gyro: Vec<f64> = part.gyro.iter().map(|r| 0.5 * (r.t0 + r.t1) - part.replay.origin).collect();
+    let mid_icp: Vec<f64> = part
+        .icp
+        .iter()
+        .map(|r| 0.5 * (r.t0 + r.t1) - part.replay.origin)
+        .collect();
+    let mid_gyro: Vec<f64> = part
+        .gyro
+        .iter()
+        .map(|r| 0.5 * (r.t0 + r.t1) - part.replay.origin)
+        .collect();
     for g in 0..4 {
         let mids = if g < 3 { &mid_icp } else { &mid_gyro };
         let sc = current.scale[g];
@@ -132,7 +148,7 @@ pub fn search_step_time(part: Part, current: &Fit, s: &SelectSettings) -> Option
             continue;
         }
         let det = a00 * a11 - a01 * a01;
-        if !(det > 1e-12 * (a00 * a11).max(1e-300)) {
+        if det.is_nan() || det <= 1e-12 * (a00 * a11).max(1e-300) {
             continue;
         }
         let drop = (a11 * b0 * b0 - 2.0 * a01 * b0 * b1 + a00 * b1 * b1) / det;
@@ -175,10 +191,18 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
             if current.effects.iter().any(|e| e.name() == name) {
                 continue;
             }
-            let Some(mut new) = zero_effect(name) else { continue };
+            let Some(mut new) = zero_effect(name) else {
+                continue;
+            };
             if let Effect::RadiusStep { .. } = new {
-                let Some(t) = search_step_time(part, &current, s) else { continue };
-                new = Effect::RadiusStep { time: t, right: 0.0, left: 0.0 };
+                let Some(t) = search_step_time(part, &current, s) else {
+                    continue;
+                };
+                new = Effect::RadiusStep {
+                    time: t,
+                    right: 0.0,
+                    left: 0.0,
+                };
             }
             let mut effs = current.effects.clone();
             effs.push(new);

@@ -32,7 +32,7 @@ pub fn normal_two_sided(z: f64) -> f64 {
 /// Upper tail P(χ²_k > q) by the Wilson–Hilferty cube-root approximation
 /// (accurate to a few per cent of the p-value for k ≥ 1 in the far tail).
 pub fn chi2_sf(q: f64, k: usize) -> f64 {
-    if !(q > 0.0) || k == 0 {
+    if q.is_nan() || q <= 0.0 || k == 0 {
         return 1.0;
     }
     let k = k as f64;
@@ -87,7 +87,12 @@ impl StructureTest {
         let tm = t.iter().sum::<f64>() / nf;
         let stt: f64 = t.iter().map(|x| (x - tm).powi(2)).sum();
         let (trend, trend_p) = if stt > 0.0 {
-            let b = t.iter().zip(z).map(|(x, y)| (x - tm) * (y - mean)).sum::<f64>() / stt;
+            let b = t
+                .iter()
+                .zip(z)
+                .map(|(x, y)| (x - tm) * (y - mean))
+                .sum::<f64>()
+                / stt;
             let res = t
                 .iter()
                 .zip(z)
@@ -141,7 +146,11 @@ pub fn cross_correlation(a: &[f64], b: &[f64], max_lag: usize) -> Vec<(i64, f64)
                     s += (a[i as usize] - ma) * (b[j as usize] - mb);
                 }
             }
-            let c = if sa > 0.0 && sb > 0.0 { s / (sa * sb) } else { 0.0 };
+            let c = if sa > 0.0 && sb > 0.0 {
+                s / (sa * sb)
+            } else {
+                0.0
+            };
             (lag, c)
         })
         .collect()
@@ -209,7 +218,10 @@ mod tests {
             .map(|x| 0.8 * (x / 4.0).sin() + nd.sample(&mut rng))
             .collect();
         assert!(StructureTest::run(&t, &y, 10).unwrap().ljung_box_p < 1e-6);
-        let d: Vec<f64> = t.iter().map(|x| x / 200.0 + rng.random_range(-1.0..1.0)).collect();
+        let d: Vec<f64> = t
+            .iter()
+            .map(|x| x / 200.0 + rng.random_range(-1.0..1.0))
+            .collect();
         assert!(StructureTest::run(&t, &d, 10).unwrap().trend_p < 1e-6);
     }
 

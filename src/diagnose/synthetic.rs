@@ -82,7 +82,11 @@ struct Drive {
 impl Drive {
     fn new(rng: &mut rand::rngs::StdRng) -> Self {
         let mut c = |a: f64, lo: f64, hi: f64| {
-            (a, rng.random_range(lo..hi), rng.random_range(0.0..std::f64::consts::TAU))
+            (
+                a,
+                rng.random_range(lo..hi),
+                rng.random_range(0.0..std::f64::consts::TAU),
+            )
         };
         Self {
             v: [c(0.3, 14.0, 25.0), c(0.15, 5.0, 9.0), c(0.08, 2.0, 3.5)],
@@ -108,7 +112,10 @@ pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Syn
     let h = 0.002;
     let t_first = -1.0;
     let n = ((spec.duration + 2.0) / h) as usize;
-    let phase = [rng.random_range(0.0..std::f64::consts::TAU), rng.random_range(0.0..std::f64::consts::TAU)];
+    let phase = [
+        rng.random_range(0.0..std::f64::consts::TAU),
+        rng.random_range(0.0..std::f64::consts::TAU),
+    ];
     let (mut pose, mut phi, mut phim) = (Pose2::identity(), [0.0f64; 2], [0.0f64; 2]);
     let mut poses = Vec::with_capacity(n + 1);
     let mut meas = Vec::with_capacity(n + 1);
@@ -157,7 +164,11 @@ pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Syn
             let (i, f) = idx(s - x.delay);
             let r = meas[i][0] + f * (meas[i + 1][0] - meas[i][0]);
             let l = meas[i][1] + f * (meas[i + 1][1] - meas[i][1]);
-            WheelSample { stamp: s, left: quant(l), right: quant(r) }
+            WheelSample {
+                stamp: s,
+                left: quant(l),
+                right: quant(r),
+            }
         })
         .collect();
     let m = &nominal.laser;
@@ -198,7 +209,10 @@ pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Syn
                 let s = j as f64 / spec.gyro_rate;
                 let (i, f) = idx(s);
                 let w = wrate[i] + f * (wrate[i + 1] - wrate[i]);
-                GyroSample { stamp: s, wz: w + x.gyro_bias + spec.gyro_sigma * nd.sample(&mut rng) }
+                GyroSample {
+                    stamp: s,
+                    wz: w + x.gyro_bias + spec.gyro_sigma * nd.sample(&mut rng),
+                }
             })
             .collect()
     } else {
@@ -207,8 +221,17 @@ pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Syn
     let reference = (0..(spec.duration * 10.0) as usize)
         .map(|j| {
             let s = j as f64 / 10.0;
-            StampedPose { stamp: s, pose: pose_at(s), has_heading: true }
+            StampedPose {
+                stamp: s,
+                pose: pose_at(s),
+                has_heading: true,
+            }
         })
         .collect();
-    Synthetic { wheels, motions, gyro, reference }
+    Synthetic {
+        wheels,
+        motions,
+        gyro,
+        reference,
+    }
 }
