@@ -15,6 +15,7 @@ pub mod motion;
 pub mod recording;
 pub mod robot;
 pub mod scan;
+pub mod sim;
 pub mod traj;
 
 pub use error::InputError;

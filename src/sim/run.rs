@@ -1,0 +1,118 @@
+//! One simulation run: drive the scenario, integrate the true wheels, and let
+//! every sensor observe the result.
+
+use super::config::SimConfig;
+use super::drive::drive;
+use super::effects::TrueRobot;
+use super::scenario::Scenario;
+use super::sensors::{
+    encoder_samples, gyro_samples, laser_scans, reference_poses, sample_times, WheelTrack,
+};
+use super::truth::{TrueParameters, TruePose, Truth};
+use super::SimError;
+use crate::effects::Effect;
+use crate::geom::wrap_angle;
+use crate::recording::Recording;
+use crate::robot::RobotConfig;
+
+/// Simulates a run: returns the recording a reader would produce from the
+/// bag (scans, wheel angles, gyro, reference, nominal `base_from_laser`) and
+/// the truth (effects, true parameters, true trajectory). Same inputs give a
+/// bitwise identical result. `progress` receives the fraction done (0–1).
+pub fn simulate(
+    cfg: &SimConfig,
+    robot: &RobotConfig,
+    effects: &[Effect],
+    progress: &mut dyn FnMut(f64),
+) -> Result<(Recording, Truth), SimError> {
+    cfg.validate()?;
+    robot
+        .validate()
+        .map_err(|e| SimError::Config(e.to_string()))?;
+    let duration = cfg.duration_s;
+    let true_robot = TrueRobot::new(robot, effects);
+    if !true_robot.radii_positive(duration) {
+        return Err(SimError::Config(
+            "the effects make a wheel radius or the wheel base non-positive".into(),
+        ));
+    }
+    let scenario = Scenario::from_config(cfg)?;
+    let motion = drive(&scenario, &cfg.scenario, duration, 1.0 / cfg.integration_hz);
+    progress(0.05);
+    let track = WheelTrack::new(&motion, &true_robot);
+    let wheels = encoder_samples(
+        &cfg.encoder,
+        robot.ticks_per_rev,
+        &track,
+        &true_robot,
+        cfg.seed,
+        duration,
+    );
+    let gyro = gyro_samples(&cfg.gyro, &motion, &true_robot, cfg.seed, duration);
+    let reference = reference_poses(&cfg.reference, &motion, cfg.seed, duration);
+    progress(0.1);
+    let scans = laser_scans(
+        &cfg.laser,
+        &scenario.world,
+        &motion,
+        &true_robot,
+        cfg.seed,
+        duration,
+        &mut |f| progress(0.1 + 0.9 * f),
+    );
+    let recording = Recording {
+        source: format!("simulated:{}", scenario.name),
+        scans,
+        wheels,
+        gyro,
+        odom: Vec::new(),
+        reference,
+        base_from_laser: Some(robot.laser.pose()),
+    };
+    let trajectory = sample_times(100.0, duration, 0.0)
+        .map(|t| {
+            let [x, y, th] = motion.pose_at(t);
+            TruePose {
+                t,
+                x,
+                y,
+                theta: wrap_angle(th),
+            }
+        })
+        .collect();
+    let mut times: Vec<f64> = sample_times(10.0, duration, 0.0).collect();
+    times.extend(effects.iter().filter_map(|e| match e {
+        Effect::RadiusStep { time, .. } if *time <= duration => Some(*time),
+        _ => None,
+    }));
+    times.sort_by(f64::total_cmp);
+    times.dedup();
+    let parameters = times
+        .into_iter()
+        .map(|t| {
+            let k = true_robot.at(t);
+            TrueParameters {
+                t,
+                r_right: k.r_right,
+                r_left: k.r_left,
+                wheel_base: k.wheel_base,
+            }
+        })
+        .collect();
+    let truth = Truth {
+        scenario: scenario.name.clone(),
+        world: scenario.world.name().to_string(),
+        walls: scenario.world.segments().to_vec(),
+        seed: cfg.seed,
+        duration_s: duration,
+        nominal: robot.clone(),
+        effect_specs: effects.iter().map(|e| e.to_string()).collect(),
+        effects: effects.to_vec(),
+        parameters,
+        laser_mount: true_robot.laser,
+        trajectory,
+        settings: cfg.clone(),
+    };
+    progress(1.0);
+    Ok((recording, truth))
+}
