@@ -9,7 +9,9 @@
 pub mod diagnose;
 pub mod effects;
 pub mod error;
+pub mod eval;
 pub mod geom;
+pub mod icp;
 pub mod io;
 pub mod motion;
 pub mod recording;

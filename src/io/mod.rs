@@ -2,3 +2,33 @@
 //! outputs. Every write goes through [`atomic`].
 
 pub mod atomic;
+mod columns;
+pub mod relations;
+pub mod carmen;
+pub mod cdr;
+pub mod mcap_canon;
+pub mod mcap_read;
+pub mod mcap_write;
+pub mod ros_msgs;
+pub mod ros_schema;
+
+pub use carmen::read_carmen;
+pub use mcap_read::{read_mcap, read_mcap_bytes, ReadOptions, TopicConfig};
+pub use mcap_write::{encode_mcap, write_mcap, WriteError, WriteOptions};
+
+use crate::error::InputError;
+use crate::recording::Recording;
+use std::path::Path;
+
+/// Reads a recording, MCAP (recognised by its magic bytes) or else a CARMEN
+/// log; the result's streams are sorted by stamp.
+pub fn read_recording(path: &Path, opts: &ReadOptions) -> Result<Recording, InputError> {
+    let file = path.display().to_string();
+    let bytes =
+        std::fs::read(path).map_err(|e| InputError::new(&file, format!("cannot read: {e}")))?;
+    if bytes.starts_with(mcap::MAGIC) {
+        mcap_read::read_mcap_bytes(&bytes, &file, opts)
+    } else {
+        carmen::read_carmen_bytes(&bytes, &file, opts)
+    }
+}

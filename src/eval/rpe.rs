@@ -1,0 +1,190 @@
+//! Relative pose error, as evo's `metrics.RPE` with consecutive pairs: pairs
+//! (i, j) chosen on the estimate by index step, travelled distance or elapsed
+//! time; error E = inv(Q_i⁻¹ Q_j) (P_i⁻¹ P_j) with Q the reference and P the
+//! estimate; translation ‖t(E)‖ (m) and rotation angle of E (rad, deg).
+
+use super::ape::rotation_angle;
+use super::stats::Stats;
+use super::sync::Matched;
+use super::traj3::Pose3;
+use super::EvalError;
+use serde::{Deserialize, Serialize};
+
+/// Unit of the RPE delta (CLI words `frames|m|s`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DeltaUnit {
+    /// Index steps among the matched pairs (evo `--delta_unit f`).
+    #[default]
+    Frames,
+    /// Metres travelled by the estimate (evo `--delta_unit m`).
+    #[serde(rename = "m")]
+    Metres,
+    /// Seconds elapsed on the estimate's clock (odocal's own; evo has none).
+    #[serde(rename = "s")]
+    Seconds,
+}
+
+impl DeltaUnit {
+    /// The CLI word.
+    pub fn word(self) -> &'static str {
+        match self {
+            Self::Frames => "frames",
+            Self::Metres => "m",
+            Self::Seconds => "s",
+        }
+    }
+}
+
+impl std::str::FromStr for DeltaUnit {
+    type Err = EvalError;
+    fn from_str(s: &str) -> Result<Self, EvalError> {
+        match s {
+            "frames" | "f" => Ok(Self::Frames),
+            "m" => Ok(Self::Metres),
+            "s" => Ok(Self::Seconds),
+            _ => Err(EvalError::InvalidOption(format!(
+                "RPE unit '{s}' (expected frames|m|s)"
+            ))),
+        }
+    }
+}
+
+/// The RPE step between the two poses of a pair.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RpeDelta {
+    /// Step size (a whole number for frames).
+    pub value: f64,
+    /// Its unit.
+    pub unit: DeltaUnit,
+}
+
+impl Default for RpeDelta {
+    fn default() -> Self {
+        Self {
+            value: 1.0,
+            unit: DeltaUnit::Frames,
+        }
+    }
+}
+
+/// RPE of matched (and aligned) pairs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Rpe {
+    /// Translation error statistics (m).
+    pub trans: Stats,
+    /// Rotation angle statistics (rad).
+    pub rot_rad: Stats,
+    /// Rotation angle statistics (deg).
+    pub rot_deg: Stats,
+    /// Index pairs (i, j) into the matched pairs.
+    pub pairs: Vec<(usize, usize)>,
+    /// Per-pair translation error (m).
+    pub trans_errors: Vec<f64>,
+    /// Per-pair rotation error (rad).
+    pub rot_errors: Vec<f64>,
+}
+
+/// evo's `filter_pairs_by_index` (consecutive): 0, d, 2d, … paired in turn.
+fn pairs_by_index(n: usize, d: usize) -> Vec<(usize, usize)> {
+    let ids: Vec<usize> = (0..n).step_by(d).collect();
+    ids.windows(2).map(|w| (w[0], w[1])).collect()
+}
+
+/// evo's `filter_pairs_by_path` (consecutive): a new id whenever the path since
+/// the last id reaches `delta` (m).
+fn pairs_by_path(poses: &[Pose3], delta: f64) -> Vec<(usize, usize)> {
+    let mut ids = vec![0];
+    let mut path = 0.0;
+    for i in 1..poses.len() {
+        path += (poses[i].translation.vector - poses[i - 1].translation.vector).norm();
+        if path >= delta {
+            ids.push(i);
+            path = 0.0;
+        }
+    }
+    ids.windows(2).map(|w| (w[0], w[1])).collect()
+}
+
+/// The time analogue: a new id whenever `delta` seconds have passed since the last.
+fn pairs_by_time(stamps: &[f64], delta: f64) -> Vec<(usize, usize)> {
+    let mut ids = vec![0];
+    for (i, &t) in stamps.iter().enumerate().skip(1) {
+        if t - stamps[*ids.last().unwrap()] >= delta {
+            ids.push(i);
+        }
+    }
+    ids.windows(2).map(|w| (w[0], w[1])).collect()
+}
+
+/// Computes the RPE; pairs are chosen on the estimate (evo's default). An error
+/// for a delta that is not positive (or not whole, for frames) or selects no pair.
+pub fn rpe(m: &Matched, delta: &RpeDelta) -> Result<Rpe, EvalError> {
+    let d = delta.value;
+    let valid = d.is_finite() && d > 0.0 && (delta.unit != DeltaUnit::Frames || d.fract() == 0.0);
+    if !valid {
+        return Err(EvalError::InvalidOption(format!(
+            "RPE delta {d} {} (must be positive{})",
+            delta.unit.word(),
+            if delta.unit == DeltaUnit::Frames {
+                " and whole"
+            } else {
+                ""
+            }
+        )));
+    }
+    let pairs = match delta.unit {
+        DeltaUnit::Frames => pairs_by_index(m.len(), d as usize),
+        DeltaUnit::Metres => pairs_by_path(&m.estimate, d),
+        DeltaUnit::Seconds => pairs_by_time(&m.est_stamps, d),
+    };
+    if pairs.is_empty() {
+        return Err(EvalError::NoRpePairs {
+            delta: d,
+            unit: delta.unit.word(),
+        });
+    }
+    let mut trans_errors = Vec::with_capacity(pairs.len());
+    let mut rot_errors = Vec::with_capacity(pairs.len());
+    for &(i, j) in &pairs {
+        let q_rel = m.reference[i].inv_mul(&m.reference[j]);
+        let p_rel = m.estimate[i].inv_mul(&m.estimate[j]);
+        let e = q_rel.inv_mul(&p_rel);
+        trans_errors.push(e.translation.vector.norm());
+        rot_errors.push(rotation_angle(&e.rotation));
+    }
+    let bad = || EvalError::NonFinite {
+        what: "matched poses",
+        index: 0,
+    };
+    let deg: Vec<f64> = rot_errors.iter().map(|a| a.to_degrees()).collect();
+    Ok(Rpe {
+        trans: Stats::of(&trans_errors).ok_or_else(bad)?,
+        rot_rad: Stats::of(&rot_errors).ok_or_else(bad)?,
+        rot_deg: Stats::of(&deg).ok_or_else(bad)?,
+        pairs,
+        trans_errors,
+        rot_errors,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pair_selection_follows_evo() {
+        assert_eq!(pairs_by_index(7, 3), vec![(0, 3), (3, 6)]);
+        let poses: Vec<Pose3> = [0.0, 0.4, 0.8, 1.2, 1.6, 2.0, 2.4]
+            .iter()
+            .map(|&x| Pose3::translation(x, 0.0, 0.0))
+            .collect();
+        // 0.4 + 0.4 + 0.4 = 1.2 ≥ 1 at index 3; again at index 6.
+        assert_eq!(pairs_by_path(&poses, 1.0), vec![(0, 3), (3, 6)]);
+        assert_eq!(
+            pairs_by_time(&[0.0, 0.5, 1.0, 1.2, 2.1], 1.0),
+            vec![(0, 2), (2, 4)]
+        );
+    }
+}

@@ -1,0 +1,358 @@
+//! The streaming scan matcher: feed scans in time order, get the motion of the
+//! robot base between each scan and the previous one.
+
+use super::covariance::Correspondence;
+use super::params::{IcpParams, IcpParamsError};
+use super::preprocess::{Preprocessor, ScanPoints};
+use super::reference::Reference;
+use super::register::{register, RegisterSettings};
+use super::threshold::AdaptiveThreshold;
+use crate::geom::{self, Pose2};
+use crate::motion::{Motion, PairFailure};
+use crate::scan::LaserScan;
+use nalgebra::{Matrix3, Vector3};
+use std::collections::VecDeque;
+
+/// Where the initial guess of a pair came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PriorSource {
+    /// The caller's prior (e.g. the wheel-odometry increment).
+    Given,
+    /// The previous valid motion's velocity times dt.
+    ConstantVelocity,
+    /// No information: identity.
+    #[default]
+    None,
+}
+
+/// Diagnostics of the last pair, beside the [`Motion`] itself.
+#[derive(Debug, Clone, Default)]
+pub struct MatchInfo {
+    /// Where the initial guess came from.
+    pub prior_source: PriorSource,
+    /// Correspondence gate used (m).
+    pub threshold: f64,
+    /// Source points after downsampling.
+    pub source_points: usize,
+    /// Reference points.
+    pub reference_points: usize,
+    /// Smallest / largest eigenvalue of the information (θ scaled to metres
+    /// by the RMS range); small = degenerate.
+    pub conditioning: f64,
+    /// Direction `(x, y, θ·L)` the geometry constrains least (unit vector).
+    pub weak_direction: [f64; 3],
+    /// Weighted RMS residual along the surface normals (m).
+    pub rms: f64,
+}
+
+/// Matches each scan against the previous one (or a local map of recent
+/// keyframes with `IcpParams::local_map`), in the robot base frame.
+pub struct ScanMatcher {
+    params: IcpParams,
+    pre: Preprocessor,
+    threshold: AdaptiveThreshold,
+    reference: Reference,
+    /// Pose of the last scan in the reference frame (the reference scan, or
+    /// the local map's world frame).
+    ref_from_last: Pose2,
+    /// Covariance of `ref_from_last` from its registration (local map only).
+    last_cov: Matrix3<f64>,
+    last: Option<(f64, usize)>,
+    velocity: Option<(Pose2, f64)>,
+    keyframes: VecDeque<(Pose2, ScanPoints)>,
+    cur: ScanPoints,
+    src: Vec<[f64; 2]>,
+    corrs: Vec<Correspondence>,
+    info: MatchInfo,
+}
+
+impl ScanMatcher {
+    /// A matcher for a laser mounted at `base_from_laser` (from /tf_static or
+    /// the robot config). Fails on parameters that cannot work.
+    pub fn new(params: IcpParams, base_from_laser: Pose2) -> Result<Self, IcpParamsError> {
+        params.validate()?;
+        let p = &params;
+        Ok(Self {
+            pre: Preprocessor::new(
+                base_from_laser,
+                p.min_range,
+                p.max_range,
+                p.gap_factor,
+                p.max_gap,
+            ),
+            threshold: AdaptiveThreshold::new(
+                p.initial_threshold,
+                p.min_threshold,
+                p.max_threshold,
+                p.min_motion,
+                p.threshold_range,
+            ),
+            reference: Reference::default(),
+            ref_from_last: Pose2::identity(),
+            last_cov: Matrix3::zeros(),
+            last: None,
+            velocity: None,
+            keyframes: VecDeque::new(),
+            cur: ScanPoints::default(),
+            src: Vec::new(),
+            corrs: Vec::new(),
+            info: MatchInfo::default(),
+            params,
+        })
+    }
+
+    /// The parameters in use.
+    pub fn params(&self) -> &IcpParams {
+        &self.params
+    }
+
+    /// Diagnostics of the last pair.
+    pub fn info(&self) -> &MatchInfo {
+        &self.info
+    }
+
+    /// Adds the next scan. `prior` is the expected motion of the base since
+    /// the previous scan (`prev_from_cur`, e.g. the wheel-odometry increment);
+    /// without it the previous velocity × dt is used, else the identity.
+    /// Returns `None` for the first scan, else the motion since the previous
+    /// scan. A failed pair carries its reason in `failure` and, as its motion,
+    /// the prior (the best estimate left), with a covariance as wide as the
+    /// plausibility gates.
+    pub fn push(&mut self, scan: &LaserScan, prior: Option<Pose2>) -> Option<Motion> {
+        let t1 = scan.stamp;
+        let Some((t0, beams0)) = self.last else {
+            self.pre.points(scan, &mut self.cur);
+            self.start_reference(Pose2::identity());
+            self.last = Some((t1, scan.ranges.len()));
+            return None;
+        };
+        let dt = t1 - t0;
+        let (prior, source) = match (prior.filter(|p| pose_finite(p)), self.velocity) {
+            (Some(p), _) => (p, PriorSource::Given),
+            (None, Some((inc, vdt))) if dt.is_finite() && dt > 0.0 => {
+                let (ds, dth) = geom::arc_of_increment(&inc);
+                (
+                    geom::arc_increment(ds / vdt, dth / vdt, dt),
+                    PriorSource::ConstantVelocity,
+                )
+            }
+            _ => (Pose2::identity(), PriorSource::None),
+        };
+        self.info = MatchInfo {
+            prior_source: source,
+            ..Default::default()
+        };
+        if !(dt.is_finite() && dt > 0.0) {
+            // Out of order or duplicate: the scan is not used as a reference.
+            return Some(self.failed(t0, t1, &Pose2::identity(), PairFailure::BadTime));
+        }
+        self.last = Some((t1, scan.ranges.len()));
+        self.pre.points(scan, &mut self.cur);
+        let usable = self.cur.pts.len() >= self.params.min_points;
+        let failure = if !usable {
+            Some(PairFailure::TooFewPoints)
+        } else if scan.ranges.len() != beams0 {
+            Some(PairFailure::Inconsistent)
+        } else if self.reference.is_empty() {
+            Some(PairFailure::TooFewPoints)
+        } else {
+            None
+        };
+        if let Some(f) = failure {
+            let m = self.failed(t0, t1, &prior, f);
+            let ref_from_cur = self.ref_from_last * prior;
+            if usable {
+                self.start_reference(ref_from_cur);
+            } else {
+                self.ref_from_last = ref_from_cur;
+            }
+            return Some(m);
+        }
+        let m = self.match_pair(t0, t1, &prior, source);
+        if m.failure.is_some() {
+            self.start_reference(self.ref_from_last * prior);
+        }
+        Some(m)
+    }
+
+    fn match_pair(&mut self, t0: f64, t1: f64, prior: &Pose2, source: PriorSource) -> Motion {
+        let p = &self.params;
+        self.pre
+            .downsample(&self.cur.pts, p.beam_stride, p.voxel_size, &mut self.src);
+        let init = geom::xyt(&(self.ref_from_last * prior));
+        let set = RegisterSettings {
+            threshold: self.threshold.threshold(),
+            max_iterations: p.max_iterations,
+            convergence: p.convergence,
+            min_correspondences: p.min_correspondences,
+            cov_inflation: p.cov_inflation,
+        };
+        let reg = register(&self.reference, &self.src, init, &set, &mut self.corrs);
+        self.info.threshold = set.threshold;
+        self.info.source_points = self.src.len();
+        self.info.reference_points = self.reference.len();
+        let ref_from_cur = geom::pose(reg.pose[0], reg.pose[1], reg.pose[2]);
+        let motion = geom::between(&self.ref_from_last, &ref_from_cur);
+        let min_inliers =
+            (p.min_correspondences as f64).max(p.min_inlier_fraction * self.src.len() as f64);
+        let failure = if (reg.inliers as f64) < min_inliers {
+            Some(PairFailure::TooFewCorrespondences)
+        } else if !reg.converged {
+            Some(PairFailure::NotConverged)
+        } else if reg
+            .uncertainty
+            .is_none_or(|u| u.conditioning < p.degenerate_ratio)
+        {
+            Some(PairFailure::Degenerate)
+        } else if !self.agrees_with_prior(&motion, prior, source) {
+            Some(PairFailure::Implausible)
+        } else {
+            None
+        };
+        if let Some(u) = reg.uncertainty {
+            self.info.conditioning = u.conditioning;
+            self.info.weak_direction = u.weak_direction;
+            self.info.rms = u.rms;
+        }
+        if let Some(f) = failure {
+            let mut m = self.failed(t0, t1, prior, f);
+            m.iterations = reg.iterations;
+            m.inliers = reg.inliers as u32;
+            return m;
+        }
+        // A geometrically sound match that the robot could not have driven
+        // in dt (bursts of scans stamped milliseconds apart): the stamps are
+        // wrong, not the geometry. The motion is kept for the trajectory but
+        // flagged, so it never becomes a velocity observation.
+        let u = reg.uncertainty.expect("checked above");
+        let cov = if self.params.local_map {
+            // motion = inv(W_last) W_cur, both registered against the map.
+            let (ja, jb) = between_jacobians(&self.ref_from_last, &ref_from_cur);
+            ja * self.last_cov * ja.transpose() + jb * u.cov * jb.transpose()
+        } else {
+            u.cov
+        };
+        let time_ok = self.within_limits(&motion, &cov, t1 - t0);
+        self.threshold.update(&geom::between(prior, &motion));
+        if time_ok {
+            self.velocity = Some((motion, t1 - t0));
+        }
+        self.advance(ref_from_cur, u.cov);
+        let [dx, dy, dtheta] = geom::xyt(&motion);
+        Motion {
+            t0,
+            t1,
+            dx,
+            dy,
+            dtheta,
+            cov,
+            iterations: reg.iterations,
+            inliers: reg.inliers as u32,
+            failure: (!time_ok).then_some(PairFailure::BadTime),
+        }
+    }
+
+    /// Whether a matched motion is within the robot's speed and turn-rate
+    /// limits over `dt`, allowing 3σ of its covariance plus a small slack.
+    fn within_limits(&self, motion: &Pose2, cov: &Matrix3<f64>, dt: f64) -> bool {
+        let p = &self.params;
+        let [x, y, th] = geom::xyt(motion);
+        let st = (cov[(0, 0)] + cov[(1, 1)]).max(0.0).sqrt();
+        let sr = cov[(2, 2)].max(0.0).sqrt();
+        (x * x + y * y).sqrt() <= p.max_speed * dt + 3.0 * st + p.speed_slack
+            && th.abs() <= p.max_turn_rate * dt + 3.0 * sr + p.turn_slack
+    }
+
+    /// Whether a matched motion agrees with an informative prior.
+    fn agrees_with_prior(&self, motion: &Pose2, prior: &Pose2, source: PriorSource) -> bool {
+        if source == PriorSource::None {
+            return true;
+        }
+        let p = &self.params;
+        let [dx, dy, dth] = geom::xyt(&geom::between(prior, motion));
+        let prior_len = prior.translation.vector.norm();
+        (dx * dx + dy * dy).sqrt() <= p.prior_trans_tol + p.prior_rel_tol * prior_len
+            && dth.abs() <= p.prior_rot_tol
+    }
+
+    /// After a successful match: the current scan becomes the reference (scan
+    /// to scan) or may become a keyframe (local map).
+    fn advance(&mut self, ref_from_cur: Pose2, cov: Matrix3<f64>) {
+        if !self.params.local_map {
+            self.start_reference(Pose2::identity());
+            return;
+        }
+        self.ref_from_last = ref_from_cur;
+        self.last_cov = cov;
+        let key = self
+            .keyframes
+            .back()
+            .map(|k| geom::between(&k.0, &ref_from_cur));
+        let new_key = key.is_none_or(|d| {
+            d.translation.vector.norm() > self.params.keyframe_dist
+                || geom::heading(&d).abs() > self.params.keyframe_angle
+        });
+        if new_key {
+            if self.keyframes.len() >= self.params.keyframes {
+                self.keyframes.pop_front();
+            }
+            self.keyframes.push_back((ref_from_cur, self.cur.clone()));
+            self.reference
+                .set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
+        }
+    }
+
+    /// Makes the current scan the only reference, placed at `ref_from_cur`
+    /// (local map) or as the new reference frame (scan to scan).
+    fn start_reference(&mut self, ref_from_cur: Pose2) {
+        self.last_cov = Matrix3::zeros();
+        if self.cur.pts.len() < self.params.min_points {
+            self.reference.set(&ScanPoints::default());
+            self.keyframes.clear();
+            self.ref_from_last = ref_from_cur;
+            return;
+        }
+        if self.params.local_map {
+            self.keyframes.clear();
+            self.keyframes.push_back((ref_from_cur, self.cur.clone()));
+            self.reference
+                .set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
+            self.ref_from_last = ref_from_cur;
+        } else {
+            self.reference.set(&self.cur);
+            self.ref_from_last = Pose2::identity();
+        }
+    }
+
+    /// A failed pair: the prior as motion, covariance as wide as the gates.
+    fn failed(&self, t0: f64, t1: f64, prior: &Pose2, f: PairFailure) -> Motion {
+        let p = &self.params;
+        let [dx, dy, dtheta] = geom::xyt(prior);
+        let st = p.prior_trans_tol + p.prior_rel_tol * (dx * dx + dy * dy).sqrt();
+        Motion {
+            t0,
+            t1,
+            dx,
+            dy,
+            dtheta,
+            cov: Matrix3::from_diagonal(&Vector3::new(st * st, st * st, p.prior_rot_tol.powi(2))),
+            iterations: 0,
+            inliers: 0,
+            failure: Some(f),
+        }
+    }
+}
+
+fn pose_finite(p: &Pose2) -> bool {
+    geom::xyt(p).iter().all(|v| v.is_finite())
+}
+
+/// Jacobians of `m = inv(a) ⊕ b` (as x, y, θ) with respect to the (x, y, θ)
+/// of `a` and of `b`, all in the common parent frame.
+fn between_jacobians(a: &Pose2, b: &Pose2) -> (Matrix3<f64>, Matrix3<f64>) {
+    let (s, c) = geom::heading(a).sin_cos();
+    let m = geom::between(a, b).translation.vector;
+    let jb = Matrix3::new(c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0);
+    let ja = Matrix3::new(-c, -s, m.y, s, -c, -m.x, 0.0, 0.0, -1.0);
+    (ja, jb)
+}

@@ -1,0 +1,217 @@
+//! Parameters of the scan matcher: one plain struct with defaults, read from the
+//! `[icp]` table of a config file and validated once.
+
+use serde::{Deserialize, Serialize};
+
+/// Everything the scan matcher can be tuned by. Units: m, rad, s.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct IcpParams {
+    /// Readings shorter than this are dropped, on top of the scan's own range_min (m).
+    pub min_range: f64,
+    /// Readings longer than this are dropped, on top of the scan's own range_max (m).
+    pub max_range: f64,
+    /// Voxel size of the source-scan downsampling (m); 0 keeps every point.
+    pub voxel_size: f64,
+    /// Keep every n-th beam of the source scan before voxelisation (1 = all).
+    pub beam_stride: usize,
+    /// Two consecutive reference points closer than `gap_factor` × range ×
+    /// beam spacing (and `max_gap`) lie on one surface: correspondences may
+    /// land anywhere on the segment between them.
+    pub gap_factor: f64,
+    /// Upper bound of the surface gap test (m).
+    pub max_gap: f64,
+    /// Fewest valid points a scan needs to be matched.
+    pub min_points: usize,
+    /// Fewest correspondences, absolute.
+    pub min_correspondences: usize,
+    /// Fewest correspondences as a fraction of the source points.
+    pub min_inlier_fraction: f64,
+    /// Largest number of iterations before the pair is declared not converged.
+    pub max_iterations: u32,
+    /// Convergence: pose change of one iteration below this (m, and rad × 1 m).
+    pub convergence: f64,
+    /// Correspondence gate before any motion-model error has been seen (m).
+    pub initial_threshold: f64,
+    /// Smallest correspondence gate (m): the sensor noise floor.
+    pub min_threshold: f64,
+    /// Largest correspondence gate (m).
+    pub max_threshold: f64,
+    /// Model errors below this are not counted by the adaptive threshold (m).
+    pub min_motion: f64,
+    /// Lever arm turning rotation errors into displacement in the threshold (m).
+    pub threshold_range: f64,
+    /// Factor on the Hessian-based covariance: corrects its known
+    /// over-confidence (correlated residuals, reference noise), fitted on
+    /// simulated runs with known truth (NEES ≈ 3).
+    pub cov_inflation: f64,
+    /// Ratio of smallest to largest eigenvalue of the normalised information
+    /// below which a pair is degenerate.
+    pub degenerate_ratio: f64,
+    /// Largest plausible translation deviation from the prior (m), on top of
+    /// `prior_rel_tol` × prior translation.
+    pub prior_trans_tol: f64,
+    /// Relative slack on the prior translation.
+    pub prior_rel_tol: f64,
+    /// Largest plausible rotation deviation from the prior (rad).
+    pub prior_rot_tol: f64,
+    /// Largest plausible speed (m/s) and turn rate (rad/s) of the robot.
+    pub max_speed: f64,
+    /// See `max_speed` (rad/s).
+    pub max_turn_rate: f64,
+    /// Slack on `max_speed` × dt beyond 3σ of the match (m).
+    pub speed_slack: f64,
+    /// Slack on `max_turn_rate` × dt beyond 3σ of the match (rad).
+    pub turn_slack: f64,
+    /// Match against a local map of recent keyframes instead of the previous scan.
+    pub local_map: bool,
+    /// Keyframes kept in the local map.
+    pub keyframes: usize,
+    /// New keyframe after this much translation (m) …
+    pub keyframe_dist: f64,
+    /// … or this much rotation (rad).
+    pub keyframe_angle: f64,
+}
+
+impl Default for IcpParams {
+    fn default() -> Self {
+        Self {
+            min_range: 0.0,
+            max_range: 30.0,
+            voxel_size: 0.0,
+            beam_stride: 1,
+            gap_factor: 6.0,
+            max_gap: 0.5,
+            min_points: 20,
+            min_correspondences: 15,
+            min_inlier_fraction: 0.5,
+            max_iterations: 60,
+            convergence: 1e-6,
+            initial_threshold: 1.0,
+            min_threshold: 0.1,
+            max_threshold: 1.5,
+            min_motion: 0.005,
+            threshold_range: 5.0,
+            cov_inflation: 8.5,
+            degenerate_ratio: 1e-4,
+            prior_trans_tol: 0.25,
+            prior_rel_tol: 0.5,
+            prior_rot_tol: 0.35,
+            max_speed: 3.0,
+            max_turn_rate: 3.0,
+            speed_slack: 0.01,
+            turn_slack: 0.01,
+            local_map: false,
+            keyframes: 5,
+            keyframe_dist: 0.3,
+            keyframe_angle: 0.2,
+        }
+    }
+}
+
+/// A parameter set that cannot work.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("invalid ICP parameter {name}: {why}")]
+pub struct IcpParamsError {
+    /// The parameter's field name.
+    pub name: &'static str,
+    /// What is wrong with it.
+    pub why: &'static str,
+}
+
+impl IcpParams {
+    /// Checks ranges and orderings once, before any matching.
+    pub fn validate(&self) -> Result<(), IcpParamsError> {
+        let e = |name, why| Err(IcpParamsError { name, why });
+        let pos = [
+            ("max_range", self.max_range),
+            ("gap_factor", self.gap_factor),
+            ("max_gap", self.max_gap),
+            ("convergence", self.convergence),
+            ("initial_threshold", self.initial_threshold),
+            ("min_threshold", self.min_threshold),
+            ("max_threshold", self.max_threshold),
+            ("threshold_range", self.threshold_range),
+            ("cov_inflation", self.cov_inflation),
+            ("degenerate_ratio", self.degenerate_ratio),
+            ("prior_trans_tol", self.prior_trans_tol),
+            ("prior_rot_tol", self.prior_rot_tol),
+            ("max_speed", self.max_speed),
+            ("max_turn_rate", self.max_turn_rate),
+            ("speed_slack", self.speed_slack),
+            ("turn_slack", self.turn_slack),
+            ("keyframe_dist", self.keyframe_dist),
+            ("keyframe_angle", self.keyframe_angle),
+        ];
+        for (name, v) in pos {
+            if !(v > 0.0 && v.is_finite()) {
+                return e(name, "must be positive and finite");
+            }
+        }
+        let nonneg = [
+            ("min_range", self.min_range),
+            ("voxel_size", self.voxel_size),
+            ("min_motion", self.min_motion),
+            ("prior_rel_tol", self.prior_rel_tol),
+            ("min_inlier_fraction", self.min_inlier_fraction),
+        ];
+        for (name, v) in nonneg {
+            if !(v >= 0.0 && v.is_finite()) {
+                return e(name, "must be non-negative and finite");
+            }
+        }
+        if self.min_range >= self.max_range {
+            return e("min_range", "must be below max_range");
+        }
+        if self.min_threshold > self.max_threshold {
+            return e("min_threshold", "must not exceed max_threshold");
+        }
+        if self.min_inlier_fraction > 1.0 {
+            return e("min_inlier_fraction", "must be at most 1");
+        }
+        if self.beam_stride == 0 {
+            return e("beam_stride", "must be at least 1");
+        }
+        if self.max_iterations == 0 {
+            return e("max_iterations", "must be at least 1");
+        }
+        if self.min_points < 3 || self.min_correspondences < 3 {
+            return e("min_points", "need at least 3 points to fix a 2D pose");
+        }
+        if self.local_map && self.keyframes == 0 {
+            return e("keyframes", "must be at least 1 with local_map");
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_validate_and_round_trip_through_toml() {
+        let p = IcpParams::default();
+        p.validate().unwrap();
+        let s = toml::to_string(&p).unwrap();
+        let q: IcpParams = toml::from_str(&s).unwrap();
+        assert_eq!(p, q);
+        let partial: IcpParams = toml::from_str("max_range = 12.0").unwrap();
+        assert_eq!(partial.max_range, 12.0);
+        assert!(toml::from_str::<IcpParams>("bogus = 1").is_err());
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let p = IcpParams {
+            convergence: 0.0,
+            ..Default::default()
+        };
+        assert_eq!(p.validate().unwrap_err().name, "convergence");
+        let p = IcpParams {
+            min_range: 40.0,
+            ..Default::default()
+        };
+        assert_eq!(p.validate().unwrap_err().name, "min_range");
+    }
+}

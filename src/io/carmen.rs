@@ -1,0 +1,265 @@
+//! Reads CARMEN logs (`.clf`), the format of the classic SLAM benchmark
+//! datasets: `FLASER`, `ROBOTLASER1` and `ODOM` lines; other lines are skipped.
+//! The stamp of every record is its `ipc_timestamp`.
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use super::mcap_read::ReadOptions;
+use crate::error::InputError;
+use crate::geom::{self, Pose2};
+use crate::recording::{Recording, StampedPose};
+use crate::scan::LaserScan;
+
+/// Smallest valid range (m) of `FLASER` scans, which carry no limits: the
+/// value the benchmark's ROS conversion (carmen_to_rosbag) uses.
+pub const FLASER_RANGE_MIN: f64 = 0.1;
+/// Largest valid range (m) of `FLASER` scans; readings of 81.83/81.91 m mark
+/// "no return" and fall outside it.
+pub const FLASER_RANGE_MAX: f64 = 80.0;
+
+/// Reads a CARMEN log file.
+pub fn read_carmen(path: &Path, opts: &ReadOptions) -> Result<Recording, InputError> {
+    let file = path.display().to_string();
+    let bytes =
+        std::fs::read(path).map_err(|e| InputError::new(&file, format!("cannot read: {e}")))?;
+    read_carmen_bytes(&bytes, &file, opts)
+}
+
+/// Beam increment (rad) of an `n`-beam FLASER scan starting at −π/2:
+/// CARMEN uses π/n for even counts (180, 360: the last beam stops short of
+/// +π/2) and π/(n−1) for odd counts (181, 361: −90°…+90° inclusive).
+pub fn flaser_increment(n: usize) -> f64 {
+    if n % 2 == 0 {
+        PI / n as f64
+    } else {
+        PI / (n.max(2) - 1) as f64
+    }
+}
+
+/// Like [`read_carmen`] for a log in memory; `file` names it in errors.
+pub fn read_carmen_bytes(
+    bytes: &[u8],
+    file: &str,
+    opts: &ReadOptions,
+) -> Result<Recording, InputError> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| InputError::new(file, format!("not a CARMEN log (not UTF-8 text: {e})")))?;
+    let mut rec = Recording {
+        source: file.to_string(),
+        ..Default::default()
+    };
+    let mut known = 0usize;
+    let mut latest_scan = f64::NEG_INFINITY;
+    let mut latest_odom = f64::NEG_INFINITY;
+    for (i, line) in text.lines().enumerate() {
+        let mut tok = line.split_ascii_whitespace();
+        let Some(kind) = tok.next() else { continue };
+        let err = |m: String| {
+            InputError::new(file, m)
+                .topic(kind)
+                .at(format!("line {}", i + 1))
+        };
+        let fields: Vec<&str> = tok.collect();
+        let (scan, odom) = match kind {
+            "FLASER" => parse_flaser(&fields).map_err(err)?,
+            "ROBOTLASER1" => {
+                let (scan, odom, laser) = parse_robotlaser(&fields).map_err(err)?;
+                if rec.base_from_laser.is_none() {
+                    rec.base_from_laser = Some(geom::between(&odom.pose, &laser));
+                }
+                (Some(scan), odom)
+            }
+            "ODOM" => (None, parse_odom(&fields).map_err(err)?),
+            _ => continue,
+        };
+        known += 1;
+        if let Some(s) = scan {
+            if s.stamp < latest_scan - opts.reorder_tolerance {
+                return Err(err(format!(
+                    "time goes backwards by {:.3} s, more than the {} s tolerance",
+                    latest_scan - s.stamp,
+                    opts.reorder_tolerance
+                )));
+            }
+            latest_scan = latest_scan.max(s.stamp);
+            rec.scans.push(s);
+        }
+        if odom.stamp < latest_odom - opts.reorder_tolerance {
+            return Err(err(format!(
+                "odometry time goes backwards by {:.3} s, more than the {} s tolerance",
+                latest_odom - odom.stamp,
+                opts.reorder_tolerance
+            )));
+        }
+        latest_odom = latest_odom.max(odom.stamp);
+        rec.odom.push(odom);
+    }
+    if known == 0 {
+        return Err(InputError::new(
+            file,
+            "neither an MCAP file nor a CARMEN log (no FLASER, ROBOTLASER1 or ODOM line)",
+        ));
+    }
+    rec.sort_streams();
+    Ok(rec)
+}
+
+fn num(fields: &[&str], i: usize, what: &str) -> Result<f64, String> {
+    let s = fields
+        .get(i)
+        .ok_or_else(|| format!("line ends before {what} (field {})", i + 2))?;
+    let v: f64 = s
+        .parse()
+        .map_err(|_| format!("{what} '{s}' is not a number (field {})", i + 2))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{what} is {v} (field {})", i + 2))
+    }
+}
+
+fn count(fields: &[&str], i: usize, what: &str) -> Result<usize, String> {
+    let v = num(fields, i, what)?;
+    if v < 0.0 || v.fract() != 0.0 || v > 1e6 {
+        return Err(format!("{what} {v} is not a count"));
+    }
+    Ok(v as usize)
+}
+
+fn ranges(fields: &[&str], start: usize, n: usize) -> Result<Vec<f32>, String> {
+    (start..start + n)
+        .map(|i| num(fields, i, "range").map(|r| r as f32))
+        .collect()
+}
+
+fn pose_at(fields: &[&str], i: usize, what: &str) -> Result<Pose2, String> {
+    Ok(geom::pose(
+        num(fields, i, what)?,
+        num(fields, i + 1, what)?,
+        num(fields, i + 2, what)?,
+    ))
+}
+
+/// `FLASER n r… x y θ odom_x odom_y odom_θ ipc_timestamp host logger_timestamp`.
+fn parse_flaser(f: &[&str]) -> Result<(Option<LaserScan>, StampedPose), String> {
+    let n = count(f, 0, "number of readings")?;
+    if n == 0 {
+        return Err("FLASER with zero beams".into());
+    }
+    let r = ranges(f, 1, n)?;
+    let odom = pose_at(f, n + 4, "odometry pose")?;
+    let stamp = num(f, n + 7, "ipc_timestamp")?;
+    let scan = LaserScan {
+        stamp,
+        angle_min: -PI / 2.0,
+        angle_increment: flaser_increment(n),
+        range_min: FLASER_RANGE_MIN,
+        range_max: FLASER_RANGE_MAX,
+        ranges: r,
+        ..Default::default()
+    };
+    Ok((
+        Some(scan),
+        StampedPose {
+            stamp,
+            pose: odom,
+            has_heading: true,
+        },
+    ))
+}
+
+/// `ROBOTLASER1 type start_angle fov resolution max_range accuracy
+/// remission_mode n r… m rem… laser_x laser_y laser_θ robot_x robot_y robot_θ
+/// tv rv forward_safety side_safety turn_axis ipc_timestamp host logger_timestamp`.
+/// Returns the scan, the robot's odometry pose and the laser's pose.
+fn parse_robotlaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), String> {
+    let start = num(f, 1, "start_angle")?;
+    let res = num(f, 3, "angular_resolution")?;
+    let max_range = num(f, 4, "maximum_range")?;
+    let n = count(f, 7, "number of readings")?;
+    if n == 0 {
+        return Err("ROBOTLASER1 with zero beams".into());
+    }
+    let r = ranges(f, 8, n)?;
+    let m = count(f, 8 + n, "number of remissions")?;
+    let p = 9 + n + m;
+    let laser = pose_at(f, p, "laser pose")?;
+    let robot = pose_at(f, p + 3, "robot pose")?;
+    let stamp = num(f, p + 11, "ipc_timestamp")?;
+    let scan = LaserScan {
+        stamp,
+        angle_min: start,
+        angle_increment: res,
+        range_min: 0.0,
+        range_max: max_range,
+        ranges: r,
+        ..Default::default()
+    };
+    let odom = StampedPose {
+        stamp,
+        pose: robot,
+        has_heading: true,
+    };
+    Ok((scan, odom, laser))
+}
+
+/// `ODOM x y θ tv rv accel ipc_timestamp host logger_timestamp`.
+fn parse_odom(f: &[&str]) -> Result<StampedPose, String> {
+    Ok(StampedPose {
+        pose: pose_at(f, 0, "odometry pose")?,
+        stamp: num(f, 6, "ipc_timestamp")?,
+        has_heading: true,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str) -> Result<Recording, InputError> {
+        read_carmen_bytes(text.as_bytes(), "t.clf", &ReadOptions::default())
+    }
+
+    #[test]
+    fn reads_all_three_kinds() {
+        let log = "# comment\nPARAM x 1\n\
+            FLASER 3 1.0 2.0 3.0 0 0 0 1.5 2.5 0.1 10.5 host 10.6\n\
+            ODOM 1.6 2.6 0.2 0 0 0 10.7 host 10.8\n\
+            ROBOTLASER1 0 -1.0 2.0 0.5 30 0.01 0 5 1 1 1 1 1 0 1.2 2 0 1 2 0 0 0 0 0 0 11.0 host 11.1\n";
+        let r = read(log).unwrap();
+        assert_eq!(r.scans.len(), 2);
+        assert_eq!(r.odom.len(), 3);
+        let s = &r.scans[0];
+        assert_eq!(s.stamp, 10.5);
+        assert_eq!(s.ranges, vec![1.0, 2.0, 3.0]);
+        assert!((s.angle_increment - PI / 2.0).abs() < 1e-15);
+        assert_eq!(r.odom[0].pose.translation.vector.x, 1.5);
+        let rl = &r.scans[1];
+        assert_eq!(
+            (rl.angle_min, rl.angle_increment, rl.range_max),
+            (-1.0, 0.5, 30.0)
+        );
+        let b = r.base_from_laser.unwrap();
+        assert!((b.translation.vector.x - 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn malformed_lines_name_the_line() {
+        let e = read("ODOM 1 2 3 0 0 0 5 h 5\nFLASER 3 1 2 x 0 0 0 0 0 0 1 h 1\n").unwrap_err();
+        assert_eq!(e.position.as_deref(), Some("line 2"));
+        assert_eq!(e.topic.as_deref(), Some("FLASER"));
+        let e = read("FLASER 4 1 2\n").unwrap_err();
+        assert_eq!(e.position.as_deref(), Some("line 1"));
+        let e = read("ODOM 1 2 nan 0 0 0 5 h 5\n").unwrap_err();
+        assert!(e.message.contains("NaN"), "{e}");
+        assert!(read("hello world\n").is_err());
+    }
+
+    #[test]
+    fn beam_conventions() {
+        assert!((flaser_increment(180) - PI / 180.0).abs() < 1e-15);
+        assert!((flaser_increment(360) - PI / 360.0).abs() < 1e-15);
+        assert!((flaser_increment(361) - PI / 360.0).abs() < 1e-15);
+    }
+}

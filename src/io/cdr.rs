@@ -1,0 +1,332 @@
+//! A small reader and writer for OMG CDR, the byte encoding of ROS 2 messages:
+//! a 4-byte encapsulation header (`00 01` little endian, `00 00` big endian),
+//! every primitive aligned to its size counted from after the header, strings
+//! as a u32 length (including the NUL) then bytes, sequences as a u32 count.
+
+/// A message that does not decode: where (byte offset from the start of the
+/// message, header included) and what was expected there.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("CDR: expected {expected} at byte {offset}")]
+pub struct CdrError {
+    /// Byte offset from the start of the message.
+    pub offset: usize,
+    /// What the schema wanted there.
+    pub expected: String,
+}
+
+/// Reads primitives from one CDR-encoded message, in schema order.
+#[derive(Debug, Clone)]
+pub struct CdrReader<'a> {
+    /// Body after the 4-byte encapsulation header.
+    body: &'a [u8],
+    /// Position in `body`.
+    pos: usize,
+    little: bool,
+}
+
+/// Bytes of the encapsulation header.
+const HEADER: usize = 4;
+
+impl<'a> CdrReader<'a> {
+    /// Starts reading a message; checks the encapsulation header.
+    pub fn new(data: &'a [u8]) -> Result<Self, CdrError> {
+        if data.len() < HEADER {
+            return Err(CdrError {
+                offset: 0,
+                expected: "4-byte encapsulation header".into(),
+            });
+        }
+        let little = match (data[0], data[1]) {
+            (0, 1) => true,
+            (0, 0) => false,
+            (a, b) => {
+                return Err(CdrError {
+                    offset: 0,
+                    expected: format!("CDR encapsulation 00 00 or 00 01, found {a:02x} {b:02x}"),
+                })
+            }
+        };
+        Ok(Self {
+            body: &data[HEADER..],
+            pos: 0,
+            little,
+        })
+    }
+
+    fn err(&self, expected: impl Into<String>) -> CdrError {
+        CdrError {
+            offset: self.pos + HEADER,
+            expected: expected.into(),
+        }
+    }
+
+    fn take<const N: usize>(&mut self, what: &str) -> Result<[u8; N], CdrError> {
+        let aligned = self.pos.next_multiple_of(N);
+        match self.body.get(aligned..aligned + N) {
+            Some(b) => {
+                self.pos = aligned + N;
+                let mut a = [0u8; N];
+                a.copy_from_slice(b);
+                if !self.little {
+                    a.reverse();
+                }
+                Ok(a)
+            }
+            None => {
+                self.pos = aligned.min(self.body.len());
+                Err(self.err(what))
+            }
+        }
+    }
+
+    /// Reads a `uint8`/`byte`/`bool`.
+    pub fn u8(&mut self) -> Result<u8, CdrError> {
+        Ok(self.take::<1>("uint8")?[0])
+    }
+
+    /// Reads an `int32`.
+    pub fn i32(&mut self) -> Result<i32, CdrError> {
+        Ok(i32::from_le_bytes(self.take("int32")?))
+    }
+
+    /// Reads a `uint32`.
+    pub fn u32(&mut self) -> Result<u32, CdrError> {
+        Ok(u32::from_le_bytes(self.take("uint32")?))
+    }
+
+    /// Reads a `float32`.
+    pub fn f32(&mut self) -> Result<f32, CdrError> {
+        Ok(f32::from_le_bytes(self.take("float32")?))
+    }
+
+    /// Reads a `float64`.
+    pub fn f64(&mut self) -> Result<f64, CdrError> {
+        Ok(f64::from_le_bytes(self.take("float64")?))
+    }
+
+    /// Reads a sequence length and checks that `elem_size`-byte elements of
+    /// that count can still fit (so a corrupt count cannot allocate gigabytes).
+    pub fn seq_len(&mut self, elem_size: usize) -> Result<usize, CdrError> {
+        let n = self.u32()? as usize;
+        let left = self.body.len().saturating_sub(self.pos);
+        if n.saturating_mul(elem_size.max(1)) > left {
+            return Err(self.err(format!(
+                "sequence of {n} elements of {elem_size} bytes (only {left} bytes left)"
+            )));
+        }
+        Ok(n)
+    }
+
+    /// Reads a `string` (u32 length including the NUL, bytes, NUL).
+    pub fn string(&mut self) -> Result<&'a str, CdrError> {
+        let n = self.seq_len(1)?;
+        let bytes = &self.body[self.pos..self.pos + n];
+        let text = match bytes.split_last() {
+            None => &[][..],
+            Some((0, rest)) => rest,
+            Some(_) => return Err(self.err("NUL-terminated string")),
+        };
+        let s = std::str::from_utf8(text).map_err(|_| self.err("UTF-8 string"))?;
+        self.pos += n;
+        Ok(s)
+    }
+
+    /// Reads a `float32[]` sequence into `out` (cleared first).
+    pub fn f32_seq_into(&mut self, out: &mut Vec<f32>) -> Result<(), CdrError> {
+        let n = self.seq_len(4)?;
+        out.clear();
+        out.reserve_exact(n);
+        for _ in 0..n {
+            out.push(self.f32()?);
+        }
+        Ok(())
+    }
+
+    /// Reads a `float64[]` sequence.
+    pub fn f64_seq(&mut self) -> Result<Vec<f64>, CdrError> {
+        let n = self.seq_len(8)?;
+        (0..n).map(|_| self.f64()).collect()
+    }
+
+    /// Reads a fixed `float64[N]` array (no count on the wire).
+    pub fn f64_array<const N: usize>(&mut self) -> Result<[f64; N], CdrError> {
+        let mut a = [0.0; N];
+        for v in &mut a {
+            *v = self.f64()?;
+        }
+        Ok(a)
+    }
+
+    /// Checks that the message has been consumed, allowing up to 3 bytes of
+    /// end padding.
+    pub fn finish(&self) -> Result<(), CdrError> {
+        let left = self.body.len() - self.pos;
+        if left > 3 {
+            return Err(self.err(format!("end of message ({left} bytes left over)")));
+        }
+        Ok(())
+    }
+}
+
+/// Writes a little-endian CDR message (header `00 01 00 00`).
+#[derive(Debug, Clone)]
+pub struct CdrWriter {
+    buf: Vec<u8>,
+}
+
+impl Default for CdrWriter {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl CdrWriter {
+    /// An empty message with its encapsulation header.
+    pub fn new() -> Self {
+        Self {
+            buf: vec![0, 1, 0, 0],
+        }
+    }
+
+    /// Empties the message for reuse (keeps the allocation).
+    pub fn clear(&mut self) {
+        self.buf.truncate(HEADER);
+    }
+
+    fn align(&mut self, n: usize) {
+        let body = self.buf.len() - HEADER;
+        let pad = body.next_multiple_of(n) - body;
+        self.buf.extend(std::iter::repeat_n(0u8, pad));
+    }
+
+    /// Writes a `uint8`.
+    pub fn u8(&mut self, v: u8) {
+        self.buf.push(v);
+    }
+
+    /// Writes an `int32`.
+    pub fn i32(&mut self, v: i32) {
+        self.align(4);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// Writes a `uint32`.
+    pub fn u32(&mut self, v: u32) {
+        self.align(4);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// Writes a `float32`.
+    pub fn f32(&mut self, v: f32) {
+        self.align(4);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// Writes a `float64`.
+    pub fn f64(&mut self, v: f64) {
+        self.align(8);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// Writes a `string`.
+    pub fn string(&mut self, s: &str) {
+        self.u32(s.len() as u32 + 1);
+        self.buf.extend_from_slice(s.as_bytes());
+        self.buf.push(0);
+    }
+
+    /// Writes a sequence count.
+    pub fn seq_len(&mut self, n: usize) {
+        self.u32(n as u32);
+    }
+
+    /// Writes a `float32[]` sequence.
+    pub fn f32_seq(&mut self, v: &[f32]) {
+        self.seq_len(v.len());
+        for &x in v {
+            self.f32(x);
+        }
+    }
+
+    /// Writes a `float64[]` sequence.
+    pub fn f64_seq(&mut self, v: &[f64]) {
+        self.seq_len(v.len());
+        for &x in v {
+            self.f64(x);
+        }
+    }
+
+    /// Writes a fixed `float64[N]` array (no count).
+    pub fn f64_array(&mut self, v: &[f64]) {
+        for &x in v {
+            self.f64(x);
+        }
+    }
+
+    /// The encoded message, header included.
+    pub fn bytes(&self) -> &[u8] {
+        &self.buf
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_with_alignment() {
+        let mut w = CdrWriter::new();
+        w.u8(7);
+        w.f64(1.5);
+        w.string("laser");
+        w.f32_seq(&[1.0, f32::NAN, f32::INFINITY]);
+        w.i32(-3);
+        let b = w.bytes().to_vec();
+        // u8 at 0, f64 aligned to 8 (7 pad bytes) from after the header.
+        assert_eq!(b.len(), 4 + 8 + 8 + 4 + 6 + 2 + 4 + 12 + 4);
+        let mut r = CdrReader::new(&b).unwrap();
+        assert_eq!(r.u8().unwrap(), 7);
+        assert_eq!(r.f64().unwrap(), 1.5);
+        assert_eq!(r.string().unwrap(), "laser");
+        let mut v = Vec::new();
+        r.f32_seq_into(&mut v).unwrap();
+        assert_eq!(v[0], 1.0);
+        assert!(v[1].is_nan());
+        assert_eq!(v[2], f32::INFINITY);
+        assert_eq!(r.i32().unwrap(), -3);
+        r.finish().unwrap();
+    }
+
+    #[test]
+    fn big_endian_is_read() {
+        let mut b = vec![0, 0, 0, 0];
+        b.extend_from_slice(&7u32.to_be_bytes());
+        b.extend_from_slice(&[0; 4]);
+        b.extend_from_slice(&2.25f64.to_be_bytes());
+        let mut r = CdrReader::new(&b).unwrap();
+        assert_eq!(r.u32().unwrap(), 7);
+        assert_eq!(r.f64().unwrap(), 2.25);
+    }
+
+    #[test]
+    fn short_message_names_offset_and_type() {
+        let mut w = CdrWriter::new();
+        w.u32(1);
+        let mut r = CdrReader::new(w.bytes()).unwrap();
+        r.u32().unwrap();
+        let e = r.f64().unwrap_err();
+        assert_eq!(e.offset, 8);
+        assert!(e.expected.contains("float64"));
+        assert!(CdrReader::new(&[0, 1]).is_err());
+        assert!(CdrReader::new(&[9, 9, 0, 0]).is_err());
+    }
+
+    #[test]
+    fn huge_sequence_count_is_an_error_not_an_allocation() {
+        let mut w = CdrWriter::new();
+        w.u32(u32::MAX);
+        let mut r = CdrReader::new(w.bytes()).unwrap();
+        let mut v = Vec::new();
+        assert!(r.f32_seq_into(&mut v).is_err());
+    }
+}
