@@ -2,6 +2,7 @@
 
 mod diagnose_encoder_table;
 mod diagnose_figures;
+mod diagnose_sim;
 mod diagnose_synthetic;
 mod icp_bad_input;
 mod icp_real;

@@ -59,8 +59,10 @@ pub fn icp_rows(motions: &[Motion], span: (f64, f64), margin: f64) -> Vec<IcpRow
 }
 
 /// Gyro samples averaged over consecutive windows of about `window` s. Each
-/// sample stands for the rate over its own sampling period (median spacing δ),
-/// so a row of samples s_1..s_n covers [s_1 − δ/2, s_n + δ/2].
+/// sample is taken as the mean rate over the sampling period that ends at its
+/// stamp (median spacing δ; what an integrating MEMS gyro read at the end of
+/// each period reports, and what the simulator writes), so a row of samples
+/// s_1..s_n covers [s_1 − δ, s_n].
 pub fn gyro_rows(gyro: &[GyroSample], span: (f64, f64), margin: f64, window: f64) -> Vec<GyroRow> {
     let (a, b) = (span.0 + margin, span.1 - margin);
     let mut rows = Vec::new();
@@ -83,13 +85,13 @@ pub fn gyro_rows(gyro: &[GyroSample], span: (f64, f64), margin: f64, window: f64
     let half = 0.5 * gaps[gaps.len() / 2];
     let mut i = 0;
     while i < g.len() {
-        let t0 = g[i].stamp - half;
+        let t0 = g[i].stamp - 2.0 * half;
         if t0 < a {
             i += 1;
             continue;
         }
         let (mut j, mut sum) = (i, 0.0);
-        while j < g.len() && g[j].stamp + half <= t0 + window + 1e-9 {
+        while j < g.len() && g[j].stamp <= t0 + window + 1e-9 {
             sum += g[j].wz;
             j += 1;
         }
@@ -97,7 +99,7 @@ pub fn gyro_rows(gyro: &[GyroSample], span: (f64, f64), margin: f64, window: f64
             i += 1;
             continue;
         }
-        let t1 = g[j - 1].stamp + half;
+        let t1 = g[j - 1].stamp;
         if t1 > b {
             break;
         }

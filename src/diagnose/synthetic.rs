@@ -119,10 +119,8 @@ pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Syn
     let (mut pose, mut phi, mut phim) = (Pose2::identity(), [0.0f64; 2], [0.0f64; 2]);
     let mut poses = Vec::with_capacity(n + 1);
     let mut meas = Vec::with_capacity(n + 1);
-    let mut wrate = Vec::with_capacity(n + 1);
     poses.push(pose);
     meas.push(phim);
-    wrate.push(drive.eval(t_first).1);
     for i in 0..n {
         let t = t_first + (i as f64 + 0.5) * h;
         let (v, w) = drive.eval(t);
@@ -145,7 +143,6 @@ pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Syn
         pose *= geom::arc_increment(v, w, h);
         poses.push(pose);
         meas.push(phim);
-        wrate.push(drive.eval(t_first + (i + 1) as f64 * h).1);
     }
     let idx = |t: f64| -> (usize, f64) {
         let f = ((t - t_first) / h).clamp(0.0, (n - 1) as f64);
@@ -207,11 +204,12 @@ pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Syn
         (0..(spec.duration * spec.gyro_rate) as usize)
             .map(|j| {
                 let s = j as f64 / spec.gyro_rate;
-                let (i, f) = idx(s);
-                let w = wrate[i] + f * (wrate[i + 1] - wrate[i]);
+                // Mean true rate over the sampling period ending at the stamp.
+                let dt = 1.0 / spec.gyro_rate;
+                let dth = geom::heading(&(pose_at(s - dt).inverse() * pose_at(s)));
                 GyroSample {
                     stamp: s,
-                    wz: w + x.gyro_bias + spec.gyro_sigma * nd.sample(&mut rng),
+                    wz: dth / dt + x.gyro_bias + spec.gyro_sigma * nd.sample(&mut rng),
                 }
             })
             .collect()

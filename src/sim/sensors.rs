@@ -73,13 +73,13 @@ impl WheelTrack {
 /// encoder clock, which runs `robot.latency` s behind the laser's.
 pub fn encoder_samples(
     cfg: &EncoderConfig,
-    ticks_per_rev: u32,
+    ticks_per_rev: f64,
     track: &WheelTrack,
     robot: &TrueRobot,
     seed: u64,
     duration: f64,
 ) -> Vec<WheelSample> {
-    let q = 2.0 * std::f64::consts::PI / ticks_per_rev as f64;
+    let q = 2.0 * std::f64::consts::PI / ticks_per_rev;
     // Unknown phase of each code wheel at power-up.
     let mut rng = stream_rng(seed, STREAM_ENCODER, 0);
     let (p_r, p_l): (f64, f64) = (rng.random_range(0.0..q), rng.random_range(0.0..q));
