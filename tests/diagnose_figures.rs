@@ -60,18 +60,25 @@ fn diagnose_figures() {
         }
     }
     println!("null: {fp}/{n} not no-discrepancy");
-    let mut un = 0;
+    let (mut un, mut other) = (0, Vec::new());
     for seed in 0..20 {
         let spec = SyntheticSpec {
             duration: 90.0,
             out_of_roundness: rng.random_range(0.004..0.01),
             ..Default::default()
         };
-        if run(&spec, 7000 + seed).verdict == Verdict::Unexplained {
+        let d = run(&spec, 7000 + seed);
+        if d.verdict == Verdict::Unexplained {
             un += 1;
+        } else {
+            let named: Vec<String> = d.causes.iter().map(|c| c.effect.clone()).collect();
+            other.push(format!(
+                "a={:.4} {:?} {named:?}",
+                spec.out_of_roundness, d.verdict
+            ));
         }
     }
-    println!("out-of-roundness: {un}/20 unexplained");
+    println!("out-of-roundness: {un}/20 unexplained; others: {other:?}");
     let pairs = [
         ("radius_scale", "latency"),
         ("wheel_base_scale", "gyro_bias"),
