@@ -239,6 +239,21 @@ fn result_serialises_with_design_keys() {
         assert!(j["gain"][k].is_number(), "{k}");
     }
     assert!(j.get("series").is_none());
+    // The synthetic reference is the truth: a gyro bias leaves the wheel
+    // trajectory unchanged; a wheel-base error shrinks the held-out RPE.
+    let t = d.gain.trajectory.unwrap();
+    assert!(t.windows >= 3 && (t.rpe_before - t.rpe_after).abs() < 1e-12);
+    let e = Effect::WheelBaseScale { scale: 0.04 };
+    let w = run(
+        &SyntheticSpec {
+            duration: 60.0,
+            effects: vec![e],
+            ..Default::default()
+        },
+        9,
+    );
+    let t = w.gain.trajectory.unwrap();
+    assert!(t.rpe_after < 0.5 * t.rpe_before, "{t:?}");
     assert_eq!(d.series.t.len(), d.series.v_before.len());
     let null = run(
         &SyntheticSpec {

@@ -21,6 +21,7 @@ pub mod report;
 pub mod select;
 pub mod stats;
 pub mod synthetic;
+pub mod trajectory;
 
 pub use report::{Cause, Diagnosis, Gain, ResidualSeries, StreamGain, Verdict};
 pub use select::CandidateScore;
@@ -58,6 +59,8 @@ pub struct DiagnoseParams {
     /// Width (s) of the centred moving average applied to the wheel angle
     /// stream before replay (reduces and evens out encoder quantisation).
     pub wheel_smoothing: f64,
+    /// Window (s) of the held-out relative-pose error against a reference.
+    pub trajectory_window: f64,
     /// Time kept free at both ends of the wheel stream (s), bounding latency.
     pub margin: f64,
     /// Residuals beyond this many robust σ of the nominal model are outliers.
@@ -82,6 +85,7 @@ impl Default for DiagnoseParams {
             ljung_box_lags: 10,
             gyro_window: 0.1,
             wheel_smoothing: 0.1,
+            trajectory_window: 5.0,
             margin: 0.25,
             outlier_sigma: 8.0,
             max_effects: 3,
@@ -103,6 +107,7 @@ impl DiagnoseParams {
             ("heldout_margin", self.heldout_margin),
             ("bin_seconds", self.bin_seconds),
             ("gyro_window", self.gyro_window),
+            ("trajectory_window", self.trajectory_window),
             ("outlier_sigma", self.outlier_sigma),
         ] {
             if !(v.is_finite() && v > 0.0) {

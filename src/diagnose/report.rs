@@ -6,6 +6,7 @@ use super::fit::Fit;
 use super::model::{Extension, Replay};
 use super::select::{forward, named, CandidateScore, SelectSettings};
 use super::stats::{cross_correlation, SeriesStats, StructureTest};
+use super::trajectory::{trajectory_gain, TrajectoryGain};
 use super::{DiagnoseError, DiagnoseParams, Measured};
 use crate::robot::RobotConfig;
 use serde::Serialize;
@@ -60,6 +61,9 @@ pub struct Gain {
     pub relative: f64,
     /// Per-stream RMSE in physical units.
     pub streams: BTreeMap<String, StreamGain>,
+    /// Relative-pose error against the reference on the held-out part
+    /// (absent without a reference).
+    pub trajectory: Option<TrajectoryGain>,
 }
 
 /// Residual series and regressors for the report's plots (one entry per ICP
@@ -393,6 +397,14 @@ pub fn run(
         heldout_rmse_after: ra,
         relative: if rb > 0.0 { (rb - ra) / rb } else { 0.0 },
         streams,
+        trajectory: trajectory_gain(
+            &replay,
+            m.reference,
+            &nominal,
+            &xm,
+            split,
+            p.trajectory_window,
+        ),
     };
     // Structure tests on all rows.
     let structure_before = structure(all, &nominal, &sel.nominal.scale, p);
