@@ -11,7 +11,7 @@ use odocal::sim::{simulate, SimConfig};
 fn blind(effects: &[Effect], seed: u64) -> odocal::diagnose::Diagnosis {
     let mut cfg = SimConfig::default();
     cfg.scenario.name = "figure-eight".into();
-    cfg.duration_s = 60.0;
+    cfg.duration_s = 40.0;
     cfg.laser.rate_hz = 25.0;
     cfg.seed = seed;
     let robot = RobotConfig::default();
