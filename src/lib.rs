@@ -8,6 +8,7 @@
 
 pub mod calib;
 pub mod classic;
+pub mod diagnose;
 pub mod effects;
 pub mod error;
 pub mod eval;

@@ -1,0 +1,168 @@
+//! Measured streams turned into observation rows: ICP motions as base-frame
+//! velocities with σ, gyro samples averaged over short windows.
+
+use super::model::{Extension, Replay};
+use crate::motion::Motion;
+use crate::recording::GyroSample;
+
+/// One ICP motion as velocities over [t0, t1] (base frame, nominal mount).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IcpRow {
+    /// Interval start (s).
+    pub t0: f64,
+    /// Interval end (s).
+    pub t1: f64,
+    /// Measured forward, lateral (m/s) and turn rate (rad/s).
+    pub z: [f64; 3],
+    /// Their σ from the ICP covariance (m/s, m/s, rad/s).
+    pub sigma: [f64; 3],
+}
+
+/// Mean gyro rate over a window.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GyroRow {
+    /// Window start (s).
+    pub t0: f64,
+    /// Window end (s).
+    pub t1: f64,
+    /// Mean measured rate (rad/s).
+    pub w: f64,
+    /// Relative σ of the mean: 1/√(samples); the absolute scale is estimated.
+    pub sigma: f64,
+}
+
+/// Rows of every stream inside the wheel time span (with `margin` s kept free
+/// at both ends for latency shifts).
+pub fn icp_rows(motions: &[Motion], span: (f64, f64), margin: f64) -> Vec<IcpRow> {
+    motions
+        .iter()
+        .filter(|m| m.is_valid() && m.t1 > m.t0)
+        .filter(|m| m.t0 >= span.0 + margin && m.t1 <= span.1 - margin)
+        .filter_map(|m| {
+            let dt = m.t1 - m.t0;
+            let z = [m.dx / dt, m.dy / dt, m.dtheta / dt];
+            let sigma = [
+                m.cov[(0, 0)].max(0.0).sqrt() / dt,
+                m.cov[(1, 1)].max(0.0).sqrt() / dt,
+                m.cov[(2, 2)].max(0.0).sqrt() / dt,
+            ];
+            let ok =
+                z.iter().all(|v| v.is_finite()) && sigma.iter().all(|s| s.is_finite() && *s > 0.0);
+            ok.then_some(IcpRow {
+                t0: m.t0,
+                t1: m.t1,
+                z,
+                sigma,
+            })
+        })
+        .collect()
+}
+
+/// Gyro samples averaged over consecutive windows of about `window` s. Each
+/// sample is taken as the mean rate over the sampling period that ends at its
+/// stamp (median spacing δ; what an integrating MEMS gyro read at the end of
+/// each period reports, and what the simulator writes), so a row of samples
+/// s_1..s_n covers [s_1 − δ, s_n].
+pub fn gyro_rows(gyro: &[GyroSample], span: (f64, f64), margin: f64, window: f64) -> Vec<GyroRow> {
+    let (a, b) = (span.0 + margin, span.1 - margin);
+    let mut rows = Vec::new();
+    let g: Vec<&GyroSample> = gyro
+        .iter()
+        .filter(|g| g.stamp.is_finite() && g.wz.is_finite())
+        .collect();
+    if window.is_nan() || window <= 0.0 || b <= a || g.len() < 2 {
+        return rows;
+    }
+    let mut gaps: Vec<f64> = g
+        .windows(2)
+        .map(|w| w[1].stamp - w[0].stamp)
+        .filter(|d| *d > 0.0)
+        .collect();
+    if gaps.is_empty() {
+        return rows;
+    }
+    gaps.sort_by(|x, y| x.total_cmp(y));
+    let half = 0.5 * gaps[gaps.len() / 2];
+    let mut i = 0;
+    while i < g.len() {
+        let t0 = g[i].stamp - 2.0 * half;
+        if t0 < a {
+            i += 1;
+            continue;
+        }
+        let (mut j, mut sum) = (i, 0.0);
+        while j < g.len() && g[j].stamp <= t0 + window + 1e-9 {
+            sum += g[j].wz;
+            j += 1;
+        }
+        if j == i {
+            i += 1;
+            continue;
+        }
+        let t1 = g[j - 1].stamp;
+        if t1 > b {
+            break;
+        }
+        let n = (j - i) as f64;
+        // Windows with a gap (missing samples) are skipped.
+        if t1 - t0 <= window + 1e-9 && n * 2.0 * half >= 0.9 * (t1 - t0) {
+            rows.push(GyroRow {
+                t0,
+                t1,
+                w: sum / n,
+                sigma: 1.0 / n.sqrt(),
+            });
+        }
+        i = j;
+    }
+    rows
+}
+
+/// Residual groups: ICP forward, ICP lateral, ICP turn rate, gyro.
+pub const GROUPS: [&str; 4] = ["icp_v", "icp_lateral", "icp_w", "gyro"];
+
+/// Rows of one part (training or held-out) with the replay that predicts them.
+#[derive(Debug, Clone, Copy)]
+pub struct Part<'a> {
+    /// The replayed wheel streams.
+    pub replay: &'a Replay,
+    /// ICP rows.
+    pub icp: &'a [IcpRow],
+    /// Gyro rows.
+    pub gyro: &'a [GyroRow],
+}
+
+impl Part<'_> {
+    /// Rows per group.
+    pub fn counts(&self) -> [usize; 4] {
+        let n = self.icp.len();
+        [n, n, n, self.gyro.len()]
+    }
+
+    /// Residuals (measured − predicted) divided by the measurement σ, per group.
+    pub fn normalised(&self, x: &Extension, out: &mut [Vec<f64>; 4]) {
+        for o in out.iter_mut() {
+            o.clear();
+        }
+        for r in self.icp {
+            let p = self.replay.icp(x, r.t0, r.t1);
+            out[0].push((r.z[0] - p.v) / r.sigma[0]);
+            out[1].push((r.z[1] - p.l) / r.sigma[1]);
+            out[2].push((r.z[2] - p.w) / r.sigma[2]);
+        }
+        for g in self.gyro {
+            out[3].push((g.w - self.replay.gyro(x, g.t0, g.t1)) / g.sigma);
+        }
+    }
+
+    /// Σ of squared normalised residuals per group.
+    pub fn rss(&self, x: &Extension) -> [f64; 4] {
+        let mut out: [Vec<f64>; 4] = Default::default();
+        self.normalised(x, &mut out);
+        let mut s = [0.0; 4];
+        for (g, v) in out.iter().enumerate() {
+            s[g] = v.iter().map(|e| e * e).sum();
+        }
+        s
+    }
+}

@@ -1,0 +1,267 @@
+//! Weighted nonlinear least squares (Levenberg–Marquardt, central-difference
+//! Jacobian) of the free parameters of a set of effects, with per-stream σ
+//! scales profiled out, parameter standard errors from (JᵀWJ)⁻¹ and BIC.
+
+use super::data::Part;
+use super::model::{free_params, free_steps, with_free, Extension};
+use crate::effects::Effect;
+use nalgebra::{DMatrix, DVector};
+
+/// A fitted extension on the training part.
+#[derive(Debug, Clone)]
+pub struct Fit {
+    /// The effects with fitted parameters.
+    pub effects: Vec<Effect>,
+    /// Standard error of each effect's free parameters.
+    pub stderr: Vec<Vec<f64>>,
+    /// Covariance of all free parameters (in effect order).
+    pub cov: DMatrix<f64>,
+    /// Σ of squared σ-normalised residuals per group (training).
+    pub rss: [f64; 4],
+    /// Profiled σ scale per group: √(rss/n), the factor by which the given σ
+    /// under- (>1) or over-states (<1) the residual noise.
+    pub scale: [f64; 4],
+    /// Bayesian information criterion (profiled per-group σ).
+    pub bic: f64,
+    /// Whether JᵀWJ was well conditioned (every parameter identifiable).
+    pub identifiable: bool,
+}
+
+/// Number of free parameters of a set of effects, counting a radius step's
+/// searched time as one more.
+pub fn dof(effects: &[Effect]) -> usize {
+    effects
+        .iter()
+        .map(|e| free_params(e).len() + matches!(e, Effect::RadiusStep { .. }) as usize)
+        .sum()
+}
+
+/// BIC = Σ_g n_g ln(RSS_g / n_g) + k ln N (Gaussian likelihood with each
+/// group's σ scale profiled out).
+pub fn bic(rss: &[f64; 4], counts: &[usize; 4], k: usize) -> f64 {
+    let n: usize = counts.iter().sum();
+    let mut b = k as f64 * (n.max(1) as f64).ln();
+    for g in 0..4 {
+        if counts[g] > 0 {
+            b += counts[g] as f64 * (rss[g].max(1e-300) / counts[g] as f64).ln();
+        }
+    }
+    b
+}
+
+/// Profiled scales √(rss_g / n_g) (1 for empty groups).
+pub fn scales(rss: &[f64; 4], counts: &[usize; 4]) -> [f64; 4] {
+    let mut s = [1.0; 4];
+    for g in 0..4 {
+        if counts[g] > 0 {
+            s[g] = (rss[g] / counts[g] as f64).sqrt().max(1e-9);
+        }
+    }
+    s
+}
+
+fn unpack(effects: &[Effect], theta: &[f64]) -> Vec<Effect> {
+    let mut i = 0;
+    effects
+        .iter()
+        .map(|e| {
+            let n = free_params(e).len();
+            let out = with_free(e, &theta[i..i + n]);
+            i += n;
+            out
+        })
+        .collect()
+}
+
+struct Lsq<'a> {
+    part: Part<'a>,
+    effects: &'a [Effect],
+    scale: [f64; 4],
+    buf: [Vec<f64>; 4],
+}
+
+impl Lsq<'_> {
+    fn residual(&mut self, theta: &[f64], out: &mut Vec<f64>) {
+        let x = Extension::from_effects(&unpack(self.effects, theta));
+        self.part.normalised(&x, &mut self.buf);
+        out.clear();
+        for g in 0..4 {
+            let s = self.scale[g];
+            out.extend(self.buf[g].iter().map(|e| e / s));
+        }
+    }
+
+    /// Forward-difference Jacobian of the residual at θ (residual `r0` given).
+    fn jacobian(&mut self, theta: &[f64], r0: &[f64], steps: &[f64]) -> DMatrix<f64> {
+        let (m, p) = (r0.len(), theta.len());
+        let mut j = DMatrix::zeros(m, p);
+        let mut rp = Vec::new();
+        let mut th = theta.to_vec();
+        for c in 0..p {
+            th[c] = theta[c] + steps[c];
+            self.residual(&th, &mut rp);
+            th[c] = theta[c];
+            for r in 0..m {
+                j[(r, c)] = (rp[r] - r0[r]) / steps[c];
+            }
+        }
+        j
+    }
+}
+
+fn cost(r: &[f64]) -> f64 {
+    r.iter().map(|e| e * e).sum()
+}
+
+/// Levenberg–Marquardt from the given starting effects with fixed scales;
+/// returns θ and the Jacobian at θ.
+fn lm(l: &mut Lsq, theta0: Vec<f64>, steps: &[f64], max_iter: usize) -> (Vec<f64>, DMatrix<f64>) {
+    let mut theta = theta0;
+    let mut r = Vec::new();
+    l.residual(&theta, &mut r);
+    let mut c = cost(&r);
+    let mut lambda = 1e-4;
+    let mut rn = Vec::new();
+    for _ in 0..max_iter {
+        let j = l.jacobian(&theta, &r, steps);
+        let a = j.transpose() * &j;
+        let g = j.transpose() * DVector::from_column_slice(&r);
+        let mut improved = false;
+        while lambda < 1e12 {
+            let mut aa = a.clone();
+            for d in 0..aa.nrows() {
+                aa[(d, d)] += lambda * a[(d, d)].max(1e-12);
+            }
+            let Some(delta) = aa.cholesky().map(|ch| ch.solve(&(-&g))) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let cand: Vec<f64> = theta.iter().zip(delta.iter()).map(|(t, d)| t + d).collect();
+            l.residual(&cand, &mut rn);
+            let cn = cost(&rn);
+            if cn.is_finite() && cn <= c {
+                let rel = (c - cn) / c.max(1e-300);
+                theta = cand;
+                std::mem::swap(&mut r, &mut rn);
+                c = cn;
+                lambda = (lambda / 10.0).max(1e-12);
+                improved = rel > 1e-9;
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    let j = l.jacobian(&theta, &r, steps);
+    (theta, j)
+}
+
+/// Fits the free parameters of `effects` (starting from their values) on the
+/// training part: LM with the given σ scales, then (`rounds` = 2) once more
+/// with the scales re-estimated from the residuals (profile likelihood).
+pub fn fit(
+    part: Part,
+    effects: &[Effect],
+    scale0: [f64; 4],
+    max_iter: usize,
+    rounds: usize,
+) -> Fit {
+    let counts = part.counts();
+    let theta0: Vec<f64> = effects.iter().flat_map(free_params).collect();
+    let steps: Vec<f64> = effects.iter().flat_map(free_steps).collect();
+    let mut l = Lsq {
+        part,
+        effects,
+        scale: scale0,
+        buf: Default::default(),
+    };
+    let mut theta = theta0;
+    let mut jac = DMatrix::zeros(0, 0);
+    for _round in 0..rounds.max(1) {
+        if theta.is_empty() {
+            break;
+        }
+        let (t, j) = lm(&mut l, theta, &steps, max_iter);
+        theta = t;
+        jac = j;
+        let fitted = unpack(effects, &theta);
+        let rss = part.rss(&Extension::from_effects(&fitted));
+        let s = scales(&rss, &counts);
+        // Rescale the Jacobian to the new scales instead of recomputing it.
+        let mut row = 0;
+        for g in 0..4 {
+            let f = l.scale[g] / s[g];
+            for r in row..row + counts[g] {
+                for c in 0..jac.ncols() {
+                    jac[(r, c)] *= f;
+                }
+            }
+            row += counts[g];
+        }
+        l.scale = s;
+    }
+    let fitted = unpack(effects, &theta);
+    let rss = part.rss(&Extension::from_effects(&fitted));
+    let scale = scales(&rss, &counts);
+    let p = theta.len();
+    let (cov, identifiable) = if p == 0 {
+        (DMatrix::zeros(0, 0), true)
+    } else {
+        let a = jac.transpose() * &jac;
+        let d: Vec<f64> = (0..p).map(|i| a[(i, i)].max(0.0).sqrt()).collect();
+        let ok_diag = d.iter().all(|v| *v > 0.0 && v.is_finite());
+        let corr = DMatrix::from_fn(p, p, |i, j| a[(i, j)] / (d[i] * d[j]).max(1e-300));
+        let min_eig = corr
+            .symmetric_eigenvalues()
+            .iter()
+            .fold(f64::INFINITY, |m, v| m.min(*v));
+        let ok = ok_diag && min_eig > 1e-8;
+        let cov = a
+            .try_inverse()
+            .unwrap_or_else(|| DMatrix::from_element(p, p, f64::INFINITY));
+        (cov, ok)
+    };
+    let mut stderr = Vec::new();
+    let mut i = 0;
+    for e in &fitted {
+        let n = free_params(e).len();
+        stderr.push((i..i + n).map(|k| cov[(k, k)].max(0.0).sqrt()).collect());
+        i += n;
+    }
+    Fit {
+        bic: bic(&rss, &counts, dof(&fitted)),
+        effects: fitted,
+        stderr,
+        cov,
+        rss,
+        scale,
+        identifiable,
+    }
+}
+
+/// Wald statistic θᵀ Σ⁻¹ θ of the free parameters of the effect at `index`
+/// (∞ when its covariance block is singular, 0 for an empty block).
+pub fn wald(f: &Fit, index: usize) -> f64 {
+    let start: usize = f.effects[..index]
+        .iter()
+        .map(|e| free_params(e).len())
+        .sum();
+    let th = free_params(&f.effects[index]);
+    let n = th.len();
+    if n == 0 {
+        return 0.0;
+    }
+    let block = f.cov.view((start, start), (n, n)).into_owned();
+    let Some(inv) = block.try_inverse() else {
+        return 0.0;
+    };
+    let v = DVector::from_vec(th);
+    let w = (v.transpose() * inv * &v)[(0, 0)];
+    if w.is_finite() {
+        w
+    } else {
+        0.0
+    }
+}

@@ -1,0 +1,234 @@
+//! Forward selection of effects by BIC: try every candidate on top of the
+//! current model, keep the best one if it improves BIC by a clear margin and
+//! its parameters are significant (Wald test), repeat until nothing does.
+
+use super::data::Part;
+use super::fit::{fit, wald, Fit};
+use super::model::{free_params, zero_effect, Extension};
+use super::stats::chi2_sf;
+use crate::effects::Effect;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// How one candidate fared when tried on top of the model of its round.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CandidateScore {
+    /// Selection round (0 = tried on the nominal model).
+    pub round: usize,
+    /// Effect name.
+    pub effect: String,
+    /// Fitted parameters (design.md keys; units of the effect table).
+    pub parameters: BTreeMap<String, f64>,
+    /// Their standard errors.
+    pub stderr: BTreeMap<String, f64>,
+    /// BIC of the round's model minus BIC with this effect (positive = better).
+    pub delta_bic: f64,
+    /// Wald-test p-value that the effect's free parameters are all zero.
+    pub p_value: f64,
+    /// Whether every parameter was identifiable from the data.
+    pub identifiable: bool,
+}
+
+/// Settings of the selection (a slice of `DiagnoseParams`).
+#[derive(Debug, Clone)]
+pub struct SelectSettings {
+    /// Candidate effect names.
+    pub candidates: Vec<String>,
+    /// Minimum BIC improvement to add an effect.
+    pub bic_margin: f64,
+    /// Maximum Wald p-value of an added effect.
+    pub alpha: f64,
+    /// Maximum number of effects.
+    pub max_effects: usize,
+    /// LM iterations per fit.
+    pub max_iter: usize,
+    /// Allowed radius-step times (s from the origin).
+    pub step_range: (f64, f64),
+    /// Minimum rows on each side of a radius step.
+    pub step_min_rows: usize,
+}
+
+/// Result of the selection.
+#[derive(Debug, Clone)]
+pub struct Selection {
+    /// Nominal fit (no effect).
+    pub nominal: Fit,
+    /// Final fit with the selected effects.
+    pub model: Fit,
+    /// ΔBIC at which each selected effect entered (same order as `model.effects`).
+    pub delta_bic: Vec<f64>,
+    /// The nested models of the selection: `steps[k]` holds the first k + 1 effects.
+    pub steps: Vec<Fit>,
+    /// Every candidate tried, every round.
+    pub tried: Vec<CandidateScore>,
+}
+
+/// Named parameters of effect `i` of a fit, and their standard errors.
+pub fn named(f: &Fit, i: usize) -> (BTreeMap<String, f64>, BTreeMap<String, f64>) {
+    let e = &f.effects[i];
+    let mut p: BTreeMap<String, f64> = e
+        .params()
+        .iter()
+        .map(|(k, v)| (k.to_string(), *v))
+        .collect();
+    let names = super::model::free_names(e);
+    let mut s = BTreeMap::new();
+    for (k, se) in names.iter().zip(&f.stderr[i]) {
+        s.insert(k.to_string(), *se);
+    }
+    if let Effect::RadiusStep { time, .. } = e {
+        p.insert("time".into(), *time);
+    }
+    (p, s)
+}
+
+/// The radius-step time that best explains the residuals of `current`: with
+/// the other parameters held, the step sizes are linear, so the RSS drop of
+/// every split time follows from suffix sums of JᵀJ and Jᵀr in one pass.
+pub fn search_step_time(part: Part, current: &Fit, s: &SelectSettings) -> Option<f64> {
+    let x0 = Extension::from_effects(&current.effects);
+    let mut base: [Vec<f64>; 4] = Default::default();
+    part.normalised(&x0, &mut base);
+    let h = 1e-4;
+    let mut cols: Vec<[Vec<f64>; 4]> = Vec::new();
+    for c in 0..2 {
+        let mut x = x0;
+        x.step = Some((
+            f64::NEG_INFINITY,
+            if c == 0 { h } else { 0.0 },
+            if c == 1 { h } else { 0.0 },
+        ));
+        let mut r: [Vec<f64>; 4] = Default::default();
+        part.normalised(&x, &mut r);
+        cols.push(r);
+    }
+    // Rows: (midpoint time from origin, j0, j1, residual), scaled per group.
+    let mut rows: Vec<(f64, f64, f64, f64)> = Vec::new();
+    let mid_icp: Vec<f64> = part
+        .icp
+        .iter()
+        .map(|r| 0.5 * (r.t0 + r.t1) - part.replay.origin)
+        .collect();
+    let mid_gyro: Vec<f64> = part
+        .gyro
+        .iter()
+        .map(|r| 0.5 * (r.t0 + r.t1) - part.replay.origin)
+        .collect();
+    for g in 0..4 {
+        let mids = if g < 3 { &mid_icp } else { &mid_gyro };
+        let sc = current.scale[g];
+        for (i, t) in mids.iter().enumerate() {
+            let r = base[g][i] / sc;
+            let j0 = (cols[0][g][i] - base[g][i]) / (h * sc);
+            let j1 = (cols[1][g][i] - base[g][i]) / (h * sc);
+            rows.push((*t, j0, j1, r));
+        }
+    }
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let n = rows.len();
+    if n < 2 * s.step_min_rows + 2 {
+        return None;
+    }
+    // Suffix sums.
+    let (mut a00, mut a01, mut a11, mut b0, mut b1) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let mut best: Option<(f64, f64)> = None;
+    for k in (1..n).rev() {
+        let (_, j0, j1, r) = rows[k];
+        a00 += j0 * j0;
+        a01 += j0 * j1;
+        a11 += j1 * j1;
+        b0 += j0 * r;
+        b1 += j1 * r;
+        let after = n - k;
+        if after < s.step_min_rows || k < s.step_min_rows {
+            continue;
+        }
+        let t = 0.5 * (rows[k - 1].0 + rows[k].0);
+        if t < s.step_range.0 || t > s.step_range.1 || rows[k - 1].0 == rows[k].0 {
+            continue;
+        }
+        let det = a00 * a11 - a01 * a01;
+        if det.is_nan() || det <= 1e-12 * (a00 * a11).max(1e-300) {
+            continue;
+        }
+        let drop = (a11 * b0 * b0 - 2.0 * a01 * b0 * b1 + a00 * b1 * b1) / det;
+        if best.is_none_or(|(d, _)| drop > d) {
+            best = Some((drop, t));
+        }
+    }
+    best.map(|b| b.1)
+}
+
+fn score(round: usize, f: &Fit, base_bic: f64) -> CandidateScore {
+    let i = f.effects.len() - 1;
+    let (parameters, stderr) = named(f, i);
+    let w = wald(f, i);
+    CandidateScore {
+        round,
+        effect: f.effects[i].name().to_string(),
+        parameters,
+        stderr,
+        delta_bic: base_bic - f.bic,
+        p_value: chi2_sf(w, free_params(&f.effects[i]).len()),
+        identifiable: f.identifiable,
+    }
+}
+
+/// Forward selection on the training part (design.md: one effect at a time,
+/// while BIC improves by more than the margin and the effect is significant).
+pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
+    let counts = part.counts();
+    let rss0 = part.rss(&Extension::default());
+    let scale0 = super::fit::scales(&rss0, &counts);
+    let nominal = fit(part, &[], scale0, s.max_iter, 1);
+    let mut current = nominal.clone();
+    let mut delta_bic = Vec::new();
+    let mut tried = Vec::new();
+    let mut steps = Vec::new();
+    for round in 0..s.max_effects {
+        let mut best: Option<(Fit, f64)> = None;
+        for name in usable {
+            if current.effects.iter().any(|e| e.name() == name) {
+                continue;
+            }
+            let Some(mut new) = zero_effect(name) else {
+                continue;
+            };
+            if let Effect::RadiusStep { .. } = new {
+                let Some(t) = search_step_time(part, &current, s) else {
+                    continue;
+                };
+                new = Effect::RadiusStep {
+                    time: t,
+                    right: 0.0,
+                    left: 0.0,
+                };
+            }
+            let mut effs = current.effects.clone();
+            effs.push(new);
+            let f = fit(part, &effs, current.scale, s.max_iter, 1);
+            let sc = score(round, &f, current.bic);
+            let ok = sc.identifiable && sc.delta_bic > s.bic_margin && sc.p_value < s.alpha;
+            tried.push(sc.clone());
+            if ok && best.as_ref().is_none_or(|b| sc.delta_bic > b.1) {
+                best = Some((f, sc.delta_bic));
+            }
+        }
+        match best {
+            Some((f, d)) => {
+                delta_bic.push(d);
+                // The accepted model is refitted with re-estimated σ scales.
+                current = fit(part, &f.effects, f.scale, s.max_iter, 1);
+                steps.push(current.clone());
+            }
+            None => break,
+        }
+    }
+    Selection {
+        nominal,
+        model: current,
+        delta_bic,
+        steps,
+        tried,
+    }
+}
