@@ -39,6 +39,26 @@ enum Command {
     Calibrate(CalibrateArgs),
     /// Evaluate a trajectory against a reference and/or relations (evo's numbers).
     Eval(EvalArgs),
+    /// Find what the nominal model gets wrong against the measurements, name the cause.
+    Diagnose(DiagnoseArgs),
+}
+
+#[derive(Args)]
+struct DiagnoseArgs {
+    /// Recording with wheel encoders and laser scans (ROS 2 MCAP or CARMEN log).
+    #[arg(long, value_name = "REC")]
+    measured: PathBuf,
+    /// Fraction of the recording (at its end) held out to measure the gain.
+    #[arg(long, value_name = "FRACTION")]
+    holdout: Option<f64>,
+    /// Directory for report.md and the residual plots.
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    common: Common,
 }
 
 #[derive(Args)]
@@ -219,6 +239,7 @@ fn main() -> ExitCode {
         Command::Icp(a) => icp(a),
         Command::Calibrate(a) => calibrate(a),
         Command::Eval(a) => eval(a),
+        Command::Diagnose(a) => diagnose(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -661,6 +682,53 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
             "open the recording with: rerun {}",
             a.out.join("demo.rrd").display()
         );
+    }
+    Ok(())
+}
+
+fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
+    let (mut cfg, robot) = load_common(&a.common)?;
+    if let Some(h) = a.holdout {
+        if !(h > 0.0 && h < 1.0) {
+            return Err(bad(format!(
+                "--holdout must be a fraction in (0, 1), got {h}"
+            )));
+        }
+        cfg.diagnose.holdout = h;
+    }
+    let rec = read_recording(&a.measured, &cfg, &robot)?;
+    let d = pipeline::diagnose::run(&rec, &robot, &cfg.icp, &cfg.diagnose)?;
+    if let Some(dir) = &a.report {
+        pipeline::diagnose::write_report(dir, &a.measured.display().to_string(), &d)?;
+    }
+    if a.json {
+        return print_json(&d);
+    }
+    out!("verdict: {}", pipeline::diagnose::verdict_word(&d));
+    for c in &d.causes {
+        let params: Vec<String> = c
+            .parameters
+            .iter()
+            .map(|(k, v)| match c.stderr.get(k) {
+                Some(e) => format!("{k} = {v:.6} ± {e:.6}"),
+                None => format!("{k} = {v:.6}"),
+            })
+            .collect();
+        out!(
+            "  {}: {} (ΔBIC {:.1})",
+            c.effect,
+            params.join(", "),
+            c.delta_bic
+        );
+    }
+    out!(
+        "held-out residual RMSE {:.4} -> {:.4} ({:+.1} %)",
+        d.gain.heldout_rmse_before,
+        d.gain.heldout_rmse_after,
+        -100.0 * d.gain.relative
+    );
+    if let Some(dir) = &a.report {
+        out!("report: {}", dir.join("report.md").display());
     }
     Ok(())
 }

@@ -198,6 +198,33 @@ fn cli_pipeline_chains_and_prints_the_contract_keys() {
         ],
     );
     assert!(ev["ape"]["rmse"].as_f64().unwrap() < 1.0, "{ev}");
+    let rep = d.join("diag");
+    let dg = json(&odocal(&[
+        "diagnose",
+        "--measured",
+        s(&bag),
+        "--holdout",
+        "0.3",
+        "--report",
+        s(&rep),
+        "--json",
+    ]));
+    has_keys(
+        &dg,
+        &[
+            "verdict",
+            "causes",
+            "gain.heldout_rmse_before",
+            "gain.heldout_rmse_after",
+            "gain.relative",
+        ],
+    );
+    assert!(
+        ["explained", "no-discrepancy", "unexplained"].contains(&dg["verdict"].as_str().unwrap())
+    );
+    for f in ["report.md", "residuals.png", "regressors.png"] {
+        assert!(rep.join(f).is_file(), "{f} missing");
+    }
     no_temp_files(&d);
     std::fs::remove_dir_all(&d).unwrap();
 }
@@ -300,37 +327,24 @@ fn cli_bad_input_exits_2_naming_the_file() {
             "line 2",
         ),
         (
-            vec![
-                "simulate",
-                "--effect",
-                "wobble",
-                "--out",
-                s(&x_mcap),
-            ],
+            vec!["simulate", "--effect", "wobble", "--out", s(&x_mcap)],
             "wobble",
         ),
         (
-            vec![
-                "simulate",
-                "--scenario",
-                "moon-base",
-                "--out",
-                s(&x_mcap),
-            ],
+            vec!["simulate", "--scenario", "moon-base", "--out", s(&x_mcap)],
             "moon-base",
         ),
         (
-            vec![
-                "calibrate",
-                "--input",
-                s(&garbage),
-                "--out",
-                s(&c_dir),
-            ],
+            vec!["calibrate", "--input", s(&garbage), "--out", s(&c_dir)],
             "garbage.mcap",
         ),
         (vec!["icp", "--input", s(&garbage)], "--out"),
         (vec!["frobnicate"], "frobnicate"),
+        (vec!["diagnose", "--measured", s(&garbage)], "garbage.mcap"),
+        (
+            vec!["diagnose", "--measured", s(&garbage), "--holdout", "1.5"],
+            "holdout",
+        ),
     ];
     for (args, needle) in cases {
         let o = odocal(&args);

@@ -4,6 +4,7 @@
 use super::calibrate::MeasurementConfig;
 use super::PipelineError;
 use crate::calib::CalibParams;
+use crate::diagnose::DiagnoseParams;
 use crate::error::InputError;
 use crate::eval::EvalOptions;
 use crate::icp::IcpParams;
@@ -29,6 +30,8 @@ pub struct Config {
     pub measurements: MeasurementConfig,
     /// Evaluation settings.
     pub eval: EvalOptions,
+    /// Diagnosis settings.
+    pub diagnose: DiagnoseParams,
 }
 
 fn read_text(path: &Path) -> Result<String, PipelineError> {

@@ -4,6 +4,7 @@
 pub mod calibrate;
 mod config;
 pub mod demo;
+pub mod diagnose;
 mod error;
 pub mod evaluate;
 pub mod icp;
