@@ -41,6 +41,28 @@ enum Command {
     Eval(EvalArgs),
     /// Find what the nominal model gets wrong against the measurements, name the cause.
     Diagnose(DiagnoseArgs),
+    /// Regenerate seed 000's tables: resampling, montecarlo, changing.
+    Experiment(ExperimentArgs),
+}
+
+#[derive(Args)]
+struct ExperimentArgs {
+    /// resampling (Table I), montecarlo (Table II) or changing (radii step at 55 s).
+    name: String,
+    /// Monte Carlo runs.
+    #[arg(long, default_value_t = 30)]
+    runs: usize,
+    /// Seed of run 0 (run k uses seed + k).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output directory (NAME.md, NAME.json, NAME.png).
+    #[arg(long, value_name = "DIR", default_value = "odocal-experiments")]
+    out: PathBuf,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    common: Common,
 }
 
 #[derive(Args)]
@@ -240,6 +262,7 @@ fn main() -> ExitCode {
         Command::Calibrate(a) => calibrate(a),
         Command::Eval(a) => eval(a),
         Command::Diagnose(a) => diagnose(a),
+        Command::Experiment(a) => experiment(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -730,5 +753,16 @@ fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
     if let Some(dir) = &a.report {
         out!("report: {}", dir.join("report.md").display());
     }
+    Ok(())
+}
+
+fn experiment(a: ExperimentArgs) -> anyhow::Result<()> {
+    let (cfg, _) = load_common(&a.common)?;
+    let table = pipeline::experiment::run(&a.name, a.runs, a.seed, &cfg.calib, &a.out)?;
+    if a.json {
+        return print_json(&table);
+    }
+    out!("{}", table.to_markdown());
+    out!("written to {}", a.out.display());
     Ok(())
 }

@@ -7,6 +7,7 @@ pub mod demo;
 pub mod diagnose;
 mod error;
 pub mod evaluate;
+pub mod experiment;
 pub mod icp;
 pub mod simulate;
 
