@@ -239,6 +239,9 @@ struct EvalArgs {
     /// RPE step unit: frames, m or s.
     #[arg(long, value_name = "UNIT")]
     rpe_unit: Option<DeltaUnit>,
+    /// Write a PNG: trajectories overlaid and the error over time (needs --reference).
+    #[arg(long, value_name = "PNG")]
+    plot: Option<PathBuf>,
     /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
@@ -403,7 +406,13 @@ fn eval(a: EvalArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
+    if a.plot.is_some() && reference.is_none() {
+        return Err(bad("--plot needs --reference"));
+    }
     let report = pipeline::evaluate::run(&est, reference.as_ref(), a.relations.as_deref(), &opts)?;
+    if let Some(png) = &a.plot {
+        pipeline::evaluate::write_plot(png, &report, opts.position_only)?;
+    }
     if a.json {
         return print_json(&report);
     }

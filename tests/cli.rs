@@ -184,8 +184,24 @@ fn cli_pipeline_chains_and_prints_the_contract_keys() {
         s(&bag),
         "--align",
         "origin",
+        "--plot",
+        s(&d.join("eval.png")),
         "--json",
     ]));
+    // One PNG: the x–y overlay above translation and rotation error panels,
+    // with the estimate's red path drawn.
+    let png = png::Decoder::new(std::io::Cursor::new(
+        std::fs::read(d.join("eval.png")).unwrap(),
+    ));
+    let mut reader = png.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (1100, 800 + 80 + 2 * 340));
+    let red = buf[..info.buffer_size()]
+        .chunks_exact(3)
+        .filter(|p| p[0] == 214 && p[1] == 39 && p[2] == 40)
+        .count();
+    assert!(red > 500, "{red} estimate pixels");
     has_keys(
         &ev,
         &[

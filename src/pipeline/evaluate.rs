@@ -61,3 +61,67 @@ pub fn run(
     };
     Ok(eval::evaluate(estimate, reference, rels.as_deref(), opts)?)
 }
+
+/// Writes `--plot`: the reference and the aligned estimate in the x–y plane
+/// above the absolute errors over time (translation in m, rotation in deg
+/// unless the reference is position-only), as one PNG. Needs a reference.
+pub fn write_plot(
+    path: &Path,
+    report: &EvalReport,
+    position_only: bool,
+) -> Result<(), PipelineError> {
+    use crate::viz::plot::{
+        render_line_chart, render_trajectory_plot, LineChart, PathSeries, Rgb, Series,
+        TrajectoryPlot,
+    };
+    let Some(d) = &report.detail else {
+        return Err(PipelineError::BadArgument(
+            "--plot needs a reference trajectory (--reference)".into(),
+        ));
+    };
+    let xy = |poses: &[eval::Pose3]| -> Vec<[f64; 2]> {
+        poses
+            .iter()
+            .map(|p| [p.translation.x, p.translation.y])
+            .collect()
+    };
+    let viz_err = |e: crate::viz::VizError| PipelineError::Write {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    };
+    let paths = vec![
+        PathSeries::new("reference", xy(&d.matched.reference)).color([40, 40, 40]),
+        PathSeries::new("estimate (aligned)", xy(&d.matched.estimate)).color([214, 39, 40]),
+    ];
+    let mut top = TrajectoryPlot::new(
+        format!(
+            "Estimate against reference: APE rmse {:.3} m over {} poses",
+            d.ape.trans.rmse,
+            d.matched.len()
+        ),
+        paths,
+    );
+    top.size = (1100, 800);
+    let t0 = d.matched.ref_stamps.first().copied().unwrap_or(0.0);
+    let t: Vec<f64> = d.matched.ref_stamps.iter().map(|s| s - t0).collect();
+    let mut chart = LineChart::new(
+        "Absolute pose error over time",
+        "time from the first pose (s)",
+    )
+    .panel(
+        "translation error (m)",
+        vec![Series::from_xy("APE translation", &t, &d.ape.trans_errors)],
+    );
+    if !position_only {
+        let deg: Vec<f64> = d.ape.rot_errors.iter().map(|r| r.to_degrees()).collect();
+        chart = chart.panel(
+            "rotation error (deg)",
+            vec![Series::from_xy("APE rotation", &t, &deg)],
+        );
+    }
+    let a = render_trajectory_plot(&top).map_err(viz_err)?;
+    let b = render_line_chart(&chart).map_err(viz_err)?;
+    Rgb::stack(&[a, b])
+        .and_then(|img| img.save_png(path))
+        .map_err(viz_err)
+}

@@ -51,6 +51,31 @@ impl Rgb {
         Ok(out)
     }
 
+    /// Stacks pictures top to bottom on white, left-aligned (one PNG of
+    /// several figures); an error for none.
+    pub fn stack(parts: &[Rgb]) -> Result<Rgb, VizError> {
+        let width = parts.iter().map(|p| p.width).max().unwrap_or(0);
+        let height: u32 = parts.iter().map(|p| p.height).sum();
+        if width == 0 || height == 0 {
+            return Err(VizError::Input("nothing to stack".into()));
+        }
+        let mut data = vec![255u8; 3 * width as usize * height as usize];
+        let mut row0 = 0usize;
+        for p in parts {
+            let line = 3 * p.width as usize;
+            for (r, src) in p.data.chunks_exact(line).enumerate() {
+                let at = 3 * width as usize * (row0 + r);
+                data[at..at + line].copy_from_slice(src);
+            }
+            row0 += p.height as usize;
+        }
+        Ok(Rgb {
+            width,
+            height,
+            data,
+        })
+    }
+
     /// Writes the PNG to `path` atomically.
     pub fn save_png(&self, path: &Path) -> Result<(), VizError> {
         let bytes = self.to_png()?;
