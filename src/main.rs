@@ -159,6 +159,15 @@ struct CalibrateArgs {
     /// Output directory: calibration.csv, trajectory.tum, summary.json.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// Record the run for the Rerun viewer: trajectories, scans, particle cloud, estimates.
+    #[arg(long, value_name = "FILE.rrd", conflicts_with_all = ["connect", "spawn"])]
+    rrd: Option<PathBuf>,
+    /// Stream the run to a running Rerun viewer at this address.
+    #[arg(long, value_name = "ADDR", conflicts_with = "spawn")]
+    connect: Option<String>,
+    /// Spawn the Rerun viewer (when installed) and stream the run to it.
+    #[arg(long)]
+    spawn: bool,
     /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
@@ -530,26 +539,29 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
     if let Some(s) = a.seed {
         cfg.calib.seed = s;
     }
-    let input = match (&a.input, &a.motions_csv, &a.wheels_csv) {
+    let mut logger = rerun_logger(a.rrd.clone(), &a.connect, a.spawn)?;
+    let (input, rec, icp_out) = match (&a.input, &a.motions_csv, &a.wheels_csv) {
         (Some(rec_path), _, _) => {
             let rec = read_recording(rec_path, &cfg, &robot)?;
             let out = pipeline::icp::run(&rec, &robot, &cfg.icp)?;
-            pipeline::calibrate::CalibInput {
+            let input = pipeline::calibrate::CalibInput {
                 observations: out.observations(),
-                wheels: rec.wheels,
-                gyro: rec.gyro,
-            }
+                wheels: rec.wheels.clone(),
+                gyro: rec.gyro.clone(),
+            };
+            (input, Some(rec), Some(out))
         }
         (None, Some(m), Some(w)) => {
             let motions = odocal::io::csv::read_motions(m).map_err(PipelineError::from)?;
-            pipeline::calibrate::CalibInput {
+            let input = pipeline::calibrate::CalibInput {
                 observations: motions
                     .iter()
                     .filter_map(odocal::motion::VelocityObs::from_motion)
                     .collect(),
                 wheels: odocal::io::csv::read_wheels(w).map_err(PipelineError::from)?,
                 gyro: Vec::new(),
-            }
+            };
+            (input, None, None)
         }
         _ => {
             return Err(bad(
@@ -562,7 +574,64 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
             "the input has no wheel encoder data (JointState) to calibrate",
         ));
     }
-    let run = pipeline::calibrate::run(&input, &robot, &cfg.calib, &cfg.measurements)?;
+    let run = match logger.as_deref_mut() {
+        None => pipeline::calibrate::run(&input, &robot, &cfg.calib, &cfg.measurements)?,
+        Some(logger) => {
+            use pipeline::record::{particle_logger, record, RunRecord};
+            // The `scan` timeline: the scans, or the motions' ends without a recording.
+            let scan_stamps: Vec<f64> = match &rec {
+                Some(r) => r.scans.iter().map(|s| s.stamp).collect(),
+                None => input.observations.iter().map(|o| o.t1).collect(),
+            };
+            let t_start = rec
+                .as_ref()
+                .and_then(|r| r.time_span())
+                .map(|s| s.0)
+                .unwrap_or(input.wheels[0].stamp);
+            let mut log_error = None;
+            let run = {
+                let mut on_step = particle_logger(logger, &scan_stamps, t_start, &mut log_error);
+                pipeline::calibrate::run_observed(
+                    &input,
+                    &robot,
+                    &cfg.calib,
+                    &cfg.measurements,
+                    &mut on_step,
+                )?
+            };
+            if let Some(e) = log_error {
+                return Err(PipelineError::Write {
+                    path: "rerun recording".into(),
+                    message: e.to_string(),
+                }
+                .into());
+            }
+            let raw = odocal::robot::wheel_odometry(
+                &robot.diff_drive(),
+                &input.wheels,
+                odocal::geom::Pose2::identity(),
+            );
+            let reference = rec.as_ref().and_then(|r| {
+                (r.reference.len() >= 2)
+                    .then(|| odocal::eval::trajectory_from_stamped(&r.reference).0)
+            });
+            record(
+                &RunRecord {
+                    recording: rec.as_ref(),
+                    robot: &robot,
+                    walls: None,
+                    icp: icp_out.as_ref(),
+                    raw: Some(&raw),
+                    calibrated: &run,
+                    reference: reference.as_ref(),
+                    t_start,
+                    scan_stamps: &scan_stamps,
+                },
+                logger,
+            )?;
+            run
+        }
+    };
     pipeline::calibrate::write(&a.out, &run)?;
     if a.json {
         return print_json(&run.summary);
@@ -601,23 +670,46 @@ const DEMO_TRUTH: &str = concat!(
     "/scans/wheelchair-corridor.truth.json"
 );
 
+/// The Rerun logger asked for: a file, a running viewer, or a spawned one;
+/// `None` when none is asked for.
 #[cfg(feature = "rerun")]
-fn demo_logger(a: &DemoArgs) -> anyhow::Result<Box<dyn odocal::viz::Logger>> {
+fn rerun_logger(
+    file: Option<PathBuf>,
+    connect: &Option<String>,
+    spawn: bool,
+) -> anyhow::Result<Option<Box<dyn odocal::viz::Logger>>> {
     use odocal::viz::{RerunLogger, RerunOptions, RerunSink};
-    let sink = match (&a.connect, a.spawn) {
-        (Some(addr), _) => RerunSink::Connect(addr.clone()),
-        (None, true) => RerunSink::Spawn,
-        (None, false) => RerunSink::File(a.out.join("demo.rrd")),
+    let sink = match (connect, spawn, file) {
+        (Some(addr), _, _) => RerunSink::Connect(addr.clone()),
+        (None, true, _) => RerunSink::Spawn,
+        (None, false, Some(f)) => RerunSink::File(f),
+        (None, false, None) => return Ok(None),
     };
-    Ok(Box::new(RerunLogger::new(sink, RerunOptions::default())?))
+    Ok(Some(Box::new(RerunLogger::new(
+        sink,
+        RerunOptions::default(),
+    )?)))
 }
 
 #[cfg(not(feature = "rerun"))]
-fn demo_logger(a: &DemoArgs) -> anyhow::Result<Box<dyn odocal::viz::Logger>> {
-    if a.connect.is_some() || a.spawn {
-        return Err(bad("this odocal was built without the `rerun` feature"));
+fn rerun_logger(
+    file: Option<PathBuf>,
+    connect: &Option<String>,
+    spawn: bool,
+) -> anyhow::Result<Option<Box<dyn odocal::viz::Logger>>> {
+    if file.is_some() || connect.is_some() || spawn {
+        return Err(bad(
+            "this odocal was built without the `rerun` feature: no Rerun recording",
+        ));
     }
-    Ok(Box::new(odocal::viz::NullLogger))
+    Ok(None)
+}
+
+fn demo_logger(a: &DemoArgs) -> anyhow::Result<Box<dyn odocal::viz::Logger>> {
+    // Without the `rerun` feature the demo still runs, with nothing recorded.
+    let file = cfg!(feature = "rerun").then(|| a.out.join("demo.rrd"));
+    Ok(rerun_logger(file, &a.connect, a.spawn)?
+        .unwrap_or_else(|| Box::new(odocal::viz::NullLogger)))
 }
 
 fn demo(a: DemoArgs) -> anyhow::Result<()> {

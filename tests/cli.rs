@@ -176,6 +176,43 @@ fn cli_pipeline_chains_and_prints_the_contract_keys() {
     let rr2 = cal2["final"]["r_right"].as_f64().unwrap();
     assert!((rr2 - rr).abs() < 1e-6, "{rr2} vs {rr}");
 
+    // The proposed filter recorded for the Rerun viewer (or refused cleanly
+    // when built without it).
+    let rrd = d.join("calib.rrd");
+    let pf_dir = d.join("pf");
+    let args = [
+        "calibrate",
+        "--input",
+        s(&bag),
+        "--method",
+        "adaptive-pf",
+        "--particles",
+        "400",
+        "--out",
+        s(&pf_dir),
+        "--rrd",
+        s(&rrd),
+    ];
+    let out = odocal(&args);
+    if cfg!(feature = "rerun") {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        #[cfg(feature = "rerun")]
+        check_run_rrd(
+            "cli_calibrate_rrd",
+            &rrd,
+            sim["scans"].as_u64().unwrap() as usize,
+            csv_rows(&pf_dir.join("calibration.csv")),
+            false,
+        );
+    } else {
+        assert_eq!(out.status.code(), Some(2));
+        assert!(!rrd.exists());
+    }
+
     let ev = json(&odocal(&[
         "eval",
         "--estimate",
@@ -306,9 +343,14 @@ fn cli_demo_on_a_short_recording_writes_report_plots_and_recording() {
     ] {
         assert!(report.contains(needle), "report lacks {needle}");
     }
-    if cfg!(feature = "rerun") {
-        assert!(out.join("demo.rrd").is_file());
-    }
+    #[cfg(feature = "rerun")]
+    check_run_rrd(
+        "cli_demo_rrd",
+        &out.join("demo.rrd"),
+        sum["scans"].as_u64().unwrap() as usize,
+        csv_rows(&out.join("adaptive-pf/calibration.csv")),
+        true,
+    );
     no_temp_files(&out);
     std::fs::remove_dir_all(&d).unwrap();
 }
@@ -380,5 +422,124 @@ fn cli_bad_input_exits_2_naming_the_file() {
     }
     assert!(!out_tum.exists(), "no output is written for bad input");
     assert!(!d.join("x.mcap").exists());
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[cfg(feature = "rerun")]
+fn csv_rows(path: &Path) -> usize {
+    std::fs::read_to_string(path).unwrap().lines().count() - 1
+}
+
+/// Opens a recording the CLI wrote with the official rerun-sdk
+/// (tools/rrd_check.py) and checks entities, timelines and row counts against
+/// the run's own outputs: one scan row per scan, one ICP row per pair, one
+/// particle cloud and one estimate per filter step.
+#[cfg(feature = "rerun")]
+fn check_run_rrd(test: &str, rrd: &Path, scans: usize, steps: usize, map: bool) {
+    use odocal::viz::entity;
+    use serde_json::json;
+    let Some(py) = crate::support::python_with(test, &["rerun", "pyarrow"]) else {
+        return;
+    };
+    assert!(rrd.is_file(), "{} missing", rrd.display());
+    let mut entities = serde_json::Map::new();
+    if map {
+        entities.insert(entity::MAP.into(), json!({"static": true, "rows": 1}));
+    }
+    for t in [
+        entity::TRAJ_ICP,
+        entity::TRAJ_RAW,
+        entity::TRAJ_CALIBRATED,
+        entity::TRAJ_REFERENCE,
+    ] {
+        entities.insert(
+            t.into(),
+            json!({"static": true, "rows": 1, "instances": {"LineStrips2D:strips": 1}}),
+        );
+    }
+    entities.insert(
+        entity::SCAN_POINTS.into(),
+        json!({"rows": scans, "first": {"scan": 0}, "last": {"scan": scans - 1}}),
+    );
+    for e in [entity::ICP_ITERATIONS, entity::ICP_COV_TRACE] {
+        entities.insert(e.into(), json!({"rows": scans - 1, "first": {"scan": 1}}));
+    }
+    for e in [
+        entity::PARTICLES,
+        entity::PARTICLES_SHOWN,
+        entity::EST_R_RIGHT,
+        entity::EST_R_LEFT,
+        entity::EST_WHEEL_BASE,
+        entity::STD_R_RIGHT,
+        entity::STD_R_LEFT,
+        entity::STD_WHEEL_BASE,
+        entity::PARTICLES_COUNT,
+        entity::PROCESS_SIGMA,
+    ] {
+        entities.insert(e.into(), json!({ "rows": steps }));
+    }
+    let expect = json!({
+        "version": "0.36.3",
+        "timelines": [entity::SCAN, entity::TIME],
+        "exact": true,
+        "entities": entities,
+    });
+    let exp = rrd.with_extension("expect.json");
+    std::fs::write(&exp, serde_json::to_vec_pretty(&expect).unwrap()).unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/rrd_check.py");
+    let out = Command::new(py)
+        .arg(script)
+        .arg(rrd)
+        .arg(&exp)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "rrd_check failed on {}:\n{}\n{}",
+        rrd.display(),
+        String::from_utf8_lossy(&out.stderr),
+        String::from_utf8_lossy(&out.stdout)
+    );
+}
+
+/// The bundled demo recording is what scans/README.md says: its command
+/// reproduces the same bytes, recording and truth.
+#[test]
+fn cli_bundled_recording_regenerates_byte_for_byte() {
+    let d = scratch("cli_bundled");
+    let scans = Path::new(env!("CARGO_MANIFEST_DIR")).join("scans");
+    let readme = std::fs::read_to_string(scans.join("README.md")).unwrap();
+    let line = readme
+        .lines()
+        .find(|l| l.starts_with("| `wheelchair-corridor.mcap`"))
+        .unwrap();
+    let cmd = line
+        .split('`')
+        .find(|c| c.starts_with("odocal simulate"))
+        .unwrap();
+    let mut args: Vec<String> = cmd.split_whitespace().skip(1).map(String::from).collect();
+    for a in args.iter_mut() {
+        if let Some(name) = a.strip_prefix("scans/") {
+            *a = match name {
+                "wheelchair-corridor.toml" => scans.join(name),
+                other => d.join(other),
+            }
+            .display()
+            .to_string();
+        }
+    }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = odocal(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in ["wheelchair-corridor.mcap", "wheelchair-corridor.truth.json"] {
+        assert!(
+            std::fs::read(d.join(f)).unwrap() == std::fs::read(scans.join(f)).unwrap(),
+            "{f} differs from what its command writes"
+        );
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }

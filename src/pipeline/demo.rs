@@ -3,6 +3,7 @@
 //! report, plots, trajectories and a Rerun recording.
 
 use super::calibrate::{self, CalibInput};
+use super::record::{anchor, in_world, particle_logger, record, RunRecord};
 use super::{icp, Config, PipelineError};
 use crate::calib::{self, CalibrationRun, Method};
 use crate::eval::{self, Alignment, EvalOptions, Trajectory3, TrajectoryMetrics};
@@ -13,8 +14,7 @@ use crate::sim::Truth;
 use crate::traj::Trajectory;
 use crate::viz::plot::{self, LineChart, PathSeries, Series, TrajectoryPlot};
 use crate::viz::report::{num, Report};
-use crate::viz::{CalibEstimate, Logger, Stamp, TrajectoryKind};
-use nalgebra::Point2;
+use crate::viz::{Logger, TrajectoryKind};
 use serde::Serialize;
 use std::path::Path;
 
@@ -91,22 +91,6 @@ fn origin_eval(est: &Trajectory, reference: Option<&Trajectory3>) -> Option<Traj
         .map(|(m, _)| m)
 }
 
-/// `world_from_estimate` that puts the estimate's first pose on the reference.
-fn anchor(est: &Trajectory, reference: Option<&Trajectory>) -> Pose2 {
-    match (est.stamps.first(), est.poses.first(), reference) {
-        (Some(&t0), Some(p0), Some(r)) => r
-            .pose_at(t0)
-            .or_else(|| r.poses.first().copied())
-            .map(|w| w * p0.inverse())
-            .unwrap_or_else(Pose2::identity),
-        _ => Pose2::identity(),
-    }
-}
-
-fn in_world(est: &Trajectory, world_from_est: &Pose2) -> Vec<Pose2> {
-    est.poses.iter().map(|p| world_from_est * p).collect()
-}
-
 fn convergence(run: &CalibrationRun, truth: &Truth, t_start: f64) -> Option<f64> {
     let mut settled: Option<f64> = None;
     for h in &run.history {
@@ -172,22 +156,15 @@ pub fn run(
         gyro: rec.gyro.clone(),
     };
     let mut runs: Vec<(Method, CalibrationRun)> = Vec::new();
-    let scan_index = |t: f64| rec.scans.partition_point(|s| s.stamp <= t) as i64;
+    let scan_stamps: Vec<f64> = rec.scans.iter().map(|s| s.stamp).collect();
     let mut log_error = None;
     for (i, m) in DEMO_METHODS.iter().enumerate() {
         progress(m.as_str(), i as f64 / DEMO_METHODS.len() as f64);
         let mut params = cfg.calib.clone();
         params.method = *m;
-        // The proposed filter's particle cloud goes to the viewer at every step.
-        let mut on_step = |e: &calib::Estimate, cloud: Option<calib::CloudView<'_>>| {
-            if let (Some(c), None) = (cloud, &log_error) {
-                let at = Stamp::new(scan_index(e.t), e.t - t_start);
-                if let Err(err) = logger.particles(at, c.r_right, c.r_left, c.weights) {
-                    log_error = Some(err);
-                }
-            }
-        };
         let run = if *m == Method::AdaptivePf {
+            // The proposed filter's particle cloud goes to the viewer at every step.
+            let mut on_step = particle_logger(logger, &scan_stamps, t_start, &mut log_error);
             calibrate::run_observed(&cal_input, robot, &params, &cfg.measurements, &mut on_step)?
         } else {
             calibrate::run(&cal_input, robot, &params, &cfg.measurements)?
@@ -239,14 +216,18 @@ pub fn run(
         wall_s: 0.0,
     };
 
-    let adaptive = &runs[0].1;
     record(
-        input,
-        &icp_out,
-        &raw,
-        adaptive,
-        reference2.as_ref(),
-        t_start,
+        &RunRecord {
+            recording: Some(rec),
+            robot,
+            walls: input.truth.map(|t| t.walls.as_slice()),
+            icp: Some(&icp_out),
+            raw: Some(&raw),
+            calibrated: &runs[0].1,
+            reference: reference2.as_ref(),
+            t_start,
+            scan_stamps: &scan_stamps,
+        },
         logger,
     )?;
     plots(
@@ -266,86 +247,6 @@ pub fn run(
     crate::io::atomic::write_bytes_atomic(&js, text.as_bytes())
         .map_err(|e| PipelineError::write(&js, e))?;
     Ok(summary)
-}
-
-/// Everything into the Rerun recording (design.md's entities).
-fn record(
-    input: &DemoInput<'_>,
-    icp_out: &icp::IcpOutput,
-    raw: &Trajectory,
-    adaptive: &CalibrationRun,
-    reference: Option<&Trajectory>,
-    t_start: f64,
-    logger: &mut dyn Logger,
-) -> Result<(), PipelineError> {
-    let rec = input.recording;
-    if let Some(t) = input.truth {
-        let segs: Vec<[Point2<f64>; 2]> = t
-            .walls
-            .iter()
-            .map(|w| [Point2::new(w[0], w[1]), Point2::new(w[2], w[3])])
-            .collect();
-        logger.map(&segs).map_err(viz_err)?;
-    }
-    let w_icp = anchor(&icp_out.trajectory, reference);
-    if let Some(r) = reference {
-        logger
-            .trajectory(TrajectoryKind::Reference, &r.poses)
-            .map_err(viz_err)?;
-    }
-    logger
-        .trajectory(TrajectoryKind::Icp, &in_world(&icp_out.trajectory, &w_icp))
-        .map_err(viz_err)?;
-    logger
-        .trajectory(
-            TrajectoryKind::RawOdometry,
-            &in_world(raw, &anchor(raw, reference)),
-        )
-        .map_err(viz_err)?;
-    let cal = &adaptive.trajectory;
-    logger
-        .trajectory(
-            TrajectoryKind::Calibrated,
-            &in_world(cal, &anchor(cal, reference)),
-        )
-        .map_err(viz_err)?;
-
-    // Scans at the ICP pose (laser frame → world), ICP quality per pair.
-    let base_from_laser = icp::base_from_laser(rec, input.robot);
-    let mut pts = Vec::new();
-    for (i, scan) in rec.scans.iter().enumerate() {
-        let at = Stamp::new(i as i64, scan.stamp - t_start);
-        if let Some(p) = icp_out.trajectory.pose_at(scan.stamp) {
-            scan.points_into(&mut pts);
-            logger
-                .scan(at, &(w_icp * p * base_from_laser), &pts)
-                .map_err(viz_err)?;
-        }
-        if i > 0 {
-            if let Some(m) = icp_out.motions.get(i - 1) {
-                logger
-                    .icp(at, m.iterations, m.cov.trace())
-                    .map_err(viz_err)?;
-            }
-        }
-    }
-    // Filter state per step (the clouds were logged while it ran).
-    let scan_index = |t: f64| rec.scans.partition_point(|s| s.stamp <= t) as i64;
-    for h in &adaptive.history {
-        let at = Stamp::new(scan_index(h.t), h.t - t_start);
-        logger
-            .estimate(
-                at,
-                &CalibEstimate {
-                    params: [h.r_right, h.r_left, h.wheel_base],
-                    std: [h.std_r_right, h.std_r_left, h.std_wheel_base],
-                    particles: h.particles,
-                    process_sigma: h.process_sigma,
-                },
-            )
-            .map_err(viz_err)?;
-    }
-    logger.finish().map_err(viz_err)
 }
 
 fn series_over_time(

@@ -9,6 +9,7 @@ mod error;
 pub mod evaluate;
 pub mod experiment;
 pub mod icp;
+pub mod record;
 pub mod simulate;
 
 pub use config::{load_robot, Config};
