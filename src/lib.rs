@@ -5,6 +5,8 @@
 //! `diagnose`) know nothing of files, the command line or Rerun; `io` reads and
 //! writes formats, `pipeline` wires the stages, `viz` draws them.
 #![warn(missing_docs)]
+// `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is also true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod calib;
 pub mod classic;
