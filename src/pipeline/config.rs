@@ -46,10 +46,15 @@ impl Config {
         let Some(path) = path else {
             return Ok(Self::default());
         };
-        let text = read_text(path)?;
-        toml::from_str(&text).map_err(|e| {
-            InputError::new(path.display().to_string(), e.message().to_string())
-                .at(span_position(&text, e.span()))
+        Self::parse(&read_text(path)?, &path.display().to_string())
+    }
+
+    /// Parses configuration text; `file` names it in errors, which give the
+    /// line of the first problem. Unknown keys are refused.
+    pub fn parse(text: &str, file: &str) -> Result<Self, PipelineError> {
+        toml::from_str(text).map_err(|e| {
+            InputError::new(file, e.message().to_string())
+                .at(span_position(text, e.span()))
                 .into()
         })
     }
@@ -69,7 +74,9 @@ fn span_position(text: &str, span: Option<std::ops::Range<usize>>) -> String {
     match span {
         Some(s) => format!(
             "line {}",
-            text[..s.start.min(text.len())].lines().count().max(1)
+            text.as_bytes()[..s.start.min(text.len())]
+                .split(|&b| b == b'\n')
+                .count()
         ),
         None => "whole file".into(),
     }
