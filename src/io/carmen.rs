@@ -190,6 +190,9 @@ fn parse_robotlaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), Strin
     if n == 0 {
         return Err("ROBOTLASER1 with zero beams".into());
     }
+    if res == 0.0 && n > 1 {
+        return Err("ROBOTLASER1 angular_resolution is 0 with several beams".into());
+    }
     let r = ranges(f, 8, n)?;
     let m = count(f, 8 + n, "number of remissions")?;
     let p = 9 + n + m;

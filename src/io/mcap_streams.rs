@@ -91,10 +91,14 @@ fn frame(f: &str) -> &str {
     f.trim_start_matches('/')
 }
 
-fn pose_of(p: &super::ros_msgs::Pose) -> Result<Pose2, String> {
-    let yaw = p.orientation.yaw();
+/// A planar pose and whether it has a heading: an all-zero quaternion (the
+/// usual "orientation unknown") gives none, and heading 0.
+fn pose_of(p: &super::ros_msgs::Pose) -> Result<(Pose2, bool), String> {
+    let q = &p.orientation;
+    let has_heading = [q.x, q.y, q.z, q.w].iter().any(|&c| c != 0.0);
+    let yaw = if has_heading { q.yaw() } else { 0.0 };
     finite("pose", &[p.position.x, p.position.y, yaw])?;
-    Ok(geom::pose(p.position.x, p.position.y, yaw))
+    Ok((geom::pose(p.position.x, p.position.y, yaw), has_heading))
 }
 
 impl<'a> State<'a> {
@@ -160,13 +164,16 @@ impl<'a> State<'a> {
                     "reference"
                 };
                 let t = self.stamp(stream, &m.header.stamp, log_time)?;
-                let pose = pose_of(&m.pose)?;
+                let (pose, has_heading) = pose_of(&m.pose)?;
                 let sp = StampedPose {
                     stamp: t,
                     pose,
-                    has_heading: true,
+                    has_heading,
                 };
                 if role == Role::Odom {
+                    if !has_heading {
+                        return Err("odometry with an all-zero orientation quaternion".into());
+                    }
                     self.rec.odom.push(sp);
                 } else {
                     self.rec.reference.push(sp);
@@ -176,11 +183,11 @@ impl<'a> State<'a> {
             Role::RefPose => {
                 let m = PoseStampedMsg::decode(data).map_err(cdr)?;
                 let t = self.stamp("reference", &m.header.stamp, log_time)?;
-                let pose = pose_of(&m.pose)?;
+                let (pose, has_heading) = pose_of(&m.pose)?;
                 self.rec.reference.push(StampedPose {
                     stamp: t,
                     pose,
-                    has_heading: true,
+                    has_heading,
                 });
                 Ok(())
             }
@@ -306,6 +313,21 @@ impl<'a> State<'a> {
         self.rec.sort_streams();
         if self.wheel_mode == Some(WheelMode::Velocities) {
             integrate_rates(&mut self.rec.wheels);
+            if let Some(w) = self
+                .rec
+                .wheels
+                .iter()
+                .find(|w| !(w.left.is_finite() && w.right.is_finite()))
+            {
+                return Err(InputError::new(
+                    self.file,
+                    format!(
+                        "wheel rates integrate to a non-finite angle at {} s",
+                        w.stamp
+                    ),
+                )
+                .topic(&self.opts.topics.joint_states));
+            }
         }
         if let Some(laser) = &self.laser_frame {
             self.rec.base_from_laser = self
@@ -328,6 +350,10 @@ impl<'a> State<'a> {
                 return Ok(None);
             };
             acc = p * acc;
+            let v = acc.translation.vector;
+            if !(v.x.is_finite() && v.y.is_finite()) {
+                return Err(format!("transform chain from '{laser}' overflows"));
+            }
             if parent == "base_link" {
                 return Ok(Some(acc));
             }
