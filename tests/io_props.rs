@@ -93,9 +93,12 @@ const BAGS: [&str; 3] = [
     "mines-rover/exp2.mcap",
 ];
 
-/// The real bags (bytes, full read), loaded once; `None` without shared data.
-fn bags() -> Option<&'static Vec<(Vec<u8>, Recording)>> {
-    static B: OnceLock<Option<Vec<(Vec<u8>, Recording)>>> = OnceLock::new();
+/// A real bag's bytes and its full read.
+type Bag = (Vec<u8>, Recording);
+
+/// The real bags, loaded once; `None` without shared data.
+fn bags() -> Option<&'static Vec<Bag>> {
+    static B: OnceLock<Option<Vec<Bag>>> = OnceLock::new();
     B.get_or_init(|| {
         let dir: PathBuf = shared_data("io_props (real bags)")?;
         Some(
