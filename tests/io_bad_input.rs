@@ -326,3 +326,82 @@ fn cut_or_damaged_real_bag_never_panics() {
         let _ = read_mcap_bytes(&b, "damaged", &opts);
     }
 }
+
+#[test]
+fn all_zero_quaternion_means_no_heading() {
+    use odocal::io::ros_msgs::{OdometryMsg, Quat};
+    let zero = Quat {
+        x: 0.0,
+        y: 0.0,
+        z: 0.0,
+        w: 0.0,
+    };
+    let mut p = PoseStampedMsg::default();
+    p.header.stamp = Time::from_seconds(1.0);
+    p.pose.position.x = 2.0;
+    p.pose.orientation = zero;
+    let mut q = p.clone();
+    q.header.stamp = Time::from_seconds(2.0);
+    q.pose.orientation = odocal::io::ros_msgs::Quat::from_yaw(0.3);
+    // A reference: read as a position without heading.
+    let b = bag(&[(
+        "/ground_truth",
+        "geometry_msgs/msg/PoseStamped",
+        vec![p.encode(), q.encode()],
+    )]);
+    let r = read(&b).unwrap();
+    assert!(!r.reference[0].has_heading);
+    assert!(r.reference[1].has_heading);
+    assert_eq!(r.reference[0].pose.translation.vector.x, 2.0);
+    // Robot odometry without a heading cannot be used: an error.
+    let mut o = OdometryMsg::default();
+    o.header.stamp = Time::from_seconds(1.0);
+    o.pose.orientation = zero;
+    let b = bag(&[("/odom", "nav_msgs/msg/Odometry", vec![o.encode()])]);
+    expect_err(&b, "/odom", 0, "all-zero orientation");
+}
+
+#[test]
+fn wheel_rates_that_integrate_past_f64_are_an_error() {
+    let msgs: Vec<_> = (0..3)
+        .map(|k| {
+            joints(
+                &["left_wheel", "right_wheel"],
+                &[],
+                &[1e308, 1.0],
+                1.0 + k as f64,
+            )
+        })
+        .collect();
+    let e = read(&bag(&[("/joint_states", JS, msgs)])).unwrap_err();
+    assert_eq!(e.topic.as_deref(), Some("/joint_states"));
+    assert!(e.message.contains("non-finite angle"), "{e}");
+}
+
+#[test]
+fn transform_chain_that_overflows_is_an_error() {
+    use odocal::io::ros_msgs::{TfMessage, TransformStamped, Vec3};
+    let tf = |parent: &str, child: &str| TransformStamped {
+        header: Header {
+            stamp: Time::from_seconds(1.0),
+            frame_id: parent.into(),
+        },
+        child_frame_id: child.into(),
+        translation: Vec3 {
+            x: 1e308,
+            y: 0.0,
+            z: 0.0,
+        },
+        rotation: odocal::io::ros_msgs::Quat::from_yaw(0.0),
+    };
+    let m = TfMessage {
+        transforms: vec![tf("base_link", "mount"), tf("mount", "laser")],
+    };
+    let b = bag(&[
+        ("/scan", SCAN, scans(&[1.0])),
+        ("/tf_static", "tf2_msgs/msg/TFMessage", vec![m.encode()]),
+    ]);
+    let e = read(&b).unwrap_err();
+    assert_eq!(e.topic.as_deref(), Some("/tf_static"));
+    assert!(e.message.contains("overflows"), "{e}");
+}

@@ -119,6 +119,15 @@ fn num(fields: &[&str], i: usize, what: &str) -> Result<f64, String> {
     }
 }
 
+/// An `ipc_timestamp` (s): a finite number ≥ 0.
+fn stamp(fields: &[&str], i: usize) -> Result<f64, String> {
+    let t = num(fields, i, "ipc_timestamp")?;
+    if t < 0.0 {
+        return Err(format!("ipc_timestamp {t} is negative (field {})", i + 2));
+    }
+    Ok(t)
+}
+
 fn count(fields: &[&str], i: usize, what: &str) -> Result<usize, String> {
     let v = num(fields, i, what)?;
     if v < 0.0 || v.fract() != 0.0 || v > 1e6 {
@@ -149,7 +158,7 @@ fn parse_flaser(f: &[&str]) -> Result<(Option<LaserScan>, StampedPose), String> 
     }
     let r = ranges(f, 1, n)?;
     let odom = pose_at(f, n + 4, "odometry pose")?;
-    let stamp = num(f, n + 7, "ipc_timestamp")?;
+    let stamp = stamp(f, n + 7)?;
     let scan = LaserScan {
         stamp,
         angle_min: -PI / 2.0,
@@ -181,12 +190,15 @@ fn parse_robotlaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), Strin
     if n == 0 {
         return Err("ROBOTLASER1 with zero beams".into());
     }
+    if res == 0.0 && n > 1 {
+        return Err("ROBOTLASER1 angular_resolution is 0 with several beams".into());
+    }
     let r = ranges(f, 8, n)?;
     let m = count(f, 8 + n, "number of remissions")?;
     let p = 9 + n + m;
     let laser = pose_at(f, p, "laser pose")?;
     let robot = pose_at(f, p + 3, "robot pose")?;
-    let stamp = num(f, p + 11, "ipc_timestamp")?;
+    let stamp = stamp(f, p + 11)?;
     let scan = LaserScan {
         stamp,
         angle_min: start,
@@ -208,7 +220,7 @@ fn parse_robotlaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), Strin
 fn parse_odom(f: &[&str]) -> Result<StampedPose, String> {
     Ok(StampedPose {
         pose: pose_at(f, 0, "odometry pose")?,
-        stamp: num(f, 6, "ipc_timestamp")?,
+        stamp: stamp(f, 6)?,
         has_heading: true,
     })
 }

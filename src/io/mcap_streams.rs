@@ -43,25 +43,36 @@ enum WheelMode {
     Velocities,
 }
 
-/// Streams being collected, with the latest stamp seen per stream for the
-/// time-order check.
+/// Streams being collected, with the latest stamp seen per stream (and
+/// whether it was a log time) for the time-order check.
 pub(crate) struct State<'a> {
     file: &'a str,
     opts: &'a ReadOptions,
     rec: Recording,
-    latest: HashMap<&'static str, f64>,
+    latest: HashMap<&'static str, (f64, bool)>,
     wheel_mode: Option<WheelMode>,
     laser_frame: Option<String>,
     /// child → (parent, parent_from_child).
     tf: HashMap<String, (String, Pose2)>,
 }
 
-fn stamp_of(t: &Time, log_time: u64) -> f64 {
+/// The stamp (s) of a message: its header stamp, or its log time when the
+/// header stamp is zero (unset); `true` when the log time was used. A negative
+/// stamp or nanoseconds ≥ 10⁹ are not a valid `builtin_interfaces/Time`.
+fn stamp_of(t: &Time, log_time: u64) -> Result<(f64, bool), String> {
     if t.is_zero() {
-        log_time as f64 * 1e-9
-    } else {
-        t.seconds()
+        return Ok((log_time as f64 * 1e-9, true));
     }
+    if t.sec < 0 {
+        return Err(format!("invalid header stamp: negative sec {}", t.sec));
+    }
+    if t.nanosec >= 1_000_000_000 {
+        return Err(format!(
+            "invalid header stamp: nanosec {} is not below 10⁹",
+            t.nanosec
+        ));
+    }
+    Ok((t.seconds(), false))
 }
 
 fn cdr(e: CdrError) -> String {
@@ -80,10 +91,14 @@ fn frame(f: &str) -> &str {
     f.trim_start_matches('/')
 }
 
-fn pose_of(p: &super::ros_msgs::Pose) -> Result<Pose2, String> {
-    let yaw = p.orientation.yaw();
+/// A planar pose and whether it has a heading: an all-zero quaternion (the
+/// usual "orientation unknown") gives none, and heading 0.
+fn pose_of(p: &super::ros_msgs::Pose) -> Result<(Pose2, bool), String> {
+    let q = &p.orientation;
+    let has_heading = [q.x, q.y, q.z, q.w].iter().any(|&c| c != 0.0);
+    let yaw = if has_heading { q.yaw() } else { 0.0 };
     finite("pose", &[p.position.x, p.position.y, yaw])?;
-    Ok(geom::pose(p.position.x, p.position.y, yaw))
+    Ok((geom::pose(p.position.x, p.position.y, yaw), has_heading))
 }
 
 impl<'a> State<'a> {
@@ -102,23 +117,31 @@ impl<'a> State<'a> {
         }
     }
 
-    /// Refuses a stamp further back than the tolerance in its stream.
-    fn check_order(&mut self, stream: &'static str, t: f64) -> Result<(), String> {
-        if !t.is_finite() {
-            return Err(format!("non-finite stamp {t}"));
-        }
-        let last = self.latest.entry(stream).or_insert(t);
-        if t < *last - self.opts.reorder_tolerance {
+    /// The stamp of a message in `stream` (see [`stamp_of`]); refuses one
+    /// further back than the tolerance from the latest stamp of its stream.
+    fn stamp(&mut self, stream: &'static str, stamp: &Time, log_time: u64) -> Result<f64, String> {
+        let (t, from_log) = stamp_of(stamp, log_time)?;
+        let (last, last_from_log) = *self.latest.entry(stream).or_insert((t, from_log));
+        if t < last - self.opts.reorder_tolerance {
+            let hint = if from_log || last_from_log {
+                "; a zero (unset) header stamp was replaced by the log time, and the \
+                 header and log clocks differ"
+            } else {
+                ""
+            };
             return Err(format!(
-                "time goes backwards by {:.3} s (from {:.6} to {:.6}), more than the {} s tolerance",
-                *last - t,
-                *last,
+                "time goes backwards by {:.3} s (from {:.6} to {:.6}), more than the {} s \
+                 tolerance{hint}",
+                last - t,
+                last,
                 t,
                 self.opts.reorder_tolerance
             ));
         }
-        *last = last.max(t);
-        Ok(())
+        if t >= last {
+            self.latest.insert(stream, (t, from_log));
+        }
+        Ok(t)
     }
 
     pub(crate) fn handle(&mut self, role: Role, data: &[u8], log_time: u64) -> Result<(), String> {
@@ -127,8 +150,7 @@ impl<'a> State<'a> {
             Role::Joints => self.joints(data, log_time),
             Role::Imu => {
                 let m = ImuMsg::decode(data).map_err(cdr)?;
-                let t = stamp_of(&m.header.stamp, log_time);
-                self.check_order("imu", t)?;
+                let t = self.stamp("imu", &m.header.stamp, log_time)?;
                 let wz = m.angular_velocity.z;
                 finite("angular_velocity.z", &[wz])?;
                 self.rec.gyro.push(GyroSample { stamp: t, wz });
@@ -136,38 +158,42 @@ impl<'a> State<'a> {
             }
             Role::Odom | Role::RefOdometry => {
                 let m = OdometryMsg::decode(data).map_err(cdr)?;
-                let t = stamp_of(&m.header.stamp, log_time);
-                let pose = pose_of(&m.pose)?;
+                let stream = if role == Role::Odom {
+                    "odom"
+                } else {
+                    "reference"
+                };
+                let t = self.stamp(stream, &m.header.stamp, log_time)?;
+                let (pose, has_heading) = pose_of(&m.pose)?;
                 let sp = StampedPose {
                     stamp: t,
                     pose,
-                    has_heading: true,
+                    has_heading,
                 };
                 if role == Role::Odom {
-                    self.check_order("odom", t)?;
+                    if !has_heading {
+                        return Err("odometry with an all-zero orientation quaternion".into());
+                    }
                     self.rec.odom.push(sp);
                 } else {
-                    self.check_order("reference", t)?;
                     self.rec.reference.push(sp);
                 }
                 Ok(())
             }
             Role::RefPose => {
                 let m = PoseStampedMsg::decode(data).map_err(cdr)?;
-                let t = stamp_of(&m.header.stamp, log_time);
-                self.check_order("reference", t)?;
-                let pose = pose_of(&m.pose)?;
+                let t = self.stamp("reference", &m.header.stamp, log_time)?;
+                let (pose, has_heading) = pose_of(&m.pose)?;
                 self.rec.reference.push(StampedPose {
                     stamp: t,
                     pose,
-                    has_heading: true,
+                    has_heading,
                 });
                 Ok(())
             }
             Role::RefPoint => {
                 let m = PointStampedMsg::decode(data).map_err(cdr)?;
-                let t = stamp_of(&m.header.stamp, log_time);
-                self.check_order("reference", t)?;
+                let t = self.stamp("reference", &m.header.stamp, log_time)?;
                 finite("point", &[m.point.x, m.point.y])?;
                 self.rec.reference.push(StampedPose {
                     stamp: t,
@@ -196,8 +222,7 @@ impl<'a> State<'a> {
 
     fn scan(&mut self, data: &[u8], log_time: u64) -> Result<(), String> {
         let m = LaserScanMsg::decode(data).map_err(cdr)?;
-        let t = stamp_of(&m.header.stamp, log_time);
-        self.check_order("scan", t)?;
+        let t = self.stamp("scan", &m.header.stamp, log_time)?;
         if m.ranges.is_empty() {
             return Err("LaserScan with zero beams".into());
         }
@@ -240,8 +265,7 @@ impl<'a> State<'a> {
 
     fn joints(&mut self, data: &[u8], log_time: u64) -> Result<(), String> {
         let m = JointStateMsg::decode(data).map_err(cdr)?;
-        let t = stamp_of(&m.header.stamp, log_time);
-        self.check_order("joint_states", t)?;
+        let t = self.stamp("joint_states", &m.header.stamp, log_time)?;
         let find = |name: &str| {
             m.name
                 .iter()
@@ -289,6 +313,21 @@ impl<'a> State<'a> {
         self.rec.sort_streams();
         if self.wheel_mode == Some(WheelMode::Velocities) {
             integrate_rates(&mut self.rec.wheels);
+            if let Some(w) = self
+                .rec
+                .wheels
+                .iter()
+                .find(|w| !(w.left.is_finite() && w.right.is_finite()))
+            {
+                return Err(InputError::new(
+                    self.file,
+                    format!(
+                        "wheel rates integrate to a non-finite angle at {} s",
+                        w.stamp
+                    ),
+                )
+                .topic(&self.opts.topics.joint_states));
+            }
         }
         if let Some(laser) = &self.laser_frame {
             self.rec.base_from_laser = self
@@ -311,6 +350,10 @@ impl<'a> State<'a> {
                 return Ok(None);
             };
             acc = p * acc;
+            let v = acc.translation.vector;
+            if !(v.x.is_finite() && v.y.is_finite()) {
+                return Err(format!("transform chain from '{laser}' overflows"));
+            }
             if parent == "base_link" {
                 return Ok(Some(acc));
             }

@@ -1,5 +1,36 @@
 //! Reading and writing files: recordings (MCAP, CARMEN), trajectories, CSV
 //! outputs. Every write goes through [`atomic`].
+//!
+//! # Time policy
+//! How the readers turn stamps into the times of a [`Recording`] (seconds as
+//! `f64`), and what the later stages do with what they get:
+//! - **Source.** A bag message's time is its `header.stamp`; a stamp of
+//!   exactly zero means "unset" and the message's MCAP log time is used
+//!   instead. A CARMEN record's time is its `ipc_timestamp`.
+//! - **Invalid stamps** are errors naming the message (bag) or line (CARMEN):
+//!   a negative time, or nanoseconds ≥ 10⁹.
+//! - **Going backwards.** Each stream (scans, joint states, IMU, odometry,
+//!   reference) is checked on its own against the latest stamp it has seen:
+//!   a step back of up to [`ReadOptions::reorder_tolerance`] (default 2 s) is
+//!   normal jitter and fixed by a stable sort; a larger one is an error naming
+//!   the message. When a log time stood in for an unset stamp, the error says
+//!   so (header and log clocks differ).
+//! - **Duplicate stamps** are kept, in file order. Downstream every step of
+//!   zero length is skipped: wheel rates ([`crate::robot::wheel_rates`]) and
+//!   wheel odometry step over it, ICP marks the pair `bad_time` and keeps the
+//!   earlier scan as its reference, the calibration steps have `t1 > t0`.
+//! - **Gaps** of any length are kept as recorded. ICP matches across them
+//!   with its plausibility gates widened by the gap (max speed × dt); the
+//!   calibration fills time without observations with predict-only steps of
+//!   at most [`crate::calib::MAX_GAP_STEP`], wheel angles interpolated
+//!   linearly; wheel *rates* (joint states without positions) are integrated
+//!   across a gap by the trapezoid rule, i.e. at the mean of the two rates.
+//! - **Clocks at 0 or at Unix time.** Both read as they are. Unix stamps
+//!   (≈ 1.7·10⁹ s) keep a resolution of about 0.24 µs in `f64`. A header clock
+//!   that starts at exactly 0 is read through the log time of that first
+//!   message (indistinguishable from an unset stamp): our own bags write log
+//!   time = stamp, so this is 0; a bag whose headers run on simulated time
+//!   from 0 while its log times are wall-clock fails with the error above.
 
 pub mod atomic;
 pub mod carmen;

@@ -34,10 +34,13 @@ pub fn parse_tum(text: &str, file: &str) -> Result<Trajectory3, InputError> {
         let [t, x, y, z, qx, qy, qz, qw] = fields::<8>(file, KIND, line_no, line)?;
         let at = || format!("line {line_no}");
         let q = Quaternion::new(qw, qx, qy, qz);
-        if q.norm() <= 1e-9 {
-            return Err(InputError::new(file, "zero quaternion")
-                .topic(KIND)
-                .at(at()));
+        if !(q.norm() > 1e-9 && q.norm().is_finite()) {
+            let what = if q.norm().is_finite() {
+                "zero quaternion"
+            } else {
+                "quaternion too large to normalise"
+            };
+            return Err(InputError::new(file, what).topic(KIND).at(at()));
         }
         if let Some(&prev) = stamps.last() {
             if t <= prev {

@@ -46,12 +46,43 @@ impl Config {
         let Some(path) = path else {
             return Ok(Self::default());
         };
-        let text = read_text(path)?;
-        toml::from_str(&text).map_err(|e| {
-            InputError::new(path.display().to_string(), e.message().to_string())
-                .at(span_position(&text, e.span()))
-                .into()
-        })
+        Self::parse(&read_text(path)?, &path.display().to_string())
+    }
+
+    /// Parses configuration text; `file` names it in errors, which give the
+    /// line of the first problem. Unknown keys are refused.
+    /// Every stage's settings are then validated once, so a bad value is
+    /// refused here, naming the file, rather than turning into NaN later.
+    pub fn parse(text: &str, file: &str) -> Result<Self, PipelineError> {
+        let c: Self = toml::from_str(text).map_err(|e| {
+            InputError::new(file, e.message().to_string()).at(span_position(text, e.span()))
+        })?;
+        c.validate()
+            .map_err(|m| InputError::new(file, m).at("whole file"))?;
+        Ok(c)
+    }
+
+    /// Checks every stage's settings; the message names the bad value.
+    pub fn validate(&self) -> Result<(), String> {
+        self.sim.validate().map_err(|e| e.to_string())?;
+        self.icp.validate().map_err(|e| e.to_string())?;
+        self.calib.validate().map_err(|e| e.to_string())?;
+        self.diagnose.validate().map_err(|e| e.to_string())?;
+        let m = &self.measurements;
+        if !(m.gyro_sigma.is_finite() && m.gyro_sigma > 0.0) {
+            return Err(format!(
+                "measurements.gyro_sigma must be a positive rate in rad/s, got {}",
+                m.gyro_sigma
+            ));
+        }
+        let sync = &self.eval.sync;
+        if !(sync.max_diff.is_finite() && sync.max_diff >= 0.0 && sync.offset.is_finite()) {
+            return Err(format!(
+                "eval.sync: max_diff must be ≥ 0 s and offset finite, got {} and {}",
+                sync.max_diff, sync.offset
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -69,7 +100,9 @@ fn span_position(text: &str, span: Option<std::ops::Range<usize>>) -> String {
     match span {
         Some(s) => format!(
             "line {}",
-            text[..s.start.min(text.len())].lines().count().max(1)
+            text.as_bytes()[..s.start.min(text.len())]
+                .split(|&b| b == b'\n')
+                .count()
         ),
         None => "whole file".into(),
     }

@@ -104,9 +104,9 @@ impl RobotConfig {
                 )));
             }
         }
-        if !(self.ticks_per_rev.is_finite() && self.ticks_per_rev > 0.0) {
+        if !(self.ticks_per_rev.is_finite() && self.ticks_per_rev >= 1.0) {
             return Err(RobotConfigError::Invalid(format!(
-                "ticks_per_rev must be a positive number, got {}",
+                "ticks_per_rev must be a number ≥ 1, got {}",
                 self.ticks_per_rev
             )));
         }

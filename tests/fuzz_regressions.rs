@@ -1,0 +1,146 @@
+//! Inputs that once crashed a fuzz target (or made a reader return a
+//! non-finite number), kept in `tests/fuzz-regressions/<target>/` and fed to
+//! the same entry point as the fuzz target. Each must now give an error value;
+//! a file named `ok-*` is valid input and must read soundly instead.
+
+use std::path::{Path, PathBuf};
+
+use odocal::effects::Effect;
+use odocal::io::carmen::read_carmen_bytes;
+use odocal::io::kitti::parse_kitti;
+use odocal::io::relations::parse_relations;
+use odocal::io::ros_msgs::{
+    ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, PoseStampedMsg, RosMsg,
+    TfMessage,
+};
+use odocal::io::tum::parse_tum;
+use odocal::io::{read_mcap_bytes, ReadOptions, TopicConfig};
+use odocal::pipeline::Config;
+use odocal::robot::RobotConfig;
+
+use crate::io_props::assert_sound;
+
+fn dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz-regressions")
+}
+
+/// Decodes with the message type the fuzz target picks from the first byte;
+/// `Ok(())` when it decodes (and re-encodes to something that decodes).
+fn cdr(data: &[u8]) -> Result<(), String> {
+    fn round<M: RosMsg>(d: &[u8]) -> Result<(), String> {
+        let m = M::decode(d).map_err(|e| e.to_string())?;
+        M::decode(&m.encode())
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    }
+    let (&kind, msg) = data.split_first().ok_or("empty")?;
+    match kind % 7 {
+        0 => round::<LaserScanMsg>(msg),
+        1 => round::<JointStateMsg>(msg),
+        2 => round::<ImuMsg>(msg),
+        3 => round::<OdometryMsg>(msg),
+        4 => round::<PoseStampedMsg>(msg),
+        5 => round::<PointStampedMsg>(msg),
+        _ => round::<TfMessage>(msg),
+    }
+}
+
+fn text(data: &[u8]) -> Result<&str, String> {
+    std::str::from_utf8(data).map_err(|e| e.to_string())
+}
+
+/// Runs one regression file through its target's entry point: `Ok` when the
+/// input was accepted (after checking what was read), `Err` with the reason.
+fn run(target: &str, data: &[u8]) -> Result<(), String> {
+    let e = |x: odocal::InputError| x.to_string();
+    match target {
+        "mcap_read" => {
+            let reference = ReadOptions {
+                topics: TopicConfig {
+                    reference: "/reference".into(),
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            let mut out = Err(String::new());
+            for opts in [ReadOptions::default(), reference] {
+                match read_mcap_bytes(data, "fuzz.mcap", &opts) {
+                    Ok(r) => {
+                        assert_sound(&r);
+                        out = Ok(());
+                    }
+                    Err(x) => {
+                        if out.is_err() {
+                            out = Err(e(x));
+                        }
+                    }
+                }
+            }
+            out
+        }
+        "cdr_msgs" => cdr(data),
+        "carmen" => read_carmen_bytes(data, "fuzz.clf", &ReadOptions::default())
+            .map(|r| assert_sound(&r))
+            .map_err(e),
+        "tum" => parse_tum(text(data)?, "fuzz.tum")
+            .map(|t| {
+                assert_eq!(t.first_non_finite(), None);
+            })
+            .map_err(e),
+        "kitti" => {
+            let t = text(data)?;
+            let (p, s) = t.split_once('\0').unwrap_or((t, ""));
+            parse_kitti(p, "fuzz.txt", s, "fuzz.times")
+                .map(|t| assert_eq!(t.first_non_finite(), None))
+                .map_err(e)
+        }
+        "relations" => parse_relations(text(data)?, "fuzz.relations")
+            .map(|_| ())
+            .map_err(e),
+        "effect_spec" => Effect::parse(text(data)?)
+            .map(|_| ())
+            .map_err(|x| x.to_string()),
+        "robot_toml" => RobotConfig::from_toml(text(data)?)
+            .map(|c| assert!(c.rad_per_tick().is_finite()))
+            .map_err(|x| x.to_string()),
+        "pipeline_toml" => Config::parse(text(data)?, "fuzz.toml")
+            .map(|_| ())
+            .map_err(|x| x.to_string()),
+        other => panic!("unknown fuzz target folder '{other}'"),
+    }
+}
+
+fn files(target: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(target)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn every_fuzz_finding_is_now_an_error_value() {
+    let mut n = 0;
+    for t in std::fs::read_dir(dir()).unwrap() {
+        let t = t.unwrap().path();
+        if !t.is_dir() {
+            continue;
+        }
+        let target = t.file_name().unwrap().to_string_lossy().to_string();
+        for f in files(&t) {
+            let data = std::fs::read(&f).unwrap();
+            let name = f.file_name().unwrap().to_string_lossy().to_string();
+            let got = run(&target, &data);
+            if name.starts_with("ok-") {
+                assert!(got.is_ok(), "{target}/{name}: {got:?}");
+            } else {
+                assert!(got.is_err(), "{target}/{name} must be refused");
+                eprintln!("{target}/{name}: {}", got.unwrap_err());
+            }
+            n += 1;
+        }
+    }
+    assert!(n > 0, "no regression inputs found in {}", dir().display());
+}
