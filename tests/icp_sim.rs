@@ -245,13 +245,12 @@ fn icp_sim_local_map_drifts_less_than_scan_to_scan() {
             - truth.poses.last().unwrap().translation.vector;
         (end.norm(), mean(&pair_errors(&motions, &truth).nees), stats)
     };
-    let (e_s2s, nees_s2s, _) = run(&IcpParams::default());
-    let (e_map, nees_map, stats) = run(&IcpParams {
-        local_map: true,
-        keyframes: 10,
-        keyframe_dist: 0.5,
+    let (e_s2s, nees_s2s, _) = run(&IcpParams {
+        local_map: false,
         ..Default::default()
     });
+    // The default matcher works against a local map.
+    let (e_map, nees_map, stats) = run(&IcpParams::default());
     eprintln!(
         "end error over {:.1} m: scan-to-scan {e_s2s:.3} m (NEES {nees_s2s:.2}), local map {e_map:.3} m (NEES {nees_map:.2}, {stats:?})",
         truth.path_length()
@@ -262,4 +261,58 @@ fn icp_sim_local_map_drifts_less_than_scan_to_scan() {
         e_map < e_s2s,
         "local map {e_map} m vs scan to scan {e_s2s} m"
     );
+}
+
+/// Σ of estimated over Σ of true forward increments (pairs moving > 5 mm) and
+/// of heading increments (all valid pairs) of a run against its truth.
+fn sum_ratios(motions: &[Motion], truth: &Trajectory) -> (f64, f64) {
+    let (mut sx, mut tx, mut st, mut tt) = (0.0, 0.0, 0.0, 0.0);
+    for m in motions.iter().filter(|m| m.is_valid()) {
+        let d = geom::between(&truth.pose_at(m.t0).unwrap(), &truth.pose_at(m.t1).unwrap());
+        let [x, _, th] = geom::xyt(&d);
+        if x.abs() > 0.005 {
+            sx += m.dx;
+            tx += x;
+        }
+        st += m.dtheta;
+        tt += th;
+    }
+    (sx / tx, st / tt)
+}
+
+#[test]
+fn icp_sim_sweeping_back_laser_square_is_unbiased() {
+    // The simulator's square: LMS111 on the back of the chair, every beam
+    // cast from the laser's pose at its own time in the sweep, and wheel
+    // odometry 2 % short (true radii 2 % above nominal) as the prior.
+    let mut cfg = odocal::sim::SimConfig::default();
+    cfg.scenario.name = "square".into();
+    cfg.duration_s = 30.0;
+    cfg.seed = 3;
+    cfg.laser.rate_hz = 25.0;
+    assert!(cfg.laser.sweep_motion);
+    let robot = odocal::robot::RobotConfig::default();
+    let effects = [odocal::effects::Effect::parse("radius_scale:right=0.02,left=0.02").unwrap()];
+    let (rec, truth) = odocal::sim::simulate(&cfg, &robot, &effects, &mut |_| {}).unwrap();
+    let truth = Trajectory::from_parts(
+        truth.trajectory.iter().map(|p| p.t).collect(),
+        truth
+            .trajectory
+            .iter()
+            .map(|p| pose(p.x, p.y, p.theta))
+            .collect(),
+    )
+    .unwrap();
+    let odom = odocal::robot::wheel_odometry(&robot.diff_drive(), &rec.wheels, Pose2::identity());
+    let bfl = rec.base_from_laser.unwrap();
+    assert!((bfl.translation.x + 0.45).abs() < 1e-9);
+    let (motions, stats) =
+        match_recording(&rec.scans, bfl, Some(&odom), &IcpParams::default()).unwrap();
+    let (rx, rt) = sum_ratios(&motions, &truth);
+    let nees = mean(&pair_errors(&motions, &truth).nees);
+    eprintln!("square 30 s: Σdx ratio {rx:.5}, Σdθ ratio {rt:.5}, NEES {nees:.2}, {stats:?}");
+    assert!(stats.failed_pairs * 50 <= stats.pairs, "{stats:?}");
+    assert!((rx - 1.0).abs() <= 0.005, "Σdx ICP / true = {rx}");
+    assert!((rt - 1.0).abs() <= 0.005, "Σdθ ICP / true = {rt}");
+    assert!((1.5..4.5).contains(&nees), "mean NEES {nees}");
 }

@@ -1,11 +1,10 @@
 //! The streaming scan matcher: feed scans in time order, get the motion of the
 //! robot base between each scan and the previous one.
 
-use super::covariance::Correspondence;
 use super::params::{IcpParams, IcpParamsError};
 use super::preprocess::{Preprocessor, ScanPoints};
 use super::reference::Reference;
-use super::register::{register, RegisterSettings};
+use super::register::{register, RegisterSettings, Scratch};
 use super::threshold::AdaptiveThreshold;
 use crate::geom::{self, Pose2};
 use crate::motion::{Motion, PairFailure};
@@ -62,7 +61,12 @@ pub struct ScanMatcher {
     keyframes: VecDeque<(Pose2, ScanPoints)>,
     cur: ScanPoints,
     src: Vec<[f64; 2]>,
-    corrs: Vec<Correspondence>,
+    kept: Vec<usize>,
+    normals: Vec<[f64; 2]>,
+    /// The current scan as a reference (lines, tree): its normals serve the
+    /// registration, and it becomes the next pair's reference.
+    own: Reference,
+    scratch: Scratch,
     info: MatchInfo,
 }
 
@@ -87,7 +91,7 @@ impl ScanMatcher {
                 p.min_motion,
                 p.threshold_range,
             ),
-            reference: Reference::default(),
+            reference: Reference::new(p.normal_window),
             ref_from_last: Pose2::identity(),
             last_cov: Matrix3::zeros(),
             last: None,
@@ -95,7 +99,10 @@ impl ScanMatcher {
             keyframes: VecDeque::new(),
             cur: ScanPoints::default(),
             src: Vec::new(),
-            corrs: Vec::new(),
+            kept: Vec::new(),
+            normals: Vec::new(),
+            own: Reference::new(p.normal_window),
+            scratch: Scratch::default(),
             info: MatchInfo::default(),
             params,
         })
@@ -121,7 +128,8 @@ impl ScanMatcher {
     pub fn push(&mut self, scan: &LaserScan, prior: Option<Pose2>) -> Option<Motion> {
         let t1 = scan.stamp;
         let Some((t0, beams0)) = self.last else {
-            self.pre.points(scan, &mut self.cur);
+            self.pre.points(scan, None, &mut self.cur);
+            self.set_own();
             self.start_reference(Pose2::identity());
             self.last = Some((t1, scan.ranges.len()));
             return None;
@@ -147,7 +155,12 @@ impl ScanMatcher {
             return Some(self.failed(t0, t1, &Pose2::identity(), PairFailure::BadTime));
         }
         self.last = Some((t1, scan.ranges.len()));
-        self.pre.points(scan, &mut self.cur);
+        let twist = (self.params.deskew && source != PriorSource::None).then(|| {
+            let (ds, dth) = geom::arc_of_increment(&prior);
+            (ds / dt, dth / dt)
+        });
+        self.pre.points(scan, twist, &mut self.cur);
+        self.set_own();
         let usable = self.cur.pts.len() >= self.params.min_points;
         let failure = if !usable {
             Some(PairFailure::TooFewPoints)
@@ -177,17 +190,38 @@ impl ScanMatcher {
 
     fn match_pair(&mut self, t0: f64, t1: f64, prior: &Pose2, source: PriorSource) -> Motion {
         let p = &self.params;
-        self.pre
-            .downsample(&self.cur.pts, p.beam_stride, p.voxel_size, &mut self.src);
+        self.pre.downsample(
+            &self.cur.pts,
+            p.beam_stride,
+            p.voxel_size,
+            &mut self.src,
+            &mut self.kept,
+        );
+        self.normals.clear();
+        self.normals.extend(
+            self.kept
+                .iter()
+                .map(|&i| self.own.normal(i).unwrap_or([f64::NAN; 2])),
+        );
         let init = geom::xyt(&(self.ref_from_last * prior));
         let set = RegisterSettings {
             threshold: self.threshold.threshold(),
+            max_gap: p.max_gap,
+            min_normal_cos: p.max_normal_angle.cos(),
+            min_kappa: p.min_kappa,
             max_iterations: p.max_iterations,
             convergence: p.convergence,
             min_correspondences: p.min_correspondences,
             cov_inflation: p.cov_inflation,
         };
-        let reg = register(&self.reference, &self.src, init, &set, &mut self.corrs);
+        let reg = register(
+            &self.reference,
+            &self.src,
+            &self.normals,
+            init,
+            &set,
+            &mut self.scratch,
+        );
         self.info.threshold = set.threshold;
         self.info.source_points = self.src.len();
         self.info.reference_points = self.reference.len();
@@ -302,6 +336,16 @@ impl ScanMatcher {
         }
     }
 
+    /// Fits the current scan's lines (for its normals); with scan-to-scan
+    /// matching also its tree, as it becomes the next reference.
+    fn set_own(&mut self) {
+        if self.params.local_map {
+            self.own.set_lines(&self.cur);
+        } else {
+            self.own.set(&self.cur);
+        }
+    }
+
     /// Makes the current scan the only reference, placed at `ref_from_cur`
     /// (local map) or as the new reference frame (scan to scan).
     fn start_reference(&mut self, ref_from_cur: Pose2) {
@@ -319,7 +363,8 @@ impl ScanMatcher {
                 .set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
             self.ref_from_last = ref_from_cur;
         } else {
-            self.reference.set(&self.cur);
+            // The current scan's lines and tree are already built: swap them in.
+            std::mem::swap(&mut self.reference, &mut self.own);
             self.ref_from_last = Pose2::identity();
         }
     }

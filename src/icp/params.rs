@@ -21,6 +21,20 @@ pub struct IcpParams {
     pub gap_factor: f64,
     /// Upper bound of the surface gap test (m).
     pub max_gap: f64,
+    /// A reference point's local surface line is fitted through
+    /// `normal_window + 1` consecutive linked points (the straightest such
+    /// window containing it): averages the range noise out of the surface the
+    /// source is matched against.
+    pub normal_window: usize,
+    /// Largest angle (rad) between a source point's own surface normal and
+    /// the reference line it is matched to.
+    pub max_normal_angle: f64,
+    /// Smallest scale of the robust kernel (m); the kernel otherwise follows
+    /// twice the robust standard deviation of the residuals.
+    pub min_kappa: f64,
+    /// Compensate the motion during each sweep (needs the scan's
+    /// `time_increment`), with the pair's prior as velocity.
+    pub deskew: bool,
     /// Fewest valid points a scan needs to be matched.
     pub min_points: usize,
     /// Fewest correspondences, absolute.
@@ -63,7 +77,11 @@ pub struct IcpParams {
     pub speed_slack: f64,
     /// Slack on `max_turn_rate` × dt beyond 3σ of the match (rad).
     pub turn_slack: f64,
-    /// Match against a local map of recent keyframes instead of the previous scan.
+    /// Match against a local map of recent keyframes instead of the previous
+    /// scan (default). Scan-to-scan matching has a small pull towards zero
+    /// motion (things that move with the sensor: sampling, occlusion edges,
+    /// range and field-of-view limits) that adds up pair after pair; against a
+    /// keyframe it is paid once per keyframe, not once per scan.
     pub local_map: bool,
     /// Keyframes kept in the local map.
     pub keyframes: usize,
@@ -82,17 +100,21 @@ impl Default for IcpParams {
             beam_stride: 1,
             gap_factor: 6.0,
             max_gap: 0.5,
+            normal_window: 8,
+            max_normal_angle: 0.5,
+            min_kappa: 0.005,
+            deskew: true,
             min_points: 20,
             min_correspondences: 15,
             min_inlier_fraction: 0.5,
             max_iterations: 60,
-            convergence: 1e-6,
+            convergence: 1e-5,
             initial_threshold: 1.0,
             min_threshold: 0.1,
             max_threshold: 1.5,
             min_motion: 0.005,
             threshold_range: 5.0,
-            cov_inflation: 8.5,
+            cov_inflation: 1.7,
             degenerate_ratio: 1e-4,
             prior_trans_tol: 0.25,
             prior_rel_tol: 0.5,
@@ -101,7 +123,7 @@ impl Default for IcpParams {
             max_turn_rate: 3.0,
             speed_slack: 0.01,
             turn_slack: 0.01,
-            local_map: false,
+            local_map: true,
             keyframes: 5,
             keyframe_dist: 0.3,
             keyframe_angle: 0.2,
@@ -127,6 +149,8 @@ impl IcpParams {
             ("max_range", self.max_range),
             ("gap_factor", self.gap_factor),
             ("max_gap", self.max_gap),
+            ("max_normal_angle", self.max_normal_angle),
+            ("min_kappa", self.min_kappa),
             ("convergence", self.convergence),
             ("initial_threshold", self.initial_threshold),
             ("min_threshold", self.min_threshold),
@@ -171,6 +195,9 @@ impl IcpParams {
         }
         if self.beam_stride == 0 {
             return e("beam_stride", "must be at least 1");
+        }
+        if self.normal_window == 0 {
+            return e("normal_window", "must be at least 1");
         }
         if self.max_iterations == 0 {
             return e("max_iterations", "must be at least 1");

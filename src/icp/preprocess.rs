@@ -3,7 +3,7 @@
 //! with `base_from_laser`, plus the surface links between consecutive beams
 //! (reference scans) or a thinned copy (source scans).
 
-use crate::geom::Pose2;
+use crate::geom::{self, Pose2};
 use crate::scan::LaserScan;
 use std::collections::HashSet;
 
@@ -59,7 +59,14 @@ impl Preprocessor {
 
     /// Fills `out` with the scan's usable points. A scan with non-finite beam
     /// geometry yields no points.
-    pub fn points(&mut self, scan: &LaserScan, out: &mut ScanPoints) {
+    ///
+    /// `twist` = `(v, ω)` (m/s, rad/s) is the base's velocity during the
+    /// sweep: beam `i` is measured `i · time_increment` s after the stamp,
+    /// from wherever the base has moved by then, so each point is carried
+    /// back into the base frame at the stamp (motion compensation, as every
+    /// rotating scanner needs while the robot moves). Without it, or when the
+    /// scan states no positive finite `time_increment`, points stay as measured.
+    pub fn points(&mut self, scan: &LaserScan, twist: Option<(f64, f64)>, out: &mut ScanPoints) {
         out.pts.clear();
         out.link.clear();
         out.range.clear();
@@ -79,6 +86,10 @@ impl Preprocessor {
         }
         let o = self.base_from_laser.translation.vector;
         let spacing = scan.angle_increment.abs();
+        let dt_beam = scan.time_increment;
+        let twist = twist.filter(|(v, w)| {
+            dt_beam.is_finite() && dt_beam > 0.0 && v.is_finite() && w.is_finite()
+        });
         let mut last: Option<(usize, f64)> = None;
         for (i, &r) in scan.ranges.iter().enumerate() {
             if !scan.is_valid_range(r) {
@@ -89,7 +100,10 @@ impl Preprocessor {
                 continue;
             }
             let d = self.dirs[i];
-            let p = [o.x + r * d[0], o.y + r * d[1]];
+            let mut p = [o.x + r * d[0], o.y + r * d[1]];
+            if let Some((v, w)) = twist {
+                p = carry_back(p, v, w, i as f64 * dt_beam);
+            }
             if let Some((li, lr)) = last {
                 let q = out.pts[out.pts.len() - 1];
                 let gap = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
@@ -107,17 +121,19 @@ impl Preprocessor {
 
     /// Thins `src` into `out`: every `stride`-th point, then at most one point
     /// per `voxel` × `voxel` cell (first come, in beam order); `voxel = 0`
-    /// keeps all.
+    /// keeps all. `kept` gets the index in `src` of every point kept.
     pub fn downsample(
         &mut self,
         src: &[[f64; 2]],
         stride: usize,
         voxel: f64,
         out: &mut Vec<[f64; 2]>,
+        kept: &mut Vec<usize>,
     ) {
         out.clear();
+        kept.clear();
         self.cells.clear();
-        for p in src.iter().step_by(stride.max(1)) {
+        for (i, p) in src.iter().enumerate().step_by(stride.max(1)) {
             if voxel > 0.0 {
                 let key = ((p[0] / voxel).floor() as i64, (p[1] / voxel).floor() as i64);
                 if !self.cells.insert(key) {
@@ -125,8 +141,37 @@ impl Preprocessor {
                 }
             }
             out.push(*p);
+            kept.push(i);
         }
     }
+}
+
+/// Maps point `p`, measured `tau` s after the stamp while the base moves at
+/// `(v, w)` on a constant-velocity arc, into the base frame at the stamp.
+/// Series for the small sweep angles of real scans (no trigonometry per
+/// point), exact formula beyond.
+#[inline]
+fn carry_back(p: [f64; 2], v: f64, w: f64, tau: f64) -> [f64; 2] {
+    let th = w * tau;
+    let (s, c, sinc, cosc) = if th.abs() < 0.2 {
+        let t2 = th * th;
+        let sinc = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0));
+        // (1 − cos θ) / θ
+        let cosc = th / 2.0 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0)));
+        (th * sinc, 1.0 - th * cosc, sinc, cosc)
+    } else {
+        let inc = geom::arc_increment(v, w, tau);
+        let (s, c) = (inc.rotation.sin_angle(), inc.rotation.cos_angle());
+        let ds = v * tau;
+        (s, c, inc.translation.x / ds, inc.translation.y / ds)
+    };
+    let ds = v * tau;
+    let (tx, ty) = if ds == 0.0 {
+        (0.0, 0.0)
+    } else {
+        (ds * sinc, ds * cosc)
+    };
+    [c * p[0] - s * p[1] + tx, s * p[0] + c * p[1] + ty]
 }
 
 #[cfg(test)]
@@ -160,7 +205,7 @@ mod tests {
             2.01,
         ]);
         let mut out = ScanPoints::default();
-        pre.points(&s, &mut out);
+        pre.points(&s, None, &mut out);
         assert_eq!(out.pts.len(), 4);
         // beam 0 at −0.1 rad in a laser facing backwards, 0.45 m behind the axle
         let a: f64 = -0.1;
@@ -175,18 +220,36 @@ mod tests {
         let mut pre = Preprocessor::new(Pose2::identity(), 0.0, 30.0, 6.0, 0.5);
         let s = scan(vec![2.0, 2.0, 5.0, 5.0]);
         let mut out = ScanPoints::default();
-        pre.points(&s, &mut out);
+        pre.points(&s, None, &mut out);
         assert_eq!(out.link, vec![true, false, true, false]);
+    }
+
+    #[test]
+    fn carrying_back_matches_the_exact_arc() {
+        for (v, w, tau) in [
+            (1.0, 0.0, 0.03),
+            (0.8, 0.6, 0.03),
+            (-0.5, -2.5, 0.05),
+            (1.0, 10.0, 0.1),
+        ] {
+            let p = [1.3, -2.1];
+            let inc = geom::arc_increment(v, w, tau);
+            let want = inc * nalgebra::Point2::new(p[0], p[1]);
+            let got = carry_back(p, v, w, tau);
+            assert!((got[0] - want.x).abs() < 1e-12 && (got[1] - want.y).abs() < 1e-12);
+        }
     }
 
     #[test]
     fn voxel_downsampling_keeps_one_point_per_cell() {
         let mut pre = Preprocessor::new(Pose2::identity(), 0.0, 30.0, 6.0, 0.5);
         let src: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.01, 0.0]).collect();
-        let mut out = Vec::new();
-        pre.downsample(&src, 1, 0.1, &mut out);
+        let (mut out, mut kept) = (Vec::new(), Vec::new());
+        pre.downsample(&src, 1, 0.1, &mut out, &mut kept);
         assert_eq!(out.len(), 10);
-        pre.downsample(&src, 3, 0.0, &mut out);
+        assert_eq!(kept[1], 10);
+        pre.downsample(&src, 3, 0.0, &mut out, &mut kept);
         assert_eq!(out.len(), 34);
+        assert_eq!(kept[1], 3);
     }
 }
