@@ -41,15 +41,17 @@ enum Command {
     Eval(EvalArgs),
     /// Find what the nominal model gets wrong against the measurements, name the cause.
     Diagnose(DiagnoseArgs),
-    /// Regenerate seed 000's tables: resampling, montecarlo, changing.
+    /// Regenerate the seeds' tables: resampling, montecarlo, changing, literature,
+    /// square, umbmark, heading-pf, tachometer.
     Experiment(ExperimentArgs),
 }
 
 #[derive(Args)]
 struct ExperimentArgs {
-    /// resampling (Table I), montecarlo (Table II) or changing (radii step at 55 s).
+    /// resampling (Table I), montecarlo (Table II), changing (radii step at 55 s),
+    /// literature (every method side by side), square, umbmark, heading-pf, tachometer.
     name: String,
-    /// Monte Carlo runs.
+    /// Monte Carlo runs (literature: repetitions; umbmark: robots; heading-pf: trials).
     #[arg(long, default_value_t = 30)]
     runs: usize,
     /// Seed of run 0 (run k uses seed + k).
@@ -58,6 +60,12 @@ struct ExperimentArgs {
     /// Output directory (NAME.md, NAME.json, NAME.png).
     #[arg(long, value_name = "DIR", default_value = "odocal-experiments")]
     out: PathBuf,
+    /// Experiment settings (TOML tables: literature, square, umbmark, heading_pf).
+    #[arg(long, value_name = "FILE.toml")]
+    settings: Option<PathBuf>,
+    /// Folder with the seed tables (square_path.csv, encoder_vs_tachometer.csv, ...).
+    #[arg(long, value_name = "DIR")]
+    tables: Option<PathBuf>,
     /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
@@ -858,12 +866,21 @@ fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
 }
 
 fn experiment(a: ExperimentArgs) -> anyhow::Result<()> {
-    let (cfg, _) = load_common(&a.common)?;
-    let table = pipeline::experiment::run(&a.name, a.runs, a.seed, &cfg.calib, &a.out)?;
+    let (cfg, robot) = load_common(&a.common)?;
+    let settings = pipeline::experiment::ExperimentSettings::load(a.settings.as_deref())?;
+    let inputs = pipeline::experiment::ExperimentInputs {
+        runs: a.runs,
+        seed: a.seed,
+        calib: &cfg.calib,
+        robot: &robot,
+        settings: &settings,
+        tables: a.tables.as_deref(),
+    };
+    let res = pipeline::experiment::run(&a.name, &inputs, &a.out)?;
     if a.json {
-        return print_json(&table);
+        return print_json(&res.json);
     }
-    out!("{}", table.to_markdown());
+    out!("{}", res.summary);
     out!("written to {}", a.out.display());
     Ok(())
 }

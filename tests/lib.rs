@@ -3,6 +3,7 @@
 mod calib_censi;
 mod calib_filters;
 mod calib_resample;
+mod classic_cli;
 mod classic_compare;
 mod classic_ga;
 mod classic_heading_pf;

@@ -20,7 +20,8 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::time::Instant;
 
-/// The classic methods (names as `odocal calibrate --method` would take them).
+/// The methods compared side by side (kebab-case names, as in tables and JSON):
+/// the classic ones and, for the literature comparison, seed 000's filters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ClassicMethod {
@@ -34,6 +35,10 @@ pub enum ClassicMethod {
     Ga,
     /// Seed 002's GA-calibrated odometry fused with a heading source in a PF.
     HeadingPf,
+    /// Seed 000's Adaptive-PF on laser velocities and gyro (`calib`).
+    AdaptivePf,
+    /// The dual Kalman filter baseline on the same measurements (`calib`).
+    Dkf,
 }
 
 impl ClassicMethod {
@@ -45,6 +50,8 @@ impl ClassicMethod {
             Self::Umbmark => "umbmark",
             Self::Ga => "ga",
             Self::HeadingPf => "heading-pf",
+            Self::AdaptivePf => "adaptive-pf",
+            Self::Dkf => "dkf",
         }
     }
 }
@@ -123,6 +130,10 @@ pub struct CompareParams {
     pub ga_bounds_rel: f64,
     /// Shortest and longest piece the square runs are cut into for the GA (m).
     pub short_run_m: (f64, f64),
+    /// Cut the square runs at their corners (after each turn) instead of into
+    /// random pieces: the GA then sees the poses a tape measurement at the
+    /// marked corners gives (runs without segment ends fall back to pieces).
+    pub ga_corners: bool,
     /// Pulse counts are read at most this often for the GA (Hz); fewer, longer
     /// increments make each replay cheaper at no visible cost in accuracy.
     pub ga_rate_hz: f64,
@@ -133,6 +144,10 @@ pub struct CompareParams {
     /// A tachometer table, if one was measured; otherwise rates are not corrected.
     #[serde(skip)]
     pub tachometer: Option<Vec<TachoReading>>,
+    /// σ of the measured end poses the classic methods rely on, [m, rad]:
+    /// added to UMBmark's end positions, the GA pieces' start and end poses
+    /// and the heading trials' actual turns (a tape or marker measurement).
+    pub end_pose_sigma: [f64; 2],
     /// Seed for every random choice.
     pub seed: u64,
 }
@@ -149,10 +164,12 @@ impl Default for CompareParams {
             ga: GaParams::default(),
             ga_bounds_rel: 0.1,
             short_run_m: (1.5, 3.0),
+            ga_corners: false,
             ga_rate_hz: 10.0,
             pf: HeadingPfParams::default(),
             heading: HeadingSourceParams::default(),
             tachometer: None,
+            end_pose_sigma: [0.0, 0.0],
             seed: 1,
         }
     }
@@ -191,6 +208,26 @@ pub fn split_short_runs(
     out
 }
 
+/// Cuts a run at every second segment end (a square's corners, after each
+/// turn) into GA runs with the true poses there.
+fn corner_pieces(run: &SimRun, ticks_per_rev: f64) -> Vec<GaRun> {
+    let w = &run.wheels;
+    let mut cuts = vec![0usize];
+    for &t in run.segment_ends.iter().skip(1).step_by(2) {
+        let i = w.partition_point(|s| s.stamp < t - 1e-9).min(w.len() - 1);
+        if i > *cuts.last().unwrap_or(&0) {
+            cuts.push(i);
+        }
+    }
+    cuts.windows(2)
+        .filter_map(|c| {
+            let a = run.truth.pose_at(w[c[0]].stamp)?;
+            let b = run.truth.pose_at(w[c[1]].stamp)?;
+            Some(GaRun::from_wheels(&w[c[0]..=c[1]], ticks_per_rev, a, b))
+        })
+        .collect()
+}
+
 /// RMSE of position (m) and heading (rad) of `est` against the truth at the
 /// estimate's stamps, and the end error as % of the true path length.
 fn errors(est: &Trajectory, truth: &Trajectory) -> (f64, f64, f64, usize) {
@@ -209,11 +246,83 @@ fn errors(est: &Trajectory, truth: &Trajectory) -> (f64, f64, f64, usize) {
     ((sxy / nn).sqrt(), (sth / nn).sqrt(), pct, n)
 }
 
-fn start_of(run: &SimRun) -> Pose2 {
+/// Scores one method on the evaluation runs: `estimate` gives its trajectory
+/// of each run, `k` the parameters it ends with (m), `ms` its compute time.
+pub(crate) fn evaluate_method(
+    method: ClassicMethod,
+    k: DiffDrive,
+    truth: Option<&DiffDrive>,
+    ms: f64,
+    details: serde_json::Value,
+    evals: &[SimRun],
+    estimate: &dyn Fn(&SimRun) -> Result<Trajectory, ClassicError>,
+) -> Result<ClassicResult, ClassicError> {
+    let (mut sxy, mut sth, mut pct, mut n) = (0.0, 0.0, 0.0, 0usize);
+    for run in evals {
+        let est = estimate(run)?;
+        let (a, b, c, m) = errors(&est, &run.truth);
+        sxy += a * a * m as f64;
+        sth += b * b * m as f64;
+        pct += c;
+        n += m;
+    }
+    let nn = n.max(1) as f64;
+    Ok(ClassicResult {
+        method,
+        final_params: k.into(),
+        param_errors: truth.map(|t| FinalParams {
+            r_right: (k.r_right - t.r_right).abs(),
+            r_left: (k.r_left - t.r_left).abs(),
+            wheel_base: (k.wheel_base - t.wheel_base).abs(),
+        }),
+        rmse_xy: (sxy / nn).sqrt(),
+        rmse_theta: (sth / nn).sqrt(),
+        path_error_percent: pct / evals.len().max(1) as f64,
+        compute_ms: ms,
+        details,
+    })
+}
+
+/// The true start pose of a run (identity if unknown).
+pub(crate) fn start_of(run: &SimRun) -> Pose2 {
     run.wheels
         .first()
         .and_then(|s| run.truth.pose_at(s.stamp))
         .unwrap_or_else(Pose2::identity)
+}
+
+/// Measurement noise of end poses: N(0, σ²) per coordinate, seeded.
+struct PoseNoise {
+    rng: StdRng,
+    sigma: [f64; 2],
+}
+
+impl PoseNoise {
+    fn new(sigma: [f64; 2], seed: u64) -> Self {
+        Self {
+            rng: StdRng::seed_from_u64(seed ^ 0x656e_6470_6f73),
+            sigma,
+        }
+    }
+    fn draw(&mut self, s: f64) -> f64 {
+        if s > 0.0 {
+            let z: f64 = self.rng.sample(rand_distr::StandardNormal);
+            s * z
+        } else {
+            0.0
+        }
+    }
+    fn xy(&mut self) -> (f64, f64) {
+        (self.draw(self.sigma[0]), self.draw(self.sigma[0]))
+    }
+    fn angle(&mut self) -> f64 {
+        self.draw(self.sigma[1])
+    }
+    fn pose(&mut self, p: &Pose2) -> Pose2 {
+        let [x, y, t] = geom::xyt(p);
+        let (dx, dy) = self.xy();
+        geom::pose(x + dx, y + dy, t + self.angle())
+    }
 }
 
 /// Total unwrapped heading change of a trajectory (rad).
@@ -274,30 +383,9 @@ where
                     details,
                     estimate: &dyn Fn(&SimRun) -> Result<Trajectory, ClassicError>|
      -> Result<(), ClassicError> {
-        let (mut sxy, mut sth, mut pct, mut n) = (0.0, 0.0, 0.0, 0usize);
-        for run in &evals {
-            let est = estimate(run)?;
-            let (a, b, c, m) = errors(&est, &run.truth);
-            sxy += a * a * m as f64;
-            sth += b * b * m as f64;
-            pct += c;
-            n += m;
-        }
-        let nn = n.max(1) as f64;
-        out.push(ClassicResult {
-            method,
-            final_params: k.into(),
-            param_errors: truth.map(|t| FinalParams {
-                r_right: (k.r_right - t.r_right).abs(),
-                r_left: (k.r_left - t.r_left).abs(),
-                wheel_base: (k.wheel_base - t.wheel_base).abs(),
-            }),
-            rmse_xy: (sxy / nn).sqrt(),
-            rmse_theta: (sth / nn).sqrt(),
-            path_error_percent: pct / evals.len().max(1) as f64,
-            compute_ms: ms,
-            details,
-        });
+        out.push(evaluate_method(
+            method, k, truth, ms, details, &evals, estimate,
+        )?);
         Ok(())
     };
     let odo = |k: DiffDrive| move |run: &SimRun| Ok(wheel_odometry(&k, &run.wheels, start_of(run)));
@@ -320,12 +408,13 @@ where
             .as_ref()
             .map_or_else(|| w.to_vec(), |c| c.correct_wheels(w))
     };
+    let mut noise = PoseNoise::new(p.end_pose_sigma, p.seed);
     let trials: Vec<HeadingTrial> = squares
         .iter()
         .map(|(_, run)| {
             let est = wheel_odometry(nominal, &correct(&run.wheels), Pose2::identity());
             HeadingTrial {
-                actual_deg: total_turn(&run.truth).abs().to_degrees(),
+                actual_deg: (total_turn(&run.truth).abs() + noise.angle()).to_degrees(),
                 estimated_deg: total_turn(&est).abs().to_degrees(),
             }
         })
@@ -361,7 +450,13 @@ where
     let t0 = Instant::now();
     let runs: Vec<UmbmarkRun> = squares
         .iter()
-        .map(|(dir, run)| UmbmarkRun::from_sim(run, nominal, *dir))
+        .map(|(dir, run)| {
+            let mut r = UmbmarkRun::from_sim(run, nominal, *dir);
+            let (dx, dy) = noise.xy();
+            r.eps_x += dx;
+            r.eps_y += dy;
+            r
+        })
         .collect();
     let um = umbmark(&runs, p.square_side, nominal)?;
     let ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -374,12 +469,15 @@ where
         &odo(k_um),
     )?;
 
-    // GA on 1.5–3 m pieces of the square runs.
+    // GA on 1.5–3 m pieces of the square runs (or the whole runs).
     let t0 = Instant::now();
     let pieces: Vec<GaRun> = squares
         .iter()
         .enumerate()
         .flat_map(|(i, (_, run))| {
+            if p.ga_corners && !run.segment_ends.is_empty() {
+                return corner_pieces(run, p.ticks_per_rev);
+            }
             split_short_runs(
                 run,
                 p.ticks_per_rev,
@@ -387,6 +485,11 @@ where
                 p.short_run_m.1,
                 p.seed.wrapping_add(i as u64),
             )
+        })
+        .map(|g| GaRun {
+            start: noise.pose(&g.start),
+            end: noise.pose(&g.end),
+            ..g
         })
         .collect();
     let nominal_ticks = TickParams::from_diff_drive(nominal, p.ticks_per_rev);
