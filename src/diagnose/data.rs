@@ -31,6 +31,47 @@ pub struct GyroRow {
     pub sigma: f64,
 }
 
+/// Chains runs of consecutive valid motions (each starting where the last
+/// ended) into motions spanning at least `min_dt` s: the SE(2) composition
+/// of the increments, covariances added (their rotation between the parts
+/// ignored: they only weight the rows). Streams stamped in bursts (odometry
+/// logged in packets) then compare over intervals the bursts cannot split.
+/// `min_dt` ≤ 0 returns the motions unchanged; a run shorter than `min_dt`
+/// at a gap or at the end is dropped.
+pub fn merge_motions(motions: &[Motion], min_dt: f64) -> Vec<Motion> {
+    if min_dt.is_nan() || min_dt <= 0.0 {
+        return motions.to_vec();
+    }
+    let mut out = Vec::new();
+    let mut acc: Option<(Motion, crate::geom::Pose2)> = None;
+    for m in motions {
+        if !m.is_valid() || m.t1 <= m.t0 {
+            acc = None;
+            continue;
+        }
+        let inc = crate::geom::pose(m.dx, m.dy, m.dtheta);
+        acc = match acc.take() {
+            Some((mut a, p)) if (a.t1 - m.t0).abs() < 1e-9 => {
+                a.t1 = m.t1;
+                a.cov += m.cov;
+                Some((a, p * inc))
+            }
+            _ => Some((m.clone(), inc)),
+        };
+        if acc.as_ref().is_some_and(|(a, _)| a.t1 - a.t0 >= min_dt) {
+            let (a, p) = acc.take().expect("checked above");
+            let [dx, dy, dtheta] = crate::geom::xyt(&p);
+            out.push(Motion {
+                dx,
+                dy,
+                dtheta,
+                ..a
+            });
+        }
+    }
+    out
+}
+
 /// Rows of every stream inside the wheel time span (with `margin` s kept free
 /// at both ends for latency shifts).
 pub fn icp_rows(motions: &[Motion], span: (f64, f64), margin: f64) -> Vec<IcpRow> {

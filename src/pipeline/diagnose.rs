@@ -10,21 +10,54 @@ use crate::viz::report::{num, Report};
 use std::path::Path;
 
 /// Runs ICP on the recording and diagnoses the nominal model against it.
+/// A recording without wheel encoders but with the robot's own integrated
+/// odometry (classic CARMEN logs) is diagnosed through virtual wheel angles
+/// ([`diagnose::odometry::wheels_from_odometry`]): the causes then describe
+/// what that odometry gets wrong against scan matching.
 pub fn run(
     rec: &Recording,
     robot: &RobotConfig,
     icp_params: &crate::icp::IcpParams,
     params: &DiagnoseParams,
 ) -> Result<Diagnosis, PipelineError> {
-    if rec.wheels.len() < 2 {
+    let virtual_wheels;
+    let wheels = if rec.wheels.len() >= 2 {
+        &rec.wheels
+    } else if rec.odom.len() >= 2 {
+        virtual_wheels = diagnose::odometry::wheels_from_odometry(&rec.odom, robot);
+        &virtual_wheels
+    } else {
         return Err(crate::error::InputError::new(
             &rec.source,
-            "no wheel encoder data (JointState with the robot's wheel joints): nothing to replay",
+            "no wheel encoder data (JointState with the robot's wheel joints) and no odometry: nothing to replay",
         )
         .into());
-    }
+    };
     let icp_out = icp::run(rec, robot, icp_params)?;
-    let measured = Measured::new(rec, &icp_out.motions);
+    let mut measured = Measured::new(rec, &icp_out.motions);
+    measured.wheels = wheels;
+    diagnose::diagnose(robot, &measured, params)
+        .map_err(|e| PipelineError::BadArgument(e.to_string()))
+}
+
+/// Diagnoses Censi et al.'s calibration tuples (`.tuple`: wheel rates and
+/// the laser's scan-matching displacement per interval). The laser motions
+/// enter with the robot file's laser mount as the nominal one, so
+/// `laser_offset` estimates the mount relative to it; σ per tuple is
+/// `sigma_xy` (m) and `sigma_theta` (rad), relative weights only (the
+/// diagnosis profiles each stream's scale).
+pub fn run_tuples(
+    tuples: &[crate::io::censi::CensiTuple],
+    robot: &RobotConfig,
+    params: &DiagnoseParams,
+) -> Result<Diagnosis, PipelineError> {
+    let (wheels, motions) = crate::io::censi::to_streams(tuples, &robot.laser.pose(), 1e-3, 1e-3);
+    let measured = Measured {
+        wheels: &wheels,
+        motions: &motions,
+        gyro: &[],
+        reference: &[],
+    };
     diagnose::diagnose(robot, &measured, params)
         .map_err(|e| PipelineError::BadArgument(e.to_string()))
 }
@@ -42,7 +75,7 @@ fn binned(x: &[f64], y: &[f64], n: usize) -> Vec<[f64; 2]> {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    if !(hi > lo) {
+    if hi <= lo {
         return Vec::new();
     }
     let mut sum = vec![(0.0, 0usize); n];
