@@ -223,3 +223,49 @@ fn intel_odometry_is_diagnosed_against_icp() {
     assert!(l.parameters["x"] > 5.0 * l.stderr["x"]);
     assert!(d.gain.relative > 0.1, "{:?}", d.gain);
 }
+
+/// The command line reads Censi's tuple files directly and prints the
+/// design.md JSON keys; the laser mount it names is the authors' one.
+#[test]
+fn cli_diagnoses_censi_tuples_with_json_keys() {
+    let Some(data) = shared_data("cli_censi_diagnosis") else {
+        return;
+    };
+    let dir = data.join("censi-calibration");
+    let robot = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scans/robots/khepera.toml");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_odocal"))
+        .args(["diagnose", "--measured"])
+        .arg(dir.join("lstraight.tuple"))
+        .arg("--robot")
+        .arg(&robot)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["verdict"], "explained");
+    let first = &v["causes"][0];
+    assert_eq!(first["effect"], "laser_offset");
+    let authors = censi::read_results(&dir.join("lstraight_results.json")).unwrap();
+    let x = first["parameters"]["x"].as_f64().unwrap();
+    assert!((x - authors.l_x).abs() < 0.002, "{x} vs {}", authors.l_x);
+    assert!(first["stderr"]["x"].as_f64().unwrap() > 0.0);
+    assert!(first["delta_bic"].as_f64().unwrap() > 100.0);
+    for k in ["heldout_rmse_before", "heldout_rmse_after", "relative"] {
+        assert!(v["gain"][k].is_number(), "{k}");
+    }
+    // A broken tuple file is bad input (exit code 2) naming the file.
+    let bad = crate::support::scratch("cli_censi_bad").join("bad.tuple");
+    std::fs::write(&bad, "{ \"T\": 0.8, \"phi_l\": 0.5 }").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_odocal"))
+        .args(["diagnose", "--measured"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("bad.tuple"));
+}

@@ -36,7 +36,14 @@ pub fn run(
     let icp_out = icp::run(rec, robot, icp_params)?;
     let mut measured = Measured::new(rec, &icp_out.motions);
     measured.wheels = wheels;
-    diagnose::diagnose(robot, &measured, params)
+    // The nominal mount is the one ICP used (the recording's /tf_static
+    // when present), so `laser_offset` is relative to it.
+    let [x, y, yaw] = crate::geom::xyt(&icp::base_from_laser(rec, robot));
+    let robot = RobotConfig {
+        laser: crate::robot::LaserMount { x, y, yaw },
+        ..robot.clone()
+    };
+    diagnose::diagnose(&robot, &measured, params)
         .map_err(|e| PipelineError::BadArgument(e.to_string()))
 }
 
@@ -191,6 +198,36 @@ pub fn write_report(dir: &Path, name: &str, d: &Diagnosis) -> Result<(), Pipelin
         ("residual RMSE after", num(d.gain.heldout_rmse_after, 5)),
         ("relative gain", format!("{:.1} %", d.gain.relative * 100.0)),
     ]);
+    if let Some(t) = &d.gain.trajectory {
+        let mut kv = vec![(
+            "relative-pose error vs reference (m)",
+            format!(
+                "{} → {} ({} windows of {} s)",
+                num(t.rpe_before, 4),
+                num(t.rpe_after, 4),
+                t.windows,
+                t.window_s
+            ),
+        )];
+        if let (Some(b), Some(a)) = (t.ate_before, t.ate_after) {
+            kv.push((
+                "held-out ATE vs reference, 2D-aligned (m)",
+                format!("{} → {}", num(b, 4), num(a, 4)),
+            ));
+        }
+        r.kv(&kv);
+    }
+    if !d.heldout_rejected.is_empty() {
+        let names: Vec<&str> = d
+            .heldout_rejected
+            .iter()
+            .map(|c| c.effect.as_str())
+            .collect();
+        r.paragraph(&format!(
+            "Selected on the training part but not confirmed on the held-out part: {}.",
+            names.join(", ")
+        ));
+    }
     r.image("residuals.png", "Residuals before and after the extension.");
     r.image(
         "regressors.png",
