@@ -75,7 +75,8 @@ struct ExperimentArgs {
 
 #[derive(Args)]
 struct DiagnoseArgs {
-    /// Recording with wheel encoders and laser scans (ROS 2 MCAP or CARMEN log).
+    /// Recording with wheel encoders (or its own odometry) and laser scans
+    /// (ROS 2 MCAP or CARMEN log), or Censi et al.'s calibration tuples (.tuple).
     #[arg(long, value_name = "REC")]
     measured: PathBuf,
     /// Fraction of the recording (at its end) held out to measure the gain.
@@ -828,8 +829,13 @@ fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
         }
         cfg.diagnose.holdout = h;
     }
-    let rec = read_recording(&a.measured, &cfg, &robot)?;
-    let d = pipeline::diagnose::run(&rec, &robot, &cfg.icp, &cfg.diagnose)?;
+    let d = if a.measured.extension().is_some_and(|e| e == "tuple") {
+        let tuples = odocal::io::censi::read(&a.measured).map_err(PipelineError::from)?;
+        pipeline::diagnose::run_tuples(&tuples, &robot, &cfg.diagnose)?
+    } else {
+        let rec = read_recording(&a.measured, &cfg, &robot)?;
+        pipeline::diagnose::run(&rec, &robot, &cfg.icp, &cfg.diagnose)?
+    };
     if let Some(dir) = &a.report {
         pipeline::diagnose::write_report(dir, &a.measured.display().to_string(), &d)?;
     }

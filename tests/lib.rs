@@ -12,6 +12,7 @@ mod classic_umbmark;
 mod cli;
 mod diagnose_encoder_table;
 mod diagnose_figures;
+mod diagnose_real;
 mod diagnose_sim;
 mod diagnose_synthetic;
 mod eval_align;

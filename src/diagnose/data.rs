@@ -31,6 +31,50 @@ pub struct GyroRow {
     pub sigma: f64,
 }
 
+/// Chains runs of consecutive valid motions (each starting where the last
+/// ended) into motions spanning at least `min_dt` s: the SE(2) composition
+/// of the increments, covariances added (their rotation between the parts
+/// ignored: they only weight the rows). Streams stamped in bursts (odometry
+/// logged in packets) then compare over intervals the bursts cannot split.
+/// `min_dt` ≤ 0 returns the motions unchanged; a run shorter than `min_dt`
+/// at a gap or at the end is dropped.
+pub fn merge_motions(motions: &[Motion], min_dt: f64) -> Vec<Motion> {
+    if min_dt.is_nan() || min_dt <= 0.0 {
+        return motions.to_vec();
+    }
+    let mut out = Vec::new();
+    let mut acc: Option<(Motion, crate::geom::Pose2)> = None;
+    for m in motions {
+        if !m.is_valid() || m.t1 <= m.t0 {
+            acc = None;
+            continue;
+        }
+        let inc = crate::geom::pose(m.dx, m.dy, m.dtheta);
+        acc = match acc.take() {
+            Some((mut a, p)) if (a.t1 - m.t0).abs() < 1e-9 => {
+                a.t1 = m.t1;
+                a.cov += m.cov;
+                Some((a, p * inc))
+            }
+            _ => Some((m.clone(), inc)),
+        };
+        if acc
+            .as_ref()
+            .is_some_and(|(a, _)| a.t1 - a.t0 >= min_dt - 1e-9)
+        {
+            let (a, p) = acc.take().expect("checked above");
+            let [dx, dy, dtheta] = crate::geom::xyt(&p);
+            out.push(Motion {
+                dx,
+                dy,
+                dtheta,
+                ..a
+            });
+        }
+    }
+    out
+}
+
 /// Rows of every stream inside the wheel time span (with `margin` s kept free
 /// at both ends for latency shifts).
 pub fn icp_rows(motions: &[Motion], span: (f64, f64), margin: f64) -> Vec<IcpRow> {
@@ -164,5 +208,51 @@ impl Part<'_> {
             s[g] = v.iter().map(|e| e * e).sum();
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom;
+    use nalgebra::Matrix3;
+
+    fn motion(t0: f64, t1: f64, inc: &geom::Pose2, valid: bool) -> Motion {
+        let [dx, dy, dtheta] = geom::xyt(inc);
+        Motion {
+            t0,
+            t1,
+            dx,
+            dy,
+            dtheta,
+            cov: Matrix3::identity() * 1e-6,
+            iterations: 1,
+            inliers: 100,
+            failure: (!valid).then_some(crate::motion::PairFailure::NotConverged),
+        }
+    }
+
+    #[test]
+    fn merged_motions_compose_contiguous_runs_and_stop_at_gaps() {
+        let inc = geom::arc_increment(0.5, 0.3, 0.1);
+        let mut ms: Vec<Motion> = (0..25)
+            .map(|k| motion(k as f64 * 0.1, (k + 1) as f64 * 0.1, &inc, k != 12))
+            .collect();
+        ms.push(motion(10.0, 10.1, &inc, true));
+        let m = merge_motions(&ms, 0.5);
+        // 0–1.2 s gives two 0.5 s runs (the 0.2 s rest dies at the failed
+        // pair), 1.3–2.3 s two more; the lone motion at 10 s is too short.
+        assert_eq!(m.len(), 4, "{m:?}");
+        let want = geom::xyt(&geom::arc_increment(0.5, 0.3, 0.5));
+        for x in &m {
+            assert!((x.t1 - x.t0 - 0.5).abs() < 1e-9);
+            let got = [x.dx, x.dy, x.dtheta];
+            for k in 0..3 {
+                assert!((got[k] - want[k]).abs() < 1e-12, "{got:?} {want:?}");
+            }
+            assert!((x.cov[(0, 0)] - 5e-6).abs() < 1e-15);
+        }
+        assert!((m[2].t0 - 1.3).abs() < 1e-9);
+        assert_eq!(merge_motions(&ms, 0.0).len(), ms.len());
     }
 }

@@ -17,6 +17,7 @@ pub mod data;
 pub mod encoder_table;
 pub mod fit;
 pub mod model;
+pub mod odometry;
 pub mod report;
 pub mod select;
 pub mod stats;
@@ -61,6 +62,10 @@ pub struct DiagnoseParams {
     pub wheel_smoothing: f64,
     /// Window (s) of the held-out relative-pose error against a reference.
     pub trajectory_window: f64,
+    /// Consecutive ICP motions are chained into intervals of at least this
+    /// many seconds before comparison (0 = every scan pair on its own); for
+    /// wheel or odometry streams stamped in bursts.
+    pub min_interval: f64,
     /// Time kept free at both ends of the wheel stream (s), bounding latency.
     pub margin: f64,
     /// Residuals beyond this many robust σ of the nominal model are outliers.
@@ -86,6 +91,7 @@ impl Default for DiagnoseParams {
             gyro_window: 0.1,
             wheel_smoothing: 0.1,
             trajectory_window: 5.0,
+            min_interval: 0.0,
             margin: 0.25,
             outlier_sigma: 8.0,
             max_effects: 3,
@@ -126,6 +132,12 @@ impl DiagnoseParams {
             return bad(format!(
                 "wheel_smoothing must be ≥ 0 s, got {}",
                 self.wheel_smoothing
+            ));
+        }
+        if !(self.min_interval.is_finite() && self.min_interval >= 0.0) {
+            return bad(format!(
+                "min_interval must be ≥ 0 s, got {}",
+                self.min_interval
             ));
         }
         if !(self.margin.is_finite() && self.margin >= 0.0) {

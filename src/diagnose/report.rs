@@ -244,7 +244,8 @@ pub fn run(
         .span()
         .filter(|s| replay.len() >= 2 && s.1 > s.0)
         .ok_or_else(|| DiagnoseError::TooLittleData("fewer than 2 wheel samples".into()))?;
-    let mut icp = icp_rows(m.motions, span, p.margin);
+    let merged = super::data::merge_motions(m.motions, p.min_interval);
+    let mut icp = icp_rows(&merged, span, p.margin);
     let mut gyro = gyro_rows(m.gyro, span, p.margin, p.gyro_window);
     // Outliers: far from the nominal model in robust σ units.
     let nominal = Extension::default();
@@ -320,7 +321,6 @@ pub fn run(
         step_range: (t_start - origin + 1.0, split - origin - 1.0),
         step_min_rows: 30,
     };
-    let sel = forward(train, &usable, &settings);
     // Held-out confirmation of the nested models, in order of selection.
     let sse = |x: &Extension, scale: &[f64; 4]| {
         let mut e: [Vec<f64>; 4] = Default::default();
@@ -329,37 +329,53 @@ pub fn run(
             .map(|g| e[g].iter().map(|v| (v / scale[g]).powi(2)).sum::<f64>())
             .sum::<f64>()
     };
-    let mut kept = 0;
-    for (k, step) in sel.steps.iter().enumerate() {
-        let prev = if k == 0 {
-            Extension::default()
-        } else {
-            Extension::from_effects(&sel.steps[k - 1].effects)
-        };
-        let drop =
-            sse(&prev, &step.scale) - sse(&Extension::from_effects(&step.effects), &step.scale);
-        if drop < p.heldout_margin {
-            break;
+    let confirmed = |sel: &super::select::Selection| {
+        let mut kept = 0;
+        for (k, step) in sel.steps.iter().enumerate() {
+            let prev = if k == 0 {
+                Extension::default()
+            } else {
+                Extension::from_effects(&sel.steps[k - 1].effects)
+            };
+            let drop =
+                sse(&prev, &step.scale) - sse(&Extension::from_effects(&step.effects), &step.scale);
+            if drop < p.heldout_margin {
+                break;
+            }
+            kept = k + 1;
         }
-        kept = k + 1;
-    }
+        kept
+    };
+    let cause = |f: &Fit, i: usize, delta_bic: f64| {
+        let (parameters, stderr) = named(f, i);
+        Cause {
+            effect: f.effects[i].name().to_string(),
+            parameters,
+            stderr,
+            delta_bic,
+        }
+    };
+    // An effect the held-out part does not confirm is vetoed and the
+    // selection restarts without it, so a spurious first choice (one that
+    // fits the training part by accident) cannot hide a real cause behind it.
+    let mut usable = usable;
+    let mut heldout_rejected: Vec<Cause> = Vec::new();
+    let (sel, kept) = loop {
+        let sel = forward(train, &usable, &settings);
+        let kept = confirmed(&sel);
+        if kept == sel.steps.len() {
+            break (sel, kept);
+        }
+        let f = &sel.steps[kept];
+        heldout_rejected.push(cause(f, kept, sel.delta_bic[kept]));
+        let name = f.effects[kept].name();
+        usable.retain(|c| c != name);
+    };
     let model: &Fit = if kept == 0 {
         &sel.nominal
     } else {
         &sel.steps[kept - 1]
     };
-    let last = sel.steps.last().unwrap_or(&sel.nominal);
-    let heldout_rejected: Vec<Cause> = (kept..last.effects.len())
-        .map(|i| {
-            let (parameters, stderr) = named(last, i);
-            Cause {
-                effect: last.effects[i].name().to_string(),
-                parameters,
-                stderr,
-                delta_bic: sel.delta_bic[i],
-            }
-        })
-        .collect();
     let xm = Extension::from_effects(&model.effects);
     // Gain on the held-out part, normalised by the final training scales.
     let scale = model.scale;

@@ -10,21 +10,61 @@ use crate::viz::report::{num, Report};
 use std::path::Path;
 
 /// Runs ICP on the recording and diagnoses the nominal model against it.
+/// A recording without wheel encoders but with the robot's own integrated
+/// odometry (classic CARMEN logs) is diagnosed through virtual wheel angles
+/// ([`diagnose::odometry::wheels_from_odometry`]): the causes then describe
+/// what that odometry gets wrong against scan matching.
 pub fn run(
     rec: &Recording,
     robot: &RobotConfig,
     icp_params: &crate::icp::IcpParams,
     params: &DiagnoseParams,
 ) -> Result<Diagnosis, PipelineError> {
-    if rec.wheels.len() < 2 {
+    let virtual_wheels;
+    let wheels = if rec.wheels.len() >= 2 {
+        &rec.wheels
+    } else if rec.odom.len() >= 2 {
+        virtual_wheels = diagnose::odometry::wheels_from_odometry(&rec.odom, robot);
+        &virtual_wheels
+    } else {
         return Err(crate::error::InputError::new(
             &rec.source,
-            "no wheel encoder data (JointState with the robot's wheel joints): nothing to replay",
+            "no wheel encoder data (JointState with the robot's wheel joints) and no odometry: nothing to replay",
         )
         .into());
-    }
+    };
     let icp_out = icp::run(rec, robot, icp_params)?;
-    let measured = Measured::new(rec, &icp_out.motions);
+    let mut measured = Measured::new(rec, &icp_out.motions);
+    measured.wheels = wheels;
+    // The nominal mount is the one ICP used (the recording's /tf_static
+    // when present), so `laser_offset` is relative to it.
+    let [x, y, yaw] = crate::geom::xyt(&icp::base_from_laser(rec, robot));
+    let robot = RobotConfig {
+        laser: crate::robot::LaserMount { x, y, yaw },
+        ..robot.clone()
+    };
+    diagnose::diagnose(&robot, &measured, params)
+        .map_err(|e| PipelineError::BadArgument(e.to_string()))
+}
+
+/// Diagnoses Censi et al.'s calibration tuples (`.tuple`: wheel rates and
+/// the laser's scan-matching displacement per interval). The laser motions
+/// enter with the robot file's laser mount as the nominal one, so
+/// `laser_offset` estimates the mount relative to it; σ per tuple is
+/// `sigma_xy` (m) and `sigma_theta` (rad), relative weights only (the
+/// diagnosis profiles each stream's scale).
+pub fn run_tuples(
+    tuples: &[crate::io::censi::CensiTuple],
+    robot: &RobotConfig,
+    params: &DiagnoseParams,
+) -> Result<Diagnosis, PipelineError> {
+    let (wheels, motions) = crate::io::censi::to_streams(tuples, &robot.laser.pose(), 1e-3, 1e-3);
+    let measured = Measured {
+        wheels: &wheels,
+        motions: &motions,
+        gyro: &[],
+        reference: &[],
+    };
     diagnose::diagnose(robot, &measured, params)
         .map_err(|e| PipelineError::BadArgument(e.to_string()))
 }
@@ -42,7 +82,7 @@ fn binned(x: &[f64], y: &[f64], n: usize) -> Vec<[f64; 2]> {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    if !(hi > lo) {
+    if hi <= lo {
         return Vec::new();
     }
     let mut sum = vec![(0.0, 0usize); n];
@@ -158,6 +198,36 @@ pub fn write_report(dir: &Path, name: &str, d: &Diagnosis) -> Result<(), Pipelin
         ("residual RMSE after", num(d.gain.heldout_rmse_after, 5)),
         ("relative gain", format!("{:.1} %", d.gain.relative * 100.0)),
     ]);
+    if let Some(t) = &d.gain.trajectory {
+        let mut kv = vec![(
+            "relative-pose error vs reference (m)",
+            format!(
+                "{} → {} ({} windows of {} s)",
+                num(t.rpe_before, 4),
+                num(t.rpe_after, 4),
+                t.windows,
+                t.window_s
+            ),
+        )];
+        if let (Some(b), Some(a)) = (t.ate_before, t.ate_after) {
+            kv.push((
+                "held-out ATE vs reference, 2D-aligned (m)",
+                format!("{} → {}", num(b, 4), num(a, 4)),
+            ));
+        }
+        r.kv(&kv);
+    }
+    if !d.heldout_rejected.is_empty() {
+        let names: Vec<&str> = d
+            .heldout_rejected
+            .iter()
+            .map(|c| c.effect.as_str())
+            .collect();
+        r.paragraph(&format!(
+            "Selected on the training part but not confirmed on the held-out part: {}.",
+            names.join(", ")
+        ));
+    }
     r.image("residuals.png", "Residuals before and after the extension.");
     r.image(
         "regressors.png",
