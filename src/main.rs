@@ -884,7 +884,8 @@ fn experiment(a: ExperimentArgs) -> anyhow::Result<()> {
     };
     let res = pipeline::experiment::run(&a.name, &inputs, &a.out)?;
     if a.json {
-        return print_json(&res.json);
+        out!("{}", res.json);
+        return Ok(());
     }
     out!("{}", res.summary);
     out!("written to {}", a.out.display());

@@ -7,6 +7,7 @@ mod classic_cli;
 mod classic_compare;
 mod classic_ga;
 mod classic_heading_pf;
+mod classic_literature;
 mod classic_seed_tables;
 mod classic_umbmark;
 mod cli;

@@ -56,7 +56,7 @@ pub fn laser_streams(
     for i in 1..t.len() {
         let (t0, t1) = (t.stamps[i - 1], t.stamps[i]);
         let dt = t1 - t0;
-        if !(dt > 0.0) {
+        if dt.is_nan() || dt <= 0.0 {
             continue;
         }
         let (ds, dth) = geom::arc_of_increment(&geom::between(&t.poses[i - 1], &t.poses[i]));

@@ -526,6 +526,27 @@ fn findings(rows: &[LiteratureRow]) -> Vec<String> {
     } else {
         format!("The Adaptive-PF is best on: {}.", won.join(", "))
     }];
+    // Seed 000's own comparison: against the DKF and no calibration.
+    let baselines: Vec<&LiteratureRow> = rows
+        .iter()
+        .filter(|r| matches!(r.method, ClassicMethod::Dkf | ClassicMethod::None))
+        .collect();
+    let beats: Vec<&str> = METRICS
+        .iter()
+        .filter(|(_, _, _, f)| baselines.iter().all(|b| f(apf) < f(b)))
+        .map(|m| m.0)
+        .collect();
+    head.push(format!(
+        "Against seed 000's own baselines (dkf, none) the Adaptive-PF is better on {} of {} \
+         metrics{}.",
+        beats.len(),
+        METRICS.len(),
+        if beats.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", beats.join(", "))
+        }
+    ));
     head.extend(out);
     head.push(
         "Its assumptions hold here by construction: laser velocities are unbiased with a known σ \

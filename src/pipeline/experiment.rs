@@ -86,8 +86,8 @@ pub struct ExperimentOutput {
     pub markdown: String,
     /// Human-readable summary for stdout.
     pub summary: String,
-    /// Content of `NAME.json`.
-    pub json: serde_json::Value,
+    /// Content of `NAME.json` (pretty-printed, fields in declaration order).
+    pub json: String,
 }
 
 fn bad(e: impl std::fmt::Display) -> PipelineError {
@@ -126,13 +126,12 @@ pub fn run(
         _ => monte_carlo(name, inp, &png)?,
     };
     write_text(out, format!("{name}.md"), &res.markdown)?;
-    let js = serde_json::to_string_pretty(&res.json).expect("experiment JSON serialises");
-    write_text(out, format!("{name}.json"), &js)?;
+    write_text(out, format!("{name}.json"), &res.json)?;
     Ok(res)
 }
 
-fn to_json<T: Serialize>(v: &T) -> serde_json::Value {
-    serde_json::to_value(v).expect("experiment results serialise")
+fn to_json<T: Serialize>(v: &T) -> String {
+    serde_json::to_string_pretty(v).expect("experiment results serialise")
 }
 
 fn monte_carlo(
@@ -400,7 +399,7 @@ fn heading_pf(inp: &ExperimentInputs<'_>, png: &Path) -> Result<ExperimentOutput
     Ok(ExperimentOutput {
         markdown: format!("# Seed 002 Table 2: GA calibration and heading fusion\n\n{md}"),
         summary: md,
-        json: serde_json::json!({ "rows": rows, "ga": ga, "params": p }),
+        json: to_json(&serde_json::json!({ "rows": rows, "ga": ga, "params": p })),
     })
 }
 
