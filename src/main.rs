@@ -500,18 +500,35 @@ fn read_recording(
     cfg: &Config,
     robot: &odocal::robot::RobotConfig,
 ) -> Result<odocal::recording::Recording, PipelineError> {
+    Ok(odocal::io::read_recording(path, &read_options(cfg, robot))?)
+}
+
+fn read_options(cfg: &Config, robot: &odocal::robot::RobotConfig) -> odocal::io::ReadOptions {
     let mut read = odocal::io::ReadOptions::for_robot(robot);
     read.topics = cfg.topics.clone();
-    Ok(odocal::io::read_recording(path, &read)?)
+    read
 }
 
 fn icp(a: IcpArgs) -> anyhow::Result<()> {
     let (cfg, robot) = load_common(&a.common)?;
     let start = std::time::Instant::now();
-    let rec = read_recording(&a.input, &cfg, &robot)?;
-    let out = pipeline::icp::run(&rec, &robot, &cfg.icp)?;
-    pipeline::icp::write(&out, &a.out, a.motions.as_deref())?;
-    let mut stats = out.stats.clone();
+    let (mut stats, path_length) = if odocal::io::stream::is_mcap(&a.input) {
+        // Bags stream through in flat memory, however long.
+        let out = pipeline::icp::run_file(
+            &a.input,
+            &read_options(&cfg, &robot),
+            &robot,
+            &cfg.icp,
+            &a.out,
+            a.motions.as_deref(),
+        )?;
+        (out.stats, out.path_length)
+    } else {
+        let rec = read_recording(&a.input, &cfg, &robot)?;
+        let out = pipeline::icp::run(&rec, &robot, &cfg.icp)?;
+        pipeline::icp::write(&out, &a.out, a.motions.as_deref())?;
+        (out.stats, out.trajectory.path_length())
+    };
     // Wall time of the whole command (decoding included), as users time it.
     stats.wall_s = start.elapsed().as_secs_f64();
     stats.pairs_per_s = stats.pairs as f64 / stats.wall_s.max(1e-9);
@@ -525,7 +542,7 @@ fn icp(a: IcpArgs) -> anyhow::Result<()> {
         stats.mean_iterations,
         stats.wall_s,
         stats.pairs_per_s,
-        out.trajectory.path_length(),
+        path_length,
         a.out.display()
     );
     Ok(())
@@ -549,6 +566,24 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         cfg.calib.seed = s;
     }
     let mut logger = rerun_logger(a.rrd.clone(), &a.connect, a.spawn)?;
+    if let Some(rec_path) = a
+        .input
+        .as_ref()
+        .filter(|p| logger.is_none() && odocal::io::stream::is_mcap(p))
+    {
+        // Bags stream through in flat memory, however long. (A Rerun
+        // recording of the run takes the in-memory path below.)
+        let summary = pipeline::calibrate::run_file(
+            rec_path,
+            &read_options(&cfg, &robot),
+            &robot,
+            &cfg.icp,
+            &cfg.calib,
+            &cfg.measurements,
+            &a.out,
+        )?;
+        return print_calibration(&summary, a.json, &a.out);
+    }
     let (input, rec, icp_out) = match (&a.input, &a.motions_csv, &a.wheels_csv) {
         (Some(rec_path), _, _) => {
             let rec = read_recording(rec_path, &cfg, &robot)?;
@@ -642,10 +677,17 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         }
     };
     pipeline::calibrate::write(&a.out, &run)?;
-    if a.json {
-        return print_json(&run.summary);
+    print_calibration(&run.summary, a.json, &a.out)
+}
+
+fn print_calibration(
+    s: &odocal::calib::CalibSummary,
+    json: bool,
+    out: &Path,
+) -> anyhow::Result<()> {
+    if json {
+        return print_json(s);
     }
-    let s = &run.summary;
     eprintln!(
         "{}: R_R {:.5} ± {:.5} m, R_L {:.5} ± {:.5} m, D {:.5} ± {:.5} m after {} steps ({:.3} ms/step)",
         s.method,
@@ -663,7 +705,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         s.multipliers.right_wheel_radius,
         s.multipliers.left_wheel_radius,
         s.multipliers.wheel_separation,
-        a.out.display()
+        out.display()
     );
     Ok(())
 }

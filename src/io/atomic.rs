@@ -1,12 +1,15 @@
 //! The one way odocal writes files: into a temporary file in the same
 //! directory, fsync, then rename over the target, so a failed or killed run
-//! leaves either the previous file or none, never a torn one.
+//! leaves either the previous file or none, never a torn one. A killed run
+//! may leave its temporary sibling `.NAME.tmp-PID`; the next write of `NAME`
+//! removes it.
 
 use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-fn temp_path(path: &Path) -> PathBuf {
+/// The temporary sibling `.NAME.tmp-PID` a write goes through before the rename.
+pub(crate) fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -24,6 +27,7 @@ where
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         fs::create_dir_all(dir)?;
     }
+    super::stream_out::remove_stale_temps(path);
     let tmp = temp_path(path);
     let result = (|| {
         let mut w = BufWriter::new(File::create(&tmp)?);

@@ -22,28 +22,33 @@ pub fn write_motions(path: &Path, motions: &[Motion]) -> io::Result<()> {
     write_atomic(path, |w| {
         writeln!(w, "{MOTIONS_HEADER}")?;
         for m in motions {
-            let c = &m.cov;
-            writeln!(
-                w,
-                "{:.9},{:.9},{:.9},{:.9},{:.9},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{}",
-                m.t0,
-                m.t1,
-                m.dx,
-                m.dy,
-                m.dtheta,
-                c[(0, 0)],
-                c[(0, 1)],
-                c[(0, 2)],
-                c[(1, 1)],
-                c[(1, 2)],
-                c[(2, 2)],
-                m.iterations,
-                m.inliers,
-                u8::from(m.is_valid())
-            )?;
+            write_motion_row(w, m)?;
         }
         Ok(())
     })
+}
+
+/// One line of the motions CSV (after [`MOTIONS_HEADER`]).
+pub fn write_motion_row(w: &mut impl Write, m: &Motion) -> io::Result<()> {
+    let c = &m.cov;
+    writeln!(
+        w,
+        "{:.9},{:.9},{:.9},{:.9},{:.9},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{}",
+        m.t0,
+        m.t1,
+        m.dx,
+        m.dy,
+        m.dtheta,
+        c[(0, 0)],
+        c[(0, 1)],
+        c[(0, 2)],
+        c[(1, 1)],
+        c[(1, 2)],
+        c[(2, 2)],
+        m.iterations,
+        m.inliers,
+        u8::from(m.is_valid())
+    )
 }
 
 fn numbers(line: &str, n: usize, file: &str, lineno: usize) -> Result<Vec<f64>, InputError> {
@@ -200,14 +205,19 @@ pub fn write_history(path: &Path, rows: impl IntoIterator<Item = HistoryFields>)
     write_atomic(path, |w| {
         writeln!(w, "{HISTORY_HEADER}")?;
         for r in rows {
-            writeln!(
-                w,
-                "{:.6},{:.9},{:.9},{:.9},{:e},{:e},{:e},{},{:e}",
-                r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7] as u64, r[8]
-            )?;
+            write_history_row(w, &r)?;
         }
         Ok(())
     })
+}
+
+/// One line of the calibration history CSV (after [`HISTORY_HEADER`]).
+pub fn write_history_row(w: &mut impl Write, r: &HistoryFields) -> io::Result<()> {
+    writeln!(
+        w,
+        "{:.6},{:.9},{:.9},{:.9},{:e},{:e},{:e},{},{:e}",
+        r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7] as u64, r[8]
+    )
 }
 
 #[cfg(test)]

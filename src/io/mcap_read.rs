@@ -180,7 +180,10 @@ fn truncated(bytes: &[u8], file: &str, e: mcap::McapError) -> InputError {
 
 /// The roles a channel plays; a configured topic with an unexpected schema is
 /// an error, other topics are ignored.
-fn channel_roles(ch: &mcap::Channel<'_>, opts: &ReadOptions) -> Result<Vec<Role>, String> {
+pub(crate) fn channel_roles(
+    ch: &mcap::Channel<'_>,
+    opts: &ReadOptions,
+) -> Result<Vec<Role>, String> {
     let t = &opts.topics;
     let schema = ch
         .schema

@@ -46,7 +46,7 @@ enum WheelMode {
 /// Streams being collected, with the latest stamp seen per stream (and
 /// whether it was a log time) for the time-order check.
 pub(crate) struct State<'a> {
-    file: &'a str,
+    file: String,
     opts: &'a ReadOptions,
     rec: Recording,
     latest: HashMap<&'static str, (f64, bool)>,
@@ -102,9 +102,9 @@ fn pose_of(p: &super::ros_msgs::Pose) -> Result<(Pose2, bool), String> {
 }
 
 impl<'a> State<'a> {
-    pub(crate) fn new(file: &'a str, opts: &'a ReadOptions) -> Self {
+    pub(crate) fn new(file: &str, opts: &'a ReadOptions) -> Self {
         Self {
-            file,
+            file: file.to_string(),
             opts,
             rec: Recording {
                 source: file.to_string(),
@@ -308,6 +308,17 @@ impl<'a> State<'a> {
         Ok(())
     }
 
+    /// The samples decoded so far, for a streaming reader to drain after
+    /// each message.
+    pub(crate) fn decoded(&mut self) -> &mut Recording {
+        &mut self.rec
+    }
+
+    /// Whether the wheel joints carry rates (rad/s) rather than angles.
+    pub(crate) fn wheel_rates(&self) -> bool {
+        self.wheel_mode == Some(WheelMode::Velocities)
+    }
+
     /// Sorts, integrates wheel rates if needed and resolves the laser mount.
     pub(crate) fn finish(mut self) -> Result<Recording, InputError> {
         self.rec.sort_streams();
@@ -332,7 +343,7 @@ impl<'a> State<'a> {
         if let Some(laser) = &self.laser_frame {
             self.rec.base_from_laser = self
                 .base_from(laser)
-                .map_err(|m| InputError::new(self.file, m).topic(&self.opts.topics.tf_static))?;
+                .map_err(|m| InputError::new(&self.file, m).topic(&self.opts.topics.tf_static))?;
         }
         Ok(self.rec)
     }

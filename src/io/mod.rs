@@ -47,6 +47,11 @@ pub mod relations;
 pub mod ros_msgs;
 pub mod ros_schema;
 pub mod seed_tables;
+pub mod stream;
+pub mod stream_icp;
+pub mod stream_out;
+pub mod stream_run;
+pub mod stream_steps;
 pub mod tum;
 
 pub use carmen::read_carmen;

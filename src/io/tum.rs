@@ -95,10 +95,18 @@ pub fn write_tum(path: &Path, traj: &Trajectory3) -> io::Result<()> {
 /// Writes a planar trajectory as TUM text (z = 0, rotation about z), atomically.
 pub fn write_tum_2d(path: &Path, traj: &Trajectory) -> io::Result<()> {
     write_atomic(path, |w| {
-        writeln!(w, "# timestamp tx ty tz qx qy qz qw")?;
+        writeln!(w, "{TUM_HEADER}")?;
         for (t, p) in traj.stamps.iter().zip(&traj.poses) {
-            write_line(w, *t, &pose3_from_2d(p))?;
+            write_pose_2d(w, *t, p)?;
         }
         Ok(())
     })
+}
+
+/// The comment line that starts every TUM file odocal writes.
+pub const TUM_HEADER: &str = "# timestamp tx ty tz qx qy qz qw";
+
+/// One TUM line of a planar pose at `t` (s), as [`write_tum_2d`] writes it.
+pub fn write_pose_2d(w: &mut impl Write, t: f64, p: &crate::geom::Pose2) -> io::Result<()> {
+    write_line(w, t, &pose3_from_2d(p))
 }

@@ -114,3 +114,24 @@ pub fn write(dir: &Path, run: &CalibrationRun) -> Result<(), PipelineError> {
         .map_err(|e| PipelineError::write(&js, e))?;
     Ok(())
 }
+
+/// Streams the MCAP bag at `input` through ICP and the configured calibrator
+/// in flat memory, writing what [`write`] writes into `dir`; same numbers as
+/// [`run`] on the read recording (timings aside).
+pub fn run_file(
+    input: &Path,
+    read: &crate::io::ReadOptions,
+    robot: &RobotConfig,
+    icp: &crate::icp::IcpParams,
+    params: &CalibParams,
+    meas: &MeasurementConfig,
+    dir: &Path,
+) -> Result<calib::CalibSummary, PipelineError> {
+    let gyro = crate::io::stream_run::GyroUse {
+        use_gyro: meas.use_gyro,
+        gyro_sigma: meas.gyro_sigma,
+    };
+    let params = params_for_robot(params, robot);
+    crate::io::stream_run::calibrate_file(input, read, robot, icp, &params, gyro, dir)
+        .map_err(super::icp::stream_error)
+}

@@ -90,3 +90,28 @@ pub fn write(out: &IcpOutput, tum: &Path, motions_csv: Option<&Path>) -> Result<
     }
     Ok(())
 }
+
+/// Streams the MCAP bag at `input` through ICP in flat memory and writes the
+/// trajectory (TUM) and, if asked, the motions CSV as [`write`] does; same
+/// numbers as [`run`] on the read recording.
+pub fn run_file(
+    input: &Path,
+    read: &crate::io::ReadOptions,
+    robot: &RobotConfig,
+    params: &IcpParams,
+    tum: &Path,
+    motions_csv: Option<&Path>,
+) -> Result<crate::io::stream_run::IcpRunSummary, PipelineError> {
+    crate::io::stream_run::icp_file(input, read, robot, params, tum, motions_csv)
+        .map_err(stream_error)
+}
+
+/// The pipeline error for a streamed run's failure.
+pub(crate) fn stream_error(e: crate::io::stream_run::StreamError) -> PipelineError {
+    use crate::io::stream_run::StreamError;
+    match e {
+        StreamError::Input(e) => PipelineError::Input(e),
+        StreamError::BadArgument(m) => PipelineError::BadArgument(m),
+        StreamError::Write { path, source } => PipelineError::write(&path, source),
+    }
+}

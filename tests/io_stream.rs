@@ -1,0 +1,361 @@
+//! The streaming path against the in-memory one: the same samples from the
+//! bag reader (also for out-of-order bags and rate-only wheels), and the same
+//! output files from `icp` and `calibrate` on the bundled recording and on
+//! real data.
+
+use crate::support::{scratch, shared_data};
+use odocal::io::cdr::CdrWriter;
+use odocal::io::ros_msgs::{Header, ImuMsg, JointStateMsg, RosMsg, Time, Vec3};
+use odocal::io::stream::{Item, McapStream};
+use odocal::io::{read_recording, ReadOptions};
+use odocal::pipeline::{self, Config};
+use odocal::recording::Recording;
+use odocal::robot::RobotConfig;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+const BUNDLED: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scans/wheelchair-corridor.mcap"
+);
+
+/// Every item of the streamed bag, gathered per stream.
+fn streamed(path: &Path, opts: &ReadOptions) -> Recording {
+    let mut s = McapStream::open(path, opts).unwrap();
+    let mut rec = Recording {
+        source: path.display().to_string(),
+        base_from_laser: s.info().base_from_laser,
+        ..Default::default()
+    };
+    while let Some(item) = s.next_item().unwrap() {
+        match item {
+            Item::Scan(x) => rec.scans.push(x),
+            Item::Wheel(x) => rec.wheels.push(x),
+            Item::Gyro(x) => rec.gyro.push(x),
+            Item::Odom(x) => rec.odom.push(x),
+            Item::Reference(x) => rec.reference.push(x),
+        }
+    }
+    rec
+}
+
+/// Equal streams (bit for bit: NaN ranges count as equal, so the Debug
+/// texts are compared), or a short message naming the first difference.
+fn same<T: std::fmt::Debug>(a: &[T], b: &[T], what: &str, stamp: impl Fn(&T) -> f64) {
+    let first = a
+        .iter()
+        .zip(b)
+        .position(|(x, y)| format!("{x:?}") != format!("{y:?}"));
+    assert!(
+        a.len() == b.len() && first.is_none(),
+        "{what}: {} vs {} items, first difference at {:?} (stamps {:?} vs {:?})",
+        a.len(),
+        b.len(),
+        first,
+        first.map(|i| stamp(&a[i])),
+        first.map(|i| stamp(&b[i])),
+    );
+}
+
+fn assert_same_recording(a: &Recording, b: &Recording, what: &str) {
+    same(&a.scans, &b.scans, &format!("{what}: scans"), |s| s.stamp);
+    same(&a.wheels, &b.wheels, &format!("{what}: wheels"), |s| {
+        s.stamp
+    });
+    same(&a.gyro, &b.gyro, &format!("{what}: gyro"), |s| s.stamp);
+    same(&a.odom, &b.odom, &format!("{what}: odom"), |s| s.stamp);
+    same(
+        &a.reference,
+        &b.reference,
+        &format!("{what}: reference"),
+        |s| s.stamp,
+    );
+    assert_eq!(a.base_from_laser, b.base_from_laser, "{what}: laser mount");
+}
+
+/// Real bags with their joint names (robot files beside the data).
+fn real_bags(test: &str) -> Vec<(PathBuf, ReadOptions)> {
+    let Some(data) = shared_data(test) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for (bag, robot) in [
+        ("lego-robot/lego-robot.mcap", "lego-robot.toml"),
+        ("mines-rover/exp1.mcap", "mines-rover.toml"),
+        ("slam-benchmark/mit-csail.mcap", ""),
+    ] {
+        if test == "streamed_icp_matches_on_real_bags" && robot.is_empty() {
+            continue; // Too long for a debug-mode test; its reader is checked.
+        }
+        let robot_file = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scans/robots")
+            .join(robot);
+        let robot = if robot.is_empty() || !robot_file.is_file() {
+            RobotConfig::default()
+        } else {
+            pipeline::load_robot(Some(&robot_file)).unwrap()
+        };
+        out.push((data.join(bag), ReadOptions::for_robot(&robot)));
+    }
+    out
+}
+
+#[test]
+fn stream_yields_exactly_what_read_recording_reads() {
+    let mut bags = vec![(PathBuf::from(BUNDLED), ReadOptions::default())];
+    bags.extend(real_bags("stream_yields_exactly_what_read_recording_reads"));
+    for (bag, opts) in bags {
+        let whole = read_recording(&bag, &opts).unwrap();
+        let s = streamed(&bag, &opts);
+        assert!(whole.scans.len() > 100, "{}", bag.display());
+        assert_same_recording(&s, &whole, &bag.display().to_string());
+    }
+}
+
+/// A bag whose gyro and wheel (rates only) messages are written out of stamp
+/// order, up to `jitter` seconds back.
+fn shuffled_bag(path: &Path, jitter: f64) {
+    let mut w = mcap::WriteOptions::new()
+        .profile("ros2")
+        .create(std::io::BufWriter::new(
+            std::fs::File::create(path).unwrap(),
+        ))
+        .unwrap();
+    let mut channel = BTreeMap::new();
+    for (topic, ty) in [
+        ("/imu", ImuMsg::TYPE),
+        ("/joint_states", JointStateMsg::TYPE),
+    ] {
+        let text = odocal::io::ros_schema::schema_text(ty).unwrap();
+        let schema = w.add_schema(ty, "ros2msg", text.as_bytes()).unwrap();
+        channel.insert(
+            topic,
+            w.add_channel(schema, topic, "cdr", &BTreeMap::new())
+                .unwrap(),
+        );
+    }
+    let robot = RobotConfig::default();
+    let mut cdr = CdrWriter::new();
+    let mut seq = 0u32;
+    // Stamps at 100 Hz, written in blocks of 37 reversed (0.36 s back).
+    assert!(0.36 < jitter);
+    let order = (0..2000u32)
+        .collect::<Vec<_>>()
+        .chunks(37)
+        .flat_map(|c| c.iter().rev().copied().collect::<Vec<_>>())
+        .collect::<Vec<_>>();
+    for j in order {
+        let t = 10.0 + j as f64 * 0.01;
+        let header = Header {
+            stamp: Time::from_seconds(t),
+            frame_id: "base_link".into(),
+        };
+        for topic in ["/imu", "/joint_states"] {
+            cdr.clear();
+            if topic == "/imu" {
+                ImuMsg {
+                    header: header.clone(),
+                    angular_velocity: Vec3 {
+                        x: 0.0,
+                        y: 0.0,
+                        z: (t * 0.7).sin(),
+                    },
+                    ..Default::default()
+                }
+                .write(&mut cdr);
+            } else {
+                JointStateMsg {
+                    header: header.clone(),
+                    name: vec![robot.left_joint.clone(), robot.right_joint.clone()],
+                    position: Vec::new(),
+                    velocity: vec![1.0 + (t * 0.3).cos(), 2.0 + (t * 0.2).sin()],
+                    effort: Vec::new(),
+                }
+                .write(&mut cdr);
+            }
+            seq += 1;
+            let log_time = (t * 1e9) as u64;
+            w.write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id: channel[topic],
+                    sequence: seq,
+                    log_time,
+                    publish_time: log_time,
+                },
+                cdr.bytes(),
+            )
+            .unwrap();
+        }
+    }
+    w.finish().unwrap();
+}
+
+#[test]
+fn stream_sorts_out_of_order_bags_like_the_whole_file_reader() {
+    let d = scratch("stream_sorts_out_of_order");
+    let bag = d.join("shuffled.mcap");
+    shuffled_bag(&bag, 0.5);
+    let opts = ReadOptions::default();
+    let whole = read_recording(&bag, &opts).unwrap();
+    assert_eq!(whole.gyro.len(), 2000);
+    assert!(whole.gyro.windows(2).all(|w| w[1].stamp > w[0].stamp));
+    // Rates were integrated into angles after sorting.
+    assert!(whole.wheels.last().unwrap().right > 30.0);
+    let s = streamed(&bag, &opts);
+    assert_same_recording(&s, &whole, "shuffled");
+    // A window shorter than the disorder is refused by both readers alike.
+    let tight = ReadOptions {
+        reorder_tolerance: 0.1,
+        ..ReadOptions::default()
+    };
+    let e1 = read_recording(&bag, &tight).unwrap_err();
+    let e2 = McapStream::open(&bag, &tight)
+        .and_then(|mut s| {
+            while s.next_item()?.is_some() {}
+            Ok(())
+        })
+        .unwrap_err();
+    assert_eq!(e1.to_string(), e2.to_string());
+    assert!(e1.to_string().contains("backwards"), "{e1}");
+}
+
+fn config() -> (Config, RobotConfig) {
+    let cfg = Config::load(None).unwrap();
+    (cfg, RobotConfig::default())
+}
+
+fn read_opts(cfg: &Config, robot: &RobotConfig) -> ReadOptions {
+    let mut r = ReadOptions::for_robot(robot);
+    r.topics = cfg.topics.clone();
+    r
+}
+
+fn same_file(a: &Path, b: &Path) {
+    let (x, y) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+    assert!(x.len() > 100, "{} is empty", a.display());
+    assert!(x == y, "{} and {} differ", a.display(), b.display());
+}
+
+#[test]
+fn streamed_icp_and_calibration_write_the_same_files_as_the_in_memory_run() {
+    let (cfg, robot) = config();
+    let read = read_opts(&cfg, &robot);
+    let d = scratch("streamed_same_files");
+    let bag = Path::new(BUNDLED);
+    let rec = read_recording(bag, &read).unwrap();
+    let whole = pipeline::icp::run(&rec, &robot, &cfg.icp).unwrap();
+    pipeline::icp::write(&whole, &d.join("a.tum"), Some(&d.join("a.csv"))).unwrap();
+    let s = pipeline::icp::run_file(
+        bag,
+        &read,
+        &robot,
+        &cfg.icp,
+        &d.join("b.tum"),
+        Some(&d.join("b.csv")),
+    )
+    .unwrap();
+    same_file(&d.join("a.tum"), &d.join("b.tum"));
+    same_file(&d.join("a.csv"), &d.join("b.csv"));
+    assert_eq!(s.stats.pairs, whole.stats.pairs);
+    assert_eq!(s.stats.failed_pairs, whole.stats.failed_pairs);
+    assert_eq!(s.stats.failures, whole.stats.failures);
+    assert_eq!(s.stats.mean_iterations, whole.stats.mean_iterations);
+    assert_eq!(s.path_length, whole.trajectory.path_length());
+    assert_eq!(s.poses, whole.trajectory.len());
+    assert!(whole.stats.pairs > 500);
+
+    // The adaptive particle filter (fewer particles to keep the test short).
+    let mut params = cfg.calib.clone();
+    params.particles = Some(300);
+    let input = pipeline::calibrate::CalibInput {
+        observations: whole.observations(),
+        wheels: rec.wheels.clone(),
+        gyro: rec.gyro.clone(),
+    };
+    assert!(!input.gyro.is_empty(), "the gyro enters the steps");
+    let mem = pipeline::calibrate::run(&input, &robot, &params, &cfg.measurements).unwrap();
+    let (a, b) = (d.join("cal-a"), d.join("cal-b"));
+    pipeline::calibrate::write(&a, &mem).unwrap();
+    let s =
+        pipeline::calibrate::run_file(bag, &read, &robot, &cfg.icp, &params, &cfg.measurements, &b)
+            .unwrap();
+    same_file(&a.join("calibration.csv"), &b.join("calibration.csv"));
+    same_file(&a.join("trajectory.tum"), &b.join("trajectory.tum"));
+    let mut expect = mem.summary.clone();
+    expect.mean_iteration_ms = s.mean_iteration_ms;
+    assert_eq!(s, expect);
+    assert!(s.iterations > 500);
+}
+
+/// A short simulated bag (library simulator, written as `odocal simulate` does).
+fn short_bag(d: &Path, seconds: f64) -> PathBuf {
+    let (mut cfg, robot) = config();
+    cfg.sim.duration_s = seconds;
+    cfg.sim.scenario.name = "square".into();
+    let out = d.join("short.mcap");
+    pipeline::simulate::run(&cfg.sim, &cfg.topics, &robot, &[], &out, None, &mut |_| {}).unwrap();
+    out
+}
+
+#[test]
+fn streamed_kalman_calibration_matches_without_and_with_gyro() {
+    let (cfg, robot) = config();
+    let read = read_opts(&cfg, &robot);
+    let d = scratch("streamed_kalman_calibration");
+    let bag = short_bag(&d, 8.0);
+    let rec = read_recording(&bag, &read).unwrap();
+    let whole = pipeline::icp::run(&rec, &robot, &cfg.icp).unwrap();
+    for (k, use_gyro) in [false, true].into_iter().enumerate() {
+        let mut params = cfg.calib.clone();
+        params.method = odocal::calib::Method::Dkf;
+        let meas = pipeline::calibrate::MeasurementConfig {
+            use_gyro,
+            ..cfg.measurements
+        };
+        let input = pipeline::calibrate::CalibInput {
+            observations: whole.observations(),
+            wheels: rec.wheels.clone(),
+            gyro: rec.gyro.clone(),
+        };
+        let mem = pipeline::calibrate::run(&input, &robot, &params, &meas).unwrap();
+        let (a, b) = (d.join(format!("a{k}")), d.join(format!("b{k}")));
+        pipeline::calibrate::write(&a, &mem).unwrap();
+        let s = pipeline::calibrate::run_file(&bag, &read, &robot, &cfg.icp, &params, &meas, &b)
+            .unwrap();
+        same_file(&a.join("calibration.csv"), &b.join("calibration.csv"));
+        same_file(&a.join("trajectory.tum"), &b.join("trajectory.tum"));
+        assert_eq!(s.final_params, mem.summary.final_params);
+        assert_eq!(s.iterations, mem.summary.iterations);
+    }
+}
+
+#[test]
+fn streamed_icp_matches_on_real_bags() {
+    let (cfg, _) = config();
+    let d = scratch("streamed_icp_matches_on_real_bags");
+    for (k, (bag, read)) in real_bags("streamed_icp_matches_on_real_bags")
+        .into_iter()
+        .enumerate()
+    {
+        let robot = RobotConfig {
+            left_joint: read.left_joint.clone(),
+            right_joint: read.right_joint.clone(),
+            ..RobotConfig::default()
+        };
+        let rec = read_recording(&bag, &read).unwrap();
+        let whole = pipeline::icp::run(&rec, &robot, &cfg.icp).unwrap();
+        let (a, b) = (d.join(format!("a{k}.csv")), d.join(format!("b{k}.csv")));
+        pipeline::icp::write(&whole, &d.join(format!("a{k}.tum")), Some(&a)).unwrap();
+        pipeline::icp::run_file(
+            &bag,
+            &read,
+            &robot,
+            &cfg.icp,
+            &d.join(format!("b{k}.tum")),
+            Some(&b),
+        )
+        .unwrap();
+        same_file(&a, &b);
+        same_file(&d.join(format!("a{k}.tum")), &d.join(format!("b{k}.tum")));
+    }
+}
