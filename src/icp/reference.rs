@@ -49,6 +49,10 @@ pub struct Reference {
     window: usize,
     /// Mean squared fit distances of the lines (scratch for the median).
     scatter: Vec<f64>,
+    /// Prefix sums of x, y, x², xy, y² along one surface (scratch).
+    prefix: Vec<[f64; 5]>,
+    /// Score and fit of every window along one surface (scratch).
+    windows: Vec<(f64, Fit)>,
 }
 
 /// The closest point of the reference surface to a query.
@@ -164,6 +168,10 @@ impl Reference {
             while end + 1 < n && self.link[end] {
                 end += 1;
             }
+            if end > start {
+                let m = k.min(end - start);
+                self.fit_windows(start, end, m);
+            }
             for j in start..=end {
                 if end == start {
                     break;
@@ -173,8 +181,7 @@ impl Reference {
                 let lo_last = j.min(end - m);
                 let mut best: Option<(f64, Fit)> = None;
                 for a in lo_first..=lo_last {
-                    let f = fit(&self.pts[a..=a + m]);
-                    let score = if m >= 2 { f.ss / (m - 1) as f64 } else { 0.0 };
+                    let (score, f) = self.windows[a - start];
                     if best.as_ref().is_none_or(|(s, _)| score < *s) {
                         best = Some((score, f));
                     }
@@ -212,6 +219,48 @@ impl Reference {
             if l.score > limit {
                 l.ok = false;
             }
+        }
+    }
+
+    /// Fits every window of `m + 1` consecutive points of the surface
+    /// `start..=end` from prefix sums (O(1) per window, whatever `m`), into
+    /// `self.windows[a - start]`, with its score (mean squared distance from
+    /// the line, m²).
+    fn fit_windows(&mut self, start: usize, end: usize, m: usize) {
+        let o = self.pts[start];
+        self.prefix.clear();
+        let mut acc = [0.0; 5];
+        self.prefix.push(acc);
+        for p in &self.pts[start..=end] {
+            let (x, y) = (p[0] - o[0], p[1] - o[1]);
+            acc = [
+                acc[0] + x,
+                acc[1] + y,
+                acc[2] + x * x,
+                acc[3] + x * y,
+                acc[4] + y * y,
+            ];
+            self.prefix.push(acc);
+        }
+        self.windows.clear();
+        let n = (m + 1) as f64;
+        for a in 0..=(end - start - m) {
+            let (lo, hi) = (self.prefix[a], self.prefix[a + m + 1]);
+            let d: [f64; 5] = std::array::from_fn(|i| hi[i] - lo[i]);
+            let (cx, cy) = (d[0] / n, d[1] / n);
+            let sxx = (d[2] - n * cx * cx).max(0.0);
+            let sxy = d[3] - n * cx * cy;
+            let syy = (d[4] - n * cy * cy).max(0.0);
+            let ss = 0.5 * (sxx + syy - ((sxx - syy).powi(2) + 4.0 * sxy * sxy).sqrt());
+            let f = Fit {
+                c: [o[0] + cx, o[1] + cy],
+                sxx,
+                sxy,
+                syy,
+                ss: ss.max(0.0),
+            };
+            let score = if m >= 2 { f.ss / (m - 1) as f64 } else { 0.0 };
+            self.windows.push((score, f));
         }
     }
 
@@ -305,6 +354,7 @@ impl Reference {
 }
 
 /// A total-least-squares line through some points.
+#[derive(Debug, Clone, Copy, Default)]
 struct Fit {
     /// Centroid (m).
     c: [f64; 2],
@@ -336,6 +386,8 @@ impl Fit {
     }
 }
 
+/// Direct two-pass fit: the reference the prefix-sum fits are checked against.
+#[cfg(test)]
 fn fit(pts: &[[f64; 2]]) -> Fit {
     let m = pts.len() as f64;
     let o = pts[0];
@@ -365,6 +417,34 @@ fn fit(pts: &[[f64; 2]]) -> Fit {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn prefix_sum_window_fits_equal_direct_fits() {
+        // A noisy wall 12 m away: the prefix sums must not lose the mm-scale
+        // scatter to cancellation.
+        let pts: Vec<[f64; 2]> = (0..40)
+            .map(|i| {
+                let e = 0.01 * ((i * 7919) % 13) as f64 / 13.0 - 0.005;
+                [12.0 + e, -3.0 + 0.05 * i as f64]
+            })
+            .collect();
+        let mut r = Reference::new(4);
+        r.pts = pts.clone();
+        r.link = vec![true; pts.len()];
+        r.fit_windows(3, 30, 4);
+        assert_eq!(r.windows.len(), 30 - 3 - 4 + 1);
+        for (a, (score, f)) in r.windows.iter().enumerate() {
+            let g = fit(&pts[3 + a..=3 + a + 4]);
+            assert!((f.c[0] - g.c[0]).abs() < 1e-12 && (f.c[1] - g.c[1]).abs() < 1e-12);
+            assert!(
+                (f.ss - g.ss).abs() < 1e-12 * (1.0 + g.sxx + g.syy),
+                "{} {}",
+                f.ss,
+                g.ss
+            );
+            assert!((score - g.ss / 3.0).abs() < 1e-11);
+        }
+    }
 
     #[test]
     fn closest_point_lies_on_the_fitted_line() {
