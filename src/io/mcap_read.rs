@@ -112,6 +112,8 @@ pub fn read_mcap_bytes(
     if let Err(e) = mcap::read::footer(bytes) {
         return Err(truncated(bytes, file, e));
     }
+    super::mcap_guard::check_chunk_sizes(bytes, false)
+        .map_err(|m| InputError::new(file, m).at("after 0 messages"))?;
     let mut stream = mcap::read::RawMessageStream::new(bytes).map_err(|e| mcap_err(e, 0))?;
     let mut st = State::new(file, opts);
     let mut total = 0usize;
@@ -150,10 +152,14 @@ pub fn read_mcap_bytes(
 /// The error for a file without a valid footer: names the last message that
 /// could still be read (topic and per-topic index), so the cut can be found.
 fn truncated(bytes: &[u8], file: &str, e: mcap::McapError) -> InputError {
-    let lenient = mcap::read::RawMessageStream::new_with_options(
-        bytes,
-        mcap::read::Options::IgnoreEndMagic.into(),
-    );
+    let lenient = super::mcap_guard::check_chunk_sizes(bytes, true)
+        .map_err(|_| mcap::McapError::UnexpectedEof)
+        .and_then(|_| {
+            mcap::read::RawMessageStream::new_with_options(
+                bytes,
+                mcap::read::Options::IgnoreEndMagic.into(),
+            )
+        });
     let mut last: Option<(String, usize)> = None;
     let mut counts: HashMap<u16, usize> = HashMap::new();
     if let Ok(mut stream) = lenient {

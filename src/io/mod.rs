@@ -40,6 +40,7 @@ mod columns;
 pub mod csv;
 pub mod kitti;
 pub mod mcap_canon;
+mod mcap_guard;
 pub mod mcap_read;
 mod mcap_streams;
 pub mod mcap_write;
