@@ -146,7 +146,6 @@ fn degenerate_measurements_never_produce_nan() {
 }
 
 #[test]
-#[ignore = "known gap: with α = 1e-4 (seed 000) σ_ε stays at µm per step and a 4 mm step is not re-tracked within 35 s"]
 fn a_radius_step_mid_run_is_retracked() {
     let step = RadiusStep {
         time: 25.0,
@@ -154,7 +153,14 @@ fn a_radius_step_mid_run_is_retracked() {
         left: 0.002,
     };
     let (d, st) = synth(21, 60.0, Some(step));
-    let r = calibrate(Method::AdaptivePf, 21, &st);
+    let p = CalibParams {
+        seed: 21,
+        ..Default::default()
+    };
+    let mut pf = ParticleFilter::new(&p);
+    let r = run(&mut pf, &st, NOMINAL);
+    // The change detector fired after the step, not before it.
+    assert!(pf.jumps() >= 1, "the jump went unnoticed");
     let f = r.final_drive();
     let k = d.truth_at(60.0);
     let before = r.history.iter().rfind(|h| h.t < 25.0).unwrap();
@@ -205,4 +211,62 @@ fn run_reports_design_keys_and_multipliers() {
         (params.method, params.resampler, params.trigger),
         (Method::Akf, Scheme::Residual, Trigger::MaxWeight)
     );
+}
+
+#[test]
+fn the_change_detector_stays_quiet_without_a_change() {
+    for seed in [11u64, 12, 13] {
+        let (d, st) = synth(seed, 60.0, None);
+        let p = CalibParams {
+            seed,
+            ..Default::default()
+        };
+        let mut pf = ParticleFilter::new(&p);
+        let r = run(&mut pf, &st, NOMINAL);
+        assert_eq!(pf.jumps(), 0, "seed {seed}: false alarm");
+        let f = r.final_drive();
+        assert!((f.r_right - d.truth.r_right).abs() < 1e-3);
+    }
+}
+
+/// Turns for 20 s (D becomes known), then drives straight for 60 s, where W
+/// carries no information about D: no filter may let D wander.
+#[test]
+fn wheel_base_holds_still_where_it_is_unobservable() {
+    let p = SynthParams {
+        duration: 80.0,
+        straight_from: Some(20.0),
+        ..Default::default()
+    };
+    let seed = 31;
+    let d = generate(&p, draw_truth(seed), seed);
+    let st = steps(&d.obs, &d.wheels, &d.gyro, p.gyro_sigma);
+    let mut failed = vec![];
+    for m in [Method::AdaptivePf, Method::Pf, Method::Dkf, Method::Akf] {
+        let r = calibrate(m, seed, &st);
+        let at = |t: f64| r.history.iter().rfind(|h| h.t <= t).unwrap().wheel_base;
+        let (d20, dend) = (at(20.0), at(80.0));
+        let wander = r
+            .history
+            .iter()
+            .filter(|h| h.t > 20.0)
+            .map(|h| (h.wheel_base - d20).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{}: D at 20 s {:.4}, end {:.4}, truth {:.4}, max wander {:.2} mm",
+            m.as_str(),
+            d20,
+            dend,
+            d.truth.wheel_base,
+            wander * 1e3
+        );
+        // The fixed-noise `pf` (seed 000's σ = 0.5 mm per step on every
+        // parameter) never settles D even while turning; it is held to a
+        // looser bound than the filters that converge.
+        let bound = if m == Method::Pf { 0.03 } else { 5e-3 };
+        if wander >= bound {
+            failed.push(format!("{}: D wandered {wander} m", m.as_str()));
+        }
+    }
+    assert!(failed.is_empty(), "{failed:?}");
 }

@@ -1,8 +1,9 @@
 //! Augmented extended Kalman filter: state [V, W, R_R, R_L, D], the
 //! parameters as random walks, V and W re-predicted from the wheel rates.
 
-use super::kalman::{model, prior};
+use super::kalman::{model, observability, prior, turn_rate_for_observability};
 use super::params::CalibParams;
+use super::robust::student_t_weight;
 use super::steps::{usable, CalibStep, Kind};
 use super::{Calibrator, Estimate};
 use nalgebra::{SMatrix, SVector, Vector3};
@@ -17,6 +18,8 @@ pub struct AugmentedKf {
     p: M5,
     q: V5,
     floor: f64,
+    dof: f64,
+    w_obs: f64,
 }
 
 impl AugmentedKf {
@@ -40,6 +43,8 @@ impl AugmentedKf {
             p,
             q: V5::new(qv, qv, qp, qp, qp),
             floor: params.noise.sigma_floor,
+            dof: params.noise.robust_dof,
+            w_obs: params.noise.observability_turn_rate,
         }
     }
 }
@@ -57,7 +62,11 @@ impl Calibrator for AugmentedKf {
         }
         self.x[0] = v;
         self.x[1] = w;
-        self.p = f * self.p * f.transpose() + M5::from_diagonal(&self.q);
+        // D's observability this step (see `NoiseParams::observability_turn_rate`).
+        let obs = observability(turn_rate_for_observability(s, self.floor, w), self.w_obs);
+        let mut q = self.q;
+        q[4] *= obs * obs;
+        self.p = f * self.p * f.transpose() + M5::from_diagonal(&q);
         // Update: one scalar update per usable measurement (Joseph form).
         for m in s.measurements().iter().filter(|m| usable(m)) {
             let k = match m.kind {
@@ -65,8 +74,13 @@ impl Calibrator for AugmentedKf {
                 Kind::W => 1,
             };
             let r = m.sigma.max(self.floor).powi(2);
+            let nu = m.value - self.x[k];
+            let r = r / student_t_weight(nu * nu / (self.p[(k, k)] + r), self.dof);
             let sv = self.p[(k, k)] + r;
-            let gain: V5 = self.p.column(k) / sv;
+            let mut gain: V5 = self.p.column(k) / sv;
+            // Partial update (Schmidt–Kalman): D moves only as far as it is
+            // observable; Joseph form keeps P consistent for any gain.
+            gain[4] *= obs;
             self.x += gain * (m.value - self.x[k]);
             let mut ikh = M5::identity();
             for i in 0..5 {

@@ -3,8 +3,9 @@
 //! [R_R, R_L, D] that takes the state filter's latest estimate (with its
 //! variance) as its measurement.
 
-use super::kalman::{model, prior};
+use super::kalman::{model, observability, prior, turn_rate_for_observability};
 use super::params::CalibParams;
+use super::robust::student_t_weight;
 use super::steps::{usable, CalibStep, Kind};
 use super::{Calibrator, Estimate};
 use nalgebra::{Matrix3, Vector3};
@@ -17,6 +18,8 @@ pub struct DualKf {
     q_theta: f64,
     q_x: f64,
     floor: f64,
+    dof: f64,
+    w_obs: f64,
 }
 
 impl DualKf {
@@ -29,17 +32,23 @@ impl DualKf {
             q_theta: params.noise.kalman_param_sigma.powi(2),
             q_x: params.noise.kalman_velocity_sigma.powi(2),
             floor: params.noise.sigma_floor,
+            dof: params.noise.robust_dof,
+            w_obs: params.noise.observability_turn_rate,
         }
     }
 }
 
 impl Calibrator for DualKf {
     fn step(&mut self, s: &CalibStep) -> Estimate {
-        // Parameter filter, time update: random walk.
-        self.p_theta += Matrix3::identity() * self.q_theta;
-        // State filter: predict with the latest parameters, update with the
-        // measurements (scalar updates, V and W independent given θ).
+        // State filter: predict with the latest parameters.
         let ([v0, w0], _) = model(&self.theta, s.omega_right, s.omega_left);
+        // D's observability this step (see `NoiseParams::observability_turn_rate`).
+        let obs = observability(turn_rate_for_observability(s, self.floor, w0), self.w_obs);
+        // Parameter filter, time update: random walk (D's scaled by it).
+        self.p_theta +=
+            Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, obs * obs)) * self.q_theta;
+        // State filter update with the measurements (scalar updates, V and W
+        // independent given θ), each robustly weighted.
         let mut x = [v0, w0];
         let mut px = [self.q_x, self.q_x];
         let mut seen = [false, false];
@@ -49,6 +58,8 @@ impl Calibrator for DualKf {
                 Kind::W => 1,
             };
             let r = m.sigma.max(self.floor).powi(2);
+            let nu = m.value - x[k];
+            let r = r / student_t_weight(nu * nu / (px[k] + r), self.dof);
             let g = px[k] / (px[k] + r);
             x[k] += g * (m.value - x[k]);
             px[k] *= 1.0 - g;
@@ -64,7 +75,10 @@ impl Calibrator for DualKf {
             let h = j[k];
             let ph = self.p_theta * h;
             let sv = h.dot(&ph) + px[k].max(self.floor * self.floor);
-            let gain = ph / sv;
+            let mut gain = ph / sv;
+            // Partial update (Schmidt–Kalman): D moves only as far as it is
+            // observable; Joseph form keeps P consistent for any gain.
+            gain[2] *= obs;
             self.theta += gain * (x[k] - f[k]);
             let ikh = Matrix3::identity() - gain * h.transpose();
             self.p_theta = ikh * self.p_theta * ikh.transpose() + gain * gain.transpose() * px[k];

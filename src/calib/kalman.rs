@@ -23,3 +23,39 @@ pub(crate) fn prior(params: &CalibParams) -> (Vector3<f64>, Matrix3<f64>) {
     let var = Vector3::from_fn(|i, _| (r[i][1] - r[i][0]).powi(2) / 12.0);
     (mean, Matrix3::from_diagonal(&var))
 }
+
+/// How observable the wheel base is at turn rate `w` (rad/s): `|w| / w_ref`
+/// capped at 1 (W carries information about D only through `−W/D`); 1 when
+/// `w_ref` is 0 (feature off).
+pub(crate) fn observability(w: f64, w_ref: f64) -> f64 {
+    if w_ref > 0.0 && w.is_finite() {
+        (w.abs() / w_ref).min(1.0)
+    } else {
+        1.0
+    }
+}
+
+/// The turn rate that decides D's observability for a step: the
+/// inverse-variance mean of its usable W measurements (the motion, not the
+/// estimate, decides), else `predicted` (rad/s).
+pub(crate) fn turn_rate_for_observability(
+    step: &super::steps::CalibStep,
+    floor: f64,
+    predicted: f64,
+) -> f64 {
+    let (mut s, mut sw) = (0.0, 0.0);
+    for m in step
+        .measurements()
+        .iter()
+        .filter(|m| m.kind == super::steps::Kind::W && super::steps::usable(m))
+    {
+        let iv = 1.0 / m.sigma.max(floor).powi(2);
+        s += m.value * iv;
+        sw += iv;
+    }
+    if sw > 0.0 {
+        s / sw
+    } else {
+        predicted
+    }
+}

@@ -6,14 +6,18 @@
 
 mod adaptive;
 mod akf;
+mod change;
 mod dkf;
 pub mod experiments;
 mod kalman;
+mod kernels;
 mod nominal;
 mod normal;
 mod params;
 mod pf;
+mod pool;
 mod resample;
+mod robust;
 mod run;
 mod steps;
 pub mod synth;
@@ -22,12 +26,15 @@ mod weights;
 
 pub use adaptive::{occupied_bins, AdaptiveParams, CountRule};
 pub use akf::AugmentedKf;
+pub use change::{ChangeDetector, ChangeParams, Jump};
 pub use dkf::DualKf;
 pub use nominal::Nominal;
 pub use normal::{erfc, inverse_normal_cdf};
 pub use params::{CalibParams, Method, NoiseParams, Ranges};
 pub use pf::{ParticleFilter, Particles};
+pub use pool::NormalPool;
 pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};
+pub use robust::student_t_weight;
 pub use run::{run, run_observed, CalibSummary, CalibrationRun, HistoryRow, Multipliers, Params3};
 pub use steps::{steps, usable, CalibStep, Kind, Measurement, MAX_GAP_STEP, MAX_MEASUREMENTS};
 pub use trigger::Trigger;

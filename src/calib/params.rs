@@ -2,6 +2,7 @@
 //! initial ranges and noise, with the defaults of seed 000.
 
 use super::adaptive::AdaptiveParams;
+use super::change::ChangeParams;
 use super::resample::Scheme;
 use super::trigger::Trigger;
 use serde::{Deserialize, Serialize};
@@ -121,6 +122,18 @@ pub struct NoiseParams {
     /// particles diverse without inflating the posterior (mean and covariance
     /// preserved); 1 = off.
     pub kernel_shrink: f64,
+    /// Degrees of freedom ν of the Student-t measurement likelihood that
+    /// makes the filters robust to outlier velocity measurements (scan
+    /// matching failures): each measurement's precision is scaled by the
+    /// variational-Bayes weight `min(1, (ν+1)/(ν+ν̃²/S))` of its normalised
+    /// innovation against the filter's prediction (Piché, Särkkä, Hartikainen
+    /// 2012). 0 = the plain Gaussian likelihood.
+    pub robust_dof: f64,
+    /// Turn rate (rad/s) below which the wheel base is only partly
+    /// observable: the random walk of D, and the Kalman filters' gain on D,
+    /// are scaled by `min(1, |W|/observability_turn_rate)` (a straight run
+    /// carries no information about D; without this D wanders). 0 = off.
+    pub observability_turn_rate: f64,
     /// Kalman baselines: σ of the parameter random walk per step (m).
     pub kalman_param_sigma: f64,
     /// Kalman baselines: σ of the velocity process noise (m/s, rad/s).
@@ -136,6 +149,8 @@ impl Default for NoiseParams {
             model_sigma_v: 0.01,
             model_sigma_w: 0.01,
             kernel_shrink: 0.8,
+            robust_dof: 4.0,
+            observability_turn_rate: 0.05,
             kalman_param_sigma: 1e-5,
             kalman_velocity_sigma: 0.05,
         }
@@ -162,6 +177,8 @@ pub struct CalibParams {
     pub noise: NoiseParams,
     /// Adaptive-PF rules.
     pub adaptive: AdaptiveParams,
+    /// Adaptive-PF change detector (re-convergence after a radius jump).
+    pub change: ChangeParams,
     /// N_eff trigger threshold as a fraction of N (seed 000: 0.5).
     pub neff_ratio: f64,
     /// Max-weight trigger threshold as a multiple of 1/N.
@@ -179,6 +196,7 @@ impl Default for CalibParams {
             ranges: Ranges::default(),
             noise: NoiseParams::default(),
             adaptive: AdaptiveParams::default(),
+            change: ChangeParams::default(),
             neff_ratio: 0.5,
             max_weight_factor: 2.0,
         }
@@ -212,6 +230,8 @@ impl CalibParams {
             && nonneg(n.kalman_param_sigma)
             && nonneg(n.model_sigma_v)
             && nonneg(n.model_sigma_w)
+            && nonneg(n.robust_dof)
+            && nonneg(n.observability_turn_rate)
             && n.kernel_shrink > 0.0
             && n.kernel_shrink <= 1.0
             && n.sigma_floor > 0.0
@@ -230,6 +250,7 @@ impl CalibParams {
         if !(self.max_weight_factor.is_finite() && self.max_weight_factor > 0.0) {
             return bad("max_weight_factor must be > 0");
         }
-        self.adaptive.validate().or_else(|m| bad(&m))
+        self.adaptive.validate().or_else(|m| bad(&m))?;
+        self.change.validate().or_else(|m| bad(&m))
     }
 }

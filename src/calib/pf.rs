@@ -1,31 +1,33 @@
 //! The particle-filter calibrator (seed 000, section III), optionally with the
-//! Adaptive-PF rules of section V. Particles are stored as a structure of
-//! arrays; a step allocates nothing once the buffers have grown.
+//! Adaptive-PF rules of section V and a change detector. Particles are stored
+//! as a structure of arrays; one step is two fused passes over them (predict
+//! and reweight; normalise and summarise) plus, when triggered, one pass that
+//! resamples and moves. A step allocates nothing once the buffers have grown.
 
 // `!(x > y)` is deliberate: it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
 use super::adaptive::{occupied_bins, AdaptiveParams, CountRule};
+use super::change::{ChangeDetector, Jump};
+use super::kernels::{self, MIN_LENGTH};
 use super::params::{CalibParams, Method, Ranges};
+use super::pool::NormalPool;
 use super::resample::{Resampler, Scheme};
+use super::robust::student_t_weight;
 use super::steps::{usable, CalibStep, Kind};
 use super::trigger::Trigger;
 use super::weights::Weights;
 use super::{Calibrator, Estimate};
+use nalgebra::Matrix3;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
-use rand_distr::{Distribution, StandardNormal};
-
-/// Smallest value a radius or wheel base may take (m): noise never makes a
-/// particle's geometry zero or negative.
-const MIN_LENGTH: f64 = 1e-6;
 
 /// The particle set: χ = [V, W, R_R, R_L, D] per particle (eq. 1).
 #[derive(Debug, Clone, Default)]
 pub struct Particles {
-    /// Forward velocities V (m/s).
+    /// Forward velocities V (m/s) of the last prediction.
     pub v: Vec<f64>,
-    /// Turn rates W (rad/s).
+    /// Turn rates W (rad/s) of the last prediction.
     pub w: Vec<f64>,
     /// Right wheel radii R_R (m).
     pub rr: Vec<f64>,
@@ -46,31 +48,34 @@ impl Particles {
         self.rr.is_empty()
     }
 
-    fn gather(&mut self, from: &Particles, idx: &[usize]) {
-        let g = |dst: &mut Vec<f64>, src: &[f64]| {
-            dst.clear();
-            dst.extend(idx.iter().map(|&i| src[i]));
-        };
-        g(&mut self.v, &from.v);
-        g(&mut self.w, &from.w);
-        g(&mut self.rr, &from.rr);
-        g(&mut self.rl, &from.rl);
-        g(&mut self.d, &from.d);
+    fn resize(&mut self, n: usize) {
+        for c in [
+            &mut self.v,
+            &mut self.w,
+            &mut self.rr,
+            &mut self.rl,
+            &mut self.d,
+        ] {
+            c.resize(n, 0.0);
+        }
     }
 }
 
-/// Weighted mean and standard deviation of one particle column.
-fn mean_std(x: &[f64], w: &[f64]) -> (f64, f64) {
-    let mut m = 0.0;
-    for (a, b) in x.iter().zip(w) {
-        m += a * b;
-    }
-    let mut v = 0.0;
-    for (a, b) in x.iter().zip(w) {
-        let d = a - m;
-        v += b * d * d;
-    }
-    (m, v.max(0.0).sqrt())
+/// Weighted mean and covariance of the parameters (R_R, R_L, D) (m, m²).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Belief {
+    mean: [f64; 3],
+    cov: Matrix3<f64>,
+}
+
+/// The step's measurements reduced to one Gaussian term per velocity:
+/// `−k_v (V − z_v)² − k_w (W − z_w)²` (constants dropped).
+#[derive(Debug, Clone, Copy, Default)]
+struct Update {
+    kv: f64,
+    zv: f64,
+    kw: f64,
+    zw: f64,
 }
 
 /// Particle-filter calibrator: `pf` (fixed count and noise) or `adaptive-pf`.
@@ -83,6 +88,7 @@ pub struct ParticleFilter {
     ancestors: Vec<usize>,
     keys: Vec<u64>,
     rng: Xoshiro256PlusPlus,
+    pool: NormalPool,
     sigma: f64,
     scheme: Scheme,
     trigger: Trigger,
@@ -92,17 +98,22 @@ pub struct ParticleFilter {
     floor: f64,
     model_var: [f64; 2],
     shrink: f64,
+    robust_dof: f64,
+    observability_turn_rate: f64,
     ema: Option<[f64; 2]>,
-    mean: [f64; 3],
-    chol: [[f64; 3]; 3],
+    belief: Belief,
     adaptive: Option<AdaptiveParams>,
+    change: Option<ChangeDetector>,
+    jump_sigma: [f64; 3],
+    initial: usize,
+    jumps: usize,
     name: &'static str,
 }
 
 impl ParticleFilter {
     /// A filter with particles drawn uniformly in `params.ranges`, V = W = 0.
-    /// `adaptive-pf` uses `params.adaptive`; every other method a fixed
-    /// count and σ. Call [`CalibParams::validate`] first.
+    /// `adaptive-pf` uses `params.adaptive` and `params.change`; every other
+    /// method a fixed count and σ. Call [`CalibParams::validate`] first.
     pub fn new(params: &CalibParams) -> Self {
         let n = params.initial_particles();
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(params.seed);
@@ -119,7 +130,20 @@ impl ParticleFilter {
         let rr = draw(r_right);
         let rl = draw(r_left);
         let d = draw(wheel_base);
-        let adaptive = (params.method == Method::AdaptivePf).then(|| params.adaptive.clone());
+        let adaptive_pf = params.method == Method::AdaptivePf;
+        let adaptive = adaptive_pf.then(|| params.adaptive.clone());
+        let change =
+            (adaptive_pf && params.change.enabled).then(|| ChangeDetector::new(&params.change));
+        let var = |[lo, hi]: [f64; 2]| (hi - lo) * (hi - lo) / 12.0;
+        let mid = |[lo, hi]: [f64; 2]| 0.5 * (lo + hi);
+        let belief = Belief {
+            mean: [mid(r_right), mid(r_left), mid(wheel_base)],
+            cov: Matrix3::from_diagonal(&nalgebra::Vector3::new(
+                var(r_right),
+                var(r_left),
+                var(wheel_base),
+            )),
+        };
         Self {
             p: Particles {
                 v: vec![0.0; n],
@@ -134,6 +158,7 @@ impl ParticleFilter {
             ancestors: Vec::with_capacity(n),
             keys: Vec::new(),
             rng,
+            pool: NormalPool::new(),
             sigma: params.noise.param_sigma,
             scheme: params.resampler,
             trigger: params.trigger,
@@ -146,15 +171,16 @@ impl ParticleFilter {
                 params.noise.model_sigma_w.powi(2),
             ],
             shrink: params.noise.kernel_shrink,
+            robust_dof: params.noise.robust_dof,
+            observability_turn_rate: params.noise.observability_turn_rate,
             ema: None,
-            mean: [0.0; 3],
-            chol: [[0.0; 3]; 3],
+            belief,
             adaptive,
-            name: if params.method == Method::AdaptivePf {
-                "adaptive-pf"
-            } else {
-                "pf"
-            },
+            change,
+            jump_sigma: params.change.jump_sigma,
+            initial: n,
+            jumps: 0,
+            name: if adaptive_pf { "adaptive-pf" } else { "pf" },
         }
     }
 
@@ -168,58 +194,196 @@ impl ParticleFilter {
         &self.weights
     }
 
-    /// Predict (eq. 2–3): random walk on the parameters, then V and W from the
-    /// wheel rates. Returns the prior weighted-mean velocities (V_O, W_O).
-    fn predict(&mut self, s: &CalibStep) -> (f64, f64) {
-        let (wr, wl) = (s.omega_right, s.omega_left);
-        let sigma = self.sigma;
-        let norm = self.weights.normalized();
-        let Particles { v, w, rr, rl, d } = &mut self.p;
-        let rng = &mut self.rng;
-        let (mut vo, mut wo) = (0.0, 0.0);
-        for i in 0..rr.len() {
-            if sigma > 0.0 {
-                let (a, b, c): (f64, f64, f64) = (
-                    StandardNormal.sample(rng),
-                    StandardNormal.sample(rng),
-                    StandardNormal.sample(rng),
-                );
-                rr[i] = (rr[i] + sigma * a).max(MIN_LENGTH);
-                rl[i] = (rl[i] + sigma * b).max(MIN_LENGTH);
-                d[i] = (d[i] + sigma * c).max(MIN_LENGTH);
-            }
-            let (sr, sl) = (wr * rr[i], wl * rl[i]);
-            v[i] = 0.5 * (sr + sl);
-            w[i] = (sr - sl) / d[i];
-            vo += norm[i] * v[i];
-            wo += norm[i] * w[i];
-        }
-        if self.jitter > 0.0 {
-            let j = self.jitter;
-            for i in 0..v.len() {
-                v[i] += j * (2.0 * rng.random::<f64>() - 1.0);
-                w[i] += j * (2.0 * rng.random::<f64>() - 1.0);
-            }
-        }
-        (vo, wo)
+    /// The change detector's statistic after the last step (χ²₃ when nothing
+    /// changed); 0 without a detector.
+    pub fn change_statistic(&self) -> f64 {
+        self.change.as_ref().map_or(0.0, |c| c.statistic())
     }
 
-    /// Update (eq. 4): add each usable measurement's Gaussian log-likelihood.
-    fn reweight(&mut self, s: &CalibStep) {
-        let lw = self.weights.log_mut();
+    /// How often the change detector has fired so far.
+    pub fn jumps(&self) -> usize {
+        self.jumps
+    }
+
+    /// Reduces the step's usable measurements to one term per velocity. Each
+    /// measurement's precision `1/S` (S = σ² floored + model variance) is
+    /// scaled by its Student-t weight against the prior prediction, whose
+    /// variance includes the parameter spread; the innovations also feed the
+    /// change detector. Returns the update and the prior mean turn rate.
+    fn measurements(&mut self, s: &CalibStep) -> (Update, f64) {
+        let (wr, wl) = (s.omega_right, s.omega_left);
+        let Belief { mean: m, cov } = self.belief;
+        let d = m[2].max(MIN_LENGTH);
+        let v_hat = 0.5 * (wr * m[0] + wl * m[1]);
+        let w_hat = (wr * m[0] - wl * m[1]) / d;
+        let jv = nalgebra::Vector3::new(0.5 * wr, 0.5 * wl, 0.0);
+        let jw = nalgebra::Vector3::new(wr / d, -wl / d, -w_hat / d);
+        let var_v = jv.dot(&(cov * jv)).max(0.0);
+        let var_w = jw.dot(&(cov * jw)).max(0.0);
+        let w_seen = super::kalman::turn_rate_for_observability(s, self.floor, w_hat);
+        let obs = super::kalman::observability(w_seen, self.observability_turn_rate);
+        if let Some(det) = &mut self.change {
+            det.begin_step(s.dt());
+        }
+        let mut u = Update::default();
+        let (mut kvz, mut kwz) = (0.0, 0.0);
         for m in s.measurements().iter().filter(|m| usable(m)) {
-            let (x, model) = match m.kind {
-                Kind::V => (&self.p.v, self.model_var[0]),
-                Kind::W => (&self.p.w, self.model_var[1]),
+            let (pred, var_pred, j, model) = match m.kind {
+                Kind::V => (v_hat, var_v, jv, self.model_var[0]),
+                Kind::W => (w_hat, var_w, jw, self.model_var[1]),
             };
-            let k = 0.5 / (m.sigma.max(self.floor).powi(2) + model);
-            let z = m.value;
-            for (l, xi) in lw.iter_mut().zip(x) {
-                let e = z - xi;
-                *l -= k * e * e;
+            let r = m.sigma.max(self.floor).powi(2) + model;
+            let nu = m.value - pred;
+            let prec = student_t_weight(nu * nu / (r + var_pred), self.robust_dof) / r;
+            match m.kind {
+                Kind::V => {
+                    u.kv += 0.5 * prec;
+                    kvz += 0.5 * prec * m.value;
+                }
+                Kind::W => {
+                    u.kw += 0.5 * prec;
+                    kwz += 0.5 * prec * m.value;
+                }
+            }
+            if let Some(det) = &mut self.change {
+                det.add(nu, [j[0], j[1], j[2] * obs], prec);
             }
         }
-        self.weights.normalize();
+        if u.kv > 0.0 {
+            u.zv = kvz / u.kv;
+        }
+        if u.kw > 0.0 {
+            u.zw = kwz / u.kw;
+        }
+        (u, w_seen)
+    }
+
+    /// Predict (eq. 2–3) and update (eq. 4) in one pass: random walk on the
+    /// parameters (D's scaled by its observability), V and W from the wheel
+    /// rates, the measurements' log-likelihood. Returns the prior
+    /// weighted-mean velocities (V_O, W_O) and the largest log-weight.
+    fn predict_and_weigh(&mut self, s: &CalibStep, u: Update, w_turn: f64) -> (f64, f64, f64) {
+        let (wr, wl) = (s.omega_right, s.omega_left);
+        let n = self.p.len();
+        let obs = super::kalman::observability(w_turn, self.observability_turn_rate);
+        let (sr, sd) = (self.sigma, self.sigma * obs);
+        let [o1, o2, o3] = self.pool.offsets::<3, _>(n, &mut self.rng);
+        let pool = self.pool.data();
+        let e = [&pool[o1..o1 + n], &pool[o2..o2 + n], &pool[o3..o3 + n]];
+        let (lw, rho) = self.weights.parts_mut();
+        let Particles { v, w, rr, rl, d } = &mut self.p;
+        // With velocity jitter the likelihood is added after it (below).
+        let (kv, kw) = if self.jitter > 0.0 {
+            (0.0, 0.0)
+        } else {
+            (u.kv, u.kw)
+        };
+        let out = kernels::predict(kernels::Predict {
+            rr,
+            rl,
+            d,
+            v,
+            w,
+            lw,
+            rho,
+            e,
+            wr,
+            wl,
+            sr,
+            sd,
+            obs,
+            dbar: self.belief.mean[2],
+            kv,
+            zv: u.zv,
+            kw,
+            zw: u.zw,
+        });
+        let mut mx = out.max;
+        if self.jitter > 0.0 {
+            // Seed 000's uniform jitter on V and W (off by default), applied
+            // before the likelihood, which the loop above then left out.
+            let j = self.jitter;
+            let (lw, _) = self.weights.parts_mut();
+            let Particles { v, w, .. } = &mut self.p;
+            let (zv, zw) = (u.zv, u.zw);
+            mx = f64::NEG_INFINITY;
+            for i in 0..n {
+                v[i] += j * (2.0 * self.rng.random::<f64>() - 1.0);
+                w[i] += j * (2.0 * self.rng.random::<f64>() - 1.0);
+                let (ev, ew) = (v[i] - zv, w[i] - zw);
+                lw[i] -= u.kv * ev * ev + u.kw * ew * ew;
+                mx = mx.max(lw[i]);
+            }
+        }
+        (out.vo, out.wo, mx)
+    }
+
+    /// Normalises the weights (log-sum-exp with the maximum `mx`) and, in the
+    /// same pass, accumulates the weighted means of every column and the
+    /// covariance of the parameters. Returns the estimate at time `t`.
+    fn normalize_and_summarize(&mut self, mx: f64, t: f64) -> Estimate {
+        let n = self.p.len();
+        let reset = !(mx > f64::NEG_INFINITY) || !mx.is_finite();
+        if reset {
+            self.weights.reset_after_underflow();
+        }
+        let r = self.belief.mean;
+        let (lw, buf) = self.weights.parts_mut();
+        buf.resize(n, 0.0);
+        let Particles { v, w, rr, rl, d } = &self.p;
+        let kernels::Sums {
+            sum,
+            sq,
+            max: emax,
+            s1,
+            s2,
+        } = kernels::summarize(kernels::Summarize {
+            rr,
+            rl,
+            d,
+            v,
+            w,
+            lw,
+            buf,
+            shift: if reset { 0.0 } else { mx },
+            uniform: reset,
+            r,
+        });
+        self.weights.finish(sum, sq, emax, reset);
+        let inv = 1.0 / sum;
+        let m: [f64; 5] = std::array::from_fn(|k| s1[k] * inv);
+        let c = |k: usize, x: usize, y: usize| s2[k] * inv - m[x] * m[y];
+        let cov = Matrix3::new(
+            c(0, 0, 0),
+            c(1, 0, 1),
+            c(2, 0, 2),
+            c(1, 0, 1),
+            c(3, 1, 1),
+            c(4, 1, 2),
+            c(2, 0, 2),
+            c(4, 1, 2),
+            c(5, 2, 2),
+        );
+        self.belief = Belief {
+            mean: [r[0] + m[0], r[1] + m[1], r[2] + m[2]],
+            cov,
+        };
+        let sd = |k: usize| cov[(k, k)].max(0.0).sqrt();
+        Estimate {
+            t,
+            r_right: self.belief.mean[0],
+            r_left: self.belief.mean[1],
+            wheel_base: self.belief.mean[2],
+            std_r_right: sd(0),
+            std_r_left: sd(1),
+            std_wheel_base: sd(2),
+            v: m[3],
+            w: m[4],
+            particles: n,
+            process_sigma: self.sigma,
+            resampled: false,
+            weights_reset: reset,
+        }
     }
 
     /// The particle count the next resampling draws.
@@ -252,7 +416,12 @@ impl ParticleFilter {
         }
     }
 
-    fn resample(&mut self, n_new: usize) {
+    /// Resamples `n_new` particles and moves their parameters in the same
+    /// pass: with `spread` (a detected change) by independent Gaussian
+    /// jitter of those σ (m); otherwise by the Liu–West kernel (see
+    /// `NoiseParams::kernel_shrink`) around the pre-resampling belief, whose
+    /// mean and covariance it preserves.
+    fn resample(&mut self, n_new: usize, spread: Option<[f64; 3]>) {
         self.resampler.resample(
             self.scheme,
             self.weights.normalized(),
@@ -260,108 +429,91 @@ impl ParticleFilter {
             &mut self.rng,
             &mut self.ancestors,
         );
-        self.spare.gather(&self.p, &self.ancestors);
+        let n = self.ancestors.len();
+        self.spare.resize(n);
+        let (a, m) = match spread {
+            Some(_) => (1.0, [0.0; 3]),
+            None => (self.shrink, self.belief.mean),
+        };
+        let l = match spread {
+            Some(s) => [[s[0], 0.0, 0.0], [0.0, s[1], 0.0], [0.0, 0.0, s[2]]],
+            None => cholesky(&self.belief.cov),
+        };
+        let h = if spread.is_some() {
+            1.0
+        } else {
+            (1.0 - a * a).sqrt()
+        };
+        let moving = a < 1.0 || spread.is_some();
+        let [o1, o2, o3] = self.pool.offsets::<3, _>(n, &mut self.rng);
+        let pool = self.pool.data();
+        let (e1, e2, e3) = (&pool[o1..o1 + n], &pool[o2..o2 + n], &pool[o3..o3 + n]);
+        let src = &self.p;
+        let dst = &mut self.spare;
+        let anc = &self.ancestors[..n];
+        let (rr, rl, d) = (&mut dst.rr[..n], &mut dst.rl[..n], &mut dst.d[..n]);
+        let (v, w) = (&mut dst.v[..n], &mut dst.w[..n]);
+        let (c0, c1, c2) = ((1.0 - a) * m[0], (1.0 - a) * m[1], (1.0 - a) * m[2]);
+        for k in 0..n {
+            let i = anc[k];
+            v[k] = src.v[i];
+            w[k] = src.w[i];
+            if moving {
+                let j0 = h * l[0][0] * e1[k];
+                let j1 = h * (l[1][0] * e1[k] + l[1][1] * e2[k]);
+                let j2 = h * (l[2][0] * e1[k] + l[2][1] * e2[k] + l[2][2] * e3[k]);
+                rr[k] = (a * src.rr[i] + c0 + j0).max(MIN_LENGTH);
+                rl[k] = (a * src.rl[i] + c1 + j1).max(MIN_LENGTH);
+                d[k] = (a * src.d[i] + c2 + j2).max(MIN_LENGTH);
+            } else {
+                rr[k] = src.rr[i];
+                rl[k] = src.rl[i];
+                d[k] = src.d[i];
+            }
+        }
         std::mem::swap(&mut self.p, &mut self.spare);
-        self.weights.reset_uniform(n_new);
-        if self.shrink < 1.0 {
-            self.kernel();
-        }
+        self.weights.reset_uniform(n);
     }
 
-    /// Liu–West kernel move of the resampled parameters (see
-    /// `NoiseParams::kernel_shrink`), with the pre-resampling weighted mean
-    /// and covariance factor stored by [`ParticleFilter::moments`].
-    fn kernel(&mut self) {
-        let a = self.shrink;
-        let h = (1.0 - a * a).sqrt();
-        let (m, l) = (self.mean, self.chol);
-        let Particles { rr, rl, d, .. } = &mut self.p;
-        let rng = &mut self.rng;
-        for i in 0..rr.len() {
-            let e: [f64; 3] = [
-                StandardNormal.sample(rng),
-                StandardNormal.sample(rng),
-                StandardNormal.sample(rng),
-            ];
-            let j0 = l[0][0] * e[0];
-            let j1 = l[1][0] * e[0] + l[1][1] * e[1];
-            let j2 = l[2][0] * e[0] + l[2][1] * e[1] + l[2][2] * e[2];
-            rr[i] = (a * rr[i] + (1.0 - a) * m[0] + h * j0).max(MIN_LENGTH);
-            rl[i] = (a * rl[i] + (1.0 - a) * m[1] + h * j1).max(MIN_LENGTH);
-            d[i] = (a * d[i] + (1.0 - a) * m[2] + h * j2).max(MIN_LENGTH);
-        }
+    /// The spread to re-inflate with after a detected jump: per radius the
+    /// larger of the configured σ and the window's estimate of the jump,
+    /// bounded by 10 % of the parameter; the wheel base gets its configured σ.
+    fn jump_spread(&self, jump: &Jump) -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let est = if k < 2 { jump.delta[k].abs() } else { 0.0 };
+            let est = if est.is_finite() { est } else { 0.0 };
+            self.jump_sigma[k]
+                .max(est)
+                .min(0.1 * self.belief.mean[k].abs())
+        })
     }
+}
 
-    /// Weighted mean and Cholesky factor of the weighted covariance of
-    /// (R_R, R_L, D); a degenerate covariance falls back to its diagonal.
-    fn moments(&mut self, mean: [f64; 3]) {
-        let w = self.weights.normalized();
-        let cols = [&self.p.rr, &self.p.rl, &self.p.d];
-        let mut c = [[0.0f64; 3]; 3];
-        for i in 0..w.len() {
-            let x = [
-                cols[0][i] - mean[0],
-                cols[1][i] - mean[1],
-                cols[2][i] - mean[2],
-            ];
-            for r in 0..3 {
-                for k in 0..=r {
-                    c[r][k] += w[i] * x[r] * x[k];
-                }
+/// Cholesky factor of a 3×3 covariance; a covariance that is not positive
+/// definite falls back to the square roots of its diagonal.
+fn cholesky(c: &Matrix3<f64>) -> [[f64; 3]; 3] {
+    let mut l = [[0.0f64; 3]; 3];
+    for r in 0..3 {
+        for k in 0..=r {
+            let mut s = c[(r, k)];
+            for j in 0..k {
+                s -= l[r][j] * l[k][j];
             }
-        }
-        let mut l = [[0.0f64; 3]; 3];
-        let mut ok = true;
-        for r in 0..3 {
-            for k in 0..=r {
-                let mut s = c[r][k];
-                for j in 0..k {
-                    s -= l[r][j] * l[k][j];
-                }
-                if r == k {
-                    if !(s > 0.0) {
-                        ok = false;
-                        break;
+            if r == k {
+                if !(s > 0.0) {
+                    let mut d = [[0.0; 3]; 3];
+                    for i in 0..3 {
+                        d[i][i] = c[(i, i)].max(0.0).sqrt();
                     }
-                    l[r][r] = s.sqrt();
-                } else {
-                    l[r][k] = s / l[k][k];
+                    return d;
                 }
+                l[r][r] = s.sqrt();
+            } else {
+                l[r][k] = s / l[k][k];
             }
         }
-        if !ok {
-            l = [[0.0; 3]; 3];
-            for r in 0..3 {
-                l[r][r] = c[r][r].max(0.0).sqrt();
-            }
-        }
-        self.mean = mean;
-        self.chol = l;
     }
-
-    fn summarize(&self, t: f64) -> Estimate {
-        let w = self.weights.normalized();
-        let (r_right, std_r_right) = mean_std(&self.p.rr, w);
-        let (r_left, std_r_left) = mean_std(&self.p.rl, w);
-        let (wheel_base, std_wheel_base) = mean_std(&self.p.d, w);
-        let (v, _) = mean_std(&self.p.v, w);
-        let (wz, _) = mean_std(&self.p.w, w);
-        Estimate {
-            t,
-            r_right,
-            r_left,
-            wheel_base,
-            std_r_right,
-            std_r_left,
-            std_wheel_base,
-            v,
-            w: wz,
-            particles: self.p.len(),
-            process_sigma: self.sigma,
-            resampled: false,
-            weights_reset: self.weights.was_reset(),
-        }
-    }
+    l
 }
 
 impl Calibrator for ParticleFilter {
@@ -376,24 +528,30 @@ impl Calibrator for ParticleFilter {
     }
 
     fn step(&mut self, s: &CalibStep) -> Estimate {
-        let (vo, wo) = self.predict(s);
-        self.reweight(s);
-        let mut est = self.summarize(s.t1);
+        let (u, w_hat) = self.measurements(s);
+        let (vo, wo, mx) = self.predict_and_weigh(s, u, w_hat);
+        let mut est = self.normalize_and_summarize(mx, s.t1);
         if let Some(a) = &self.adaptive {
             if let Some(e) = a.residuals(s, vo, wo, self.floor) {
                 a.average(&mut self.ema, e, s.dt());
                 self.sigma = a.sigma_of(self.ema.unwrap_or(e));
             }
         }
-        if self
+        let cov = self.belief.cov;
+        if let Some(jump) = self.change.as_mut().and_then(|c| c.end_step(&cov)) {
+            // A change: keep what the weights say, then re-inflate the spread
+            // and the count so the cloud can find the new parameters.
+            let spread = self.jump_spread(&jump);
+            let n_new = self.initial.max(self.p.len());
+            self.resample(n_new, Some(spread));
+            self.jumps += 1;
+            est.resampled = true;
+        } else if self
             .trigger
             .fires(&self.weights, self.neff_ratio, self.max_weight_factor)
         {
-            if self.shrink < 1.0 {
-                self.moments([est.r_right, est.r_left, est.wheel_base]);
-            }
             let n_new = self.target_count(&est);
-            self.resample(n_new);
+            self.resample(n_new, None);
             est.resampled = true;
         }
         est.process_sigma = self.sigma;

@@ -53,6 +53,9 @@ pub struct SynthParams {
     pub turn: f64,
     /// Optional jump of the true radii.
     pub radius_step: Option<RadiusStep>,
+    /// From this time on (s) the robot drives straight (turn rate 0), e.g. a
+    /// corridor where the wheel base is unobservable; `None` = turns all along.
+    pub straight_from: Option<f64>,
 }
 
 impl Default for SynthParams {
@@ -70,6 +73,7 @@ impl Default for SynthParams {
             speed: 0.8,
             turn: 0.5,
             radius_step: None,
+            straight_from: None,
         }
     }
 }
@@ -143,12 +147,13 @@ pub fn generate(p: &SynthParams, truth: DiffDrive, seed: u64) -> SynthData {
     let (tv, phv) = (u(12.0, 20.0), u(0.0, 6.3));
     let (t1, ph1, t2, ph2) = (u(8.0, 14.0), u(0.0, 6.3), u(3.0, 6.0), u(0.0, 6.3));
     let (speed, turn) = (p.speed, p.turn);
+    let straight = p.straight_from.unwrap_or(f64::INFINITY);
     let tau = std::f64::consts::TAU;
     let profile = move |t: f64| {
         let ramp = 1.0 - (-t / 1.5).exp();
         let v = speed * ramp * (1.0 + 0.4 * (tau * t / tv + phv).sin());
         let w = ramp * turn * (0.7 * (tau * t / t1 + ph1).sin() + 0.5 * (tau * t / t2 + ph2).sin());
-        (v, w)
+        (v, if t < straight { w } else { 0.0 })
     };
     let n = (p.duration / H).round() as usize;
     let every = |rate: f64| ((1.0 / (rate * H)).round() as usize).max(1);

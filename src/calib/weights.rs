@@ -107,6 +107,31 @@ impl Weights {
         self.max = mx;
     }
 
+    /// The log-weights and the weight buffer together, for a fused pass that
+    /// writes `exp(log − max)` into the buffer and then calls
+    /// [`Weights::finish`].
+    pub(crate) fn parts_mut(&mut self) -> (&mut [f64], &mut Vec<f64>) {
+        (&mut self.log, &mut self.norm)
+    }
+
+    /// Completes a fused normalisation: the buffer holds unnormalised weights
+    /// with sum `sum`, sum of squares `sq` and largest `max` (all finite,
+    /// positive sum); scales them to sum 1 and records N_eff, the largest weight and
+    /// whether the pass had to reset them.
+    pub(crate) fn finish(&mut self, sum: f64, sq: f64, max: f64, reset: bool) {
+        let inv = 1.0 / sum;
+        self.norm.iter_mut().for_each(|w| *w *= inv);
+        self.ess = sum * sum / sq;
+        self.max = max * inv;
+        self.reset = reset;
+    }
+
+    /// Resets to uniform after a fused pass found no finite log-weight.
+    pub(crate) fn reset_after_underflow(&mut self) {
+        self.reset_uniform(self.log.len());
+        self.reset = true;
+    }
+
     /// Normalised weights (sum 1), valid after [`Weights::normalize`].
     pub fn normalized(&self) -> &[f64] {
         &self.norm
@@ -133,16 +158,18 @@ impl Weights {
 /// to exactly 0 below −708.
 #[inline(always)]
 pub fn fast_exp(x: f64) -> f64 {
-    if !(x > -708.0) {
-        return 0.0;
-    }
-    // exp(x) = 2^k · exp(r), r = x − k ln2 ∈ [−ln2/2, ln2/2].
+    // exp(x) = 2^k · exp(r), r = x − k ln2 ∈ [−ln2/2, ln2/2]; k is rounded
+    // with the 1.5·2^52 trick (no libm call, so the loops vectorise).
     const LOG2E: f64 = std::f64::consts::LOG2_E;
     #[allow(clippy::excessive_precision)]
     const LN2_HI: f64 = 6.931_471_803_691_238_2e-1;
     const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
-    let k = (x * LOG2E).round();
-    let r = (x - k * LN2_HI) - k * LN2_LO;
+    const SHIFT: f64 = 6_755_399_441_055_744.0;
+    let ok = x > -708.0;
+    let xc = if ok { x } else { -708.0 };
+    let t = xc * LOG2E + SHIFT;
+    let k = t - SHIFT;
+    let r = (xc - k * LN2_HI) - k * LN2_LO;
     // Taylor to degree 11 on |r| ≤ 0.347: truncation < 1e-15.
     let mut p = 1.0 / 39_916_800.0;
     p = p * r + 1.0 / 3_628_800.0;
@@ -156,8 +183,15 @@ pub fn fast_exp(x: f64) -> f64 {
     p = p * r + 0.5;
     p = p * r + 1.0;
     p = p * r + 1.0;
-    let bits = ((k as i64 + 1023) as u64) << 52;
-    p * f64::from_bits(bits)
+    // The low bits of t hold k (two's complement, |k| ≤ 1022 here).
+    let ki = t.to_bits().wrapping_sub(SHIFT.to_bits());
+    let bits = ki.wrapping_add(1023) << 52;
+    let y = p * f64::from_bits(bits);
+    if ok {
+        y
+    } else {
+        0.0
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,330 @@
+//! The particle filter's two per-step passes over its particle columns, kept
+//! apart so they can be compiled twice: for the baseline CPU and, picked at
+//! run time, with AVX2 (same instructions' results, wider registers: no fused
+//! multiply-add is enabled, so both versions give bit-identical numbers).
+//! Each pass keeps `LANES` independent partial sums in a fixed order, which
+//! lets the compiler vectorise the reductions without changing the result.
+
+use super::weights::fast_exp;
+
+/// Independent accumulators per pass.
+const LANES: usize = 4;
+
+/// Smallest value a radius or wheel base may take (m).
+pub(crate) const MIN_LENGTH: f64 = 1e-6;
+
+/// Inputs of the fused predict-and-weigh pass (seed 000, eq. 2–4).
+pub(crate) struct Predict<'a> {
+    pub rr: &'a mut [f64],
+    pub rl: &'a mut [f64],
+    pub d: &'a mut [f64],
+    pub v: &'a mut [f64],
+    pub w: &'a mut [f64],
+    /// Log-weights, updated in place.
+    pub lw: &'a mut [f64],
+    /// Prior normalised weights (for V_O, W_O).
+    pub rho: &'a [f64],
+    /// Standard normals for the random walks of R_R, R_L, D.
+    pub e: [&'a [f64]; 3],
+    /// Wheel rates (rad/s).
+    pub wr: f64,
+    pub wl: f64,
+    /// Random-walk σ of the radii and of D (m).
+    pub sr: f64,
+    pub sd: f64,
+    /// D's observability in [0, 1] and the mean D (m): W is predicted with
+    /// `D̄ + obs·(D − D̄)`, so an unobservable D is neither selected nor moved.
+    pub obs: f64,
+    pub dbar: f64,
+    /// Likelihood `−kv (V − zv)² − kw (W − zw)²`.
+    pub kv: f64,
+    pub zv: f64,
+    pub kw: f64,
+    pub zw: f64,
+}
+
+/// Output of [`predict`]: prior weighted-mean velocities and the largest
+/// log-weight.
+pub(crate) struct Predicted {
+    pub vo: f64,
+    pub wo: f64,
+    pub max: f64,
+}
+
+/// `max(x, MIN_LENGTH)` as a plain compare-select (NaN becomes MIN_LENGTH).
+#[inline(always)]
+fn clamp_len(x: f64) -> f64 {
+    if x > MIN_LENGTH {
+        x
+    } else {
+        MIN_LENGTH
+    }
+}
+
+#[inline(always)]
+fn predict_impl(a: Predict<'_>) -> Predicted {
+    let n = a.rr.len();
+    let Predict {
+        rr,
+        rl,
+        d,
+        v,
+        w,
+        lw,
+        rho,
+        e,
+        wr,
+        wl,
+        sr,
+        sd,
+        obs,
+        dbar,
+        kv,
+        zv,
+        kw,
+        zw,
+    } = a;
+    let dfix = (1.0 - obs) * dbar;
+    let (rl, d, v, w, lw, rho) = (
+        &mut rl[..n],
+        &mut d[..n],
+        &mut v[..n],
+        &mut w[..n],
+        &mut lw[..n],
+        &rho[..n],
+    );
+    let (e1, e2, e3) = (&e[0][..n], &e[1][..n], &e[2][..n]);
+    let mut vo = [0.0f64; LANES];
+    let mut wo = [0.0f64; LANES];
+    let mut mx = [f64::NEG_INFINITY; LANES];
+    macro_rules! body {
+        ($rr:ident, $rl:ident, $d:ident, $v:ident, $w:ident, $lw:ident, $rho:ident, $e1:ident, $e2:ident, $e3:ident, $l:expr, $i:expr) => {{
+            let (l, i) = ($l, $i);
+            let (rr, rl, d, v, w, lw, rho, e1, e2, e3) = (&mut *$rr, &mut *$rl, &mut *$d, &mut *$v, &mut *$w, &mut *$lw, &*$rho, &*$e1, &*$e2, &*$e3);
+            let a = clamp_len(rr[i] + sr * e1[i]);
+            let b = clamp_len(rl[i] + sr * e2[i]);
+            let c = clamp_len(d[i] + sd * e3[i]);
+            rr[i] = a;
+            rl[i] = b;
+            d[i] = c;
+            let (x, y) = (wr * a, wl * b);
+            let vi = 0.5 * (x + y);
+            let wi = (x - y) / (dfix + obs * c);
+            v[i] = vi;
+            w[i] = wi;
+            vo[l] += rho[i] * vi;
+            wo[l] += rho[i] * wi;
+            let (ev, ew) = (vi - zv, wi - zw);
+            let q = lw[i] - kv * ev * ev - kw * ew * ew;
+            lw[i] = q;
+            mx[l] = if q > mx[l] { q } else { mx[l] };
+        }};
+    }
+    let full = n / LANES * LANES;
+    for c in (0..full).step_by(LANES) {
+        // Fixed-size views: one bounds check per chunk, none per lane.
+        let rr: &mut [f64; LANES] = (&mut rr[c..c + LANES]).try_into().unwrap();
+        let rl: &mut [f64; LANES] = (&mut rl[c..c + LANES]).try_into().unwrap();
+        let d: &mut [f64; LANES] = (&mut d[c..c + LANES]).try_into().unwrap();
+        let v: &mut [f64; LANES] = (&mut v[c..c + LANES]).try_into().unwrap();
+        let w: &mut [f64; LANES] = (&mut w[c..c + LANES]).try_into().unwrap();
+        let lw: &mut [f64; LANES] = (&mut lw[c..c + LANES]).try_into().unwrap();
+        let rho: &[f64; LANES] = rho[c..c + LANES].try_into().unwrap();
+        let e1: &[f64; LANES] = e1[c..c + LANES].try_into().unwrap();
+        let e2: &[f64; LANES] = e2[c..c + LANES].try_into().unwrap();
+        let e3: &[f64; LANES] = e3[c..c + LANES].try_into().unwrap();
+        // Whole-chunk operations, the same arithmetic as `body!`.
+        let a: [f64; LANES] = std::array::from_fn(|l| clamp_len(rr[l] + sr * e1[l]));
+        let b: [f64; LANES] = std::array::from_fn(|l| clamp_len(rl[l] + sr * e2[l]));
+        let cc: [f64; LANES] = std::array::from_fn(|l| clamp_len(d[l] + sd * e3[l]));
+        let x: [f64; LANES] = std::array::from_fn(|l| wr * a[l]);
+        let y: [f64; LANES] = std::array::from_fn(|l| wl * b[l]);
+        let vi: [f64; LANES] = std::array::from_fn(|l| 0.5 * (x[l] + y[l]));
+        let wi: [f64; LANES] = std::array::from_fn(|l| (x[l] - y[l]) / (dfix + obs * cc[l]));
+        let ev: [f64; LANES] = std::array::from_fn(|l| vi[l] - zv);
+        let ew: [f64; LANES] = std::array::from_fn(|l| wi[l] - zw);
+        let q: [f64; LANES] =
+            std::array::from_fn(|l| lw[l] - kv * ev[l] * ev[l] - kw * ew[l] * ew[l]);
+        *rr = a;
+        *rl = b;
+        *d = cc;
+        *v = vi;
+        *w = wi;
+        *lw = q;
+        vo = std::array::from_fn(|l| vo[l] + rho[l] * vi[l]);
+        wo = std::array::from_fn(|l| wo[l] + rho[l] * wi[l]);
+        mx = std::array::from_fn(|l| if q[l] > mx[l] { q[l] } else { mx[l] });
+    }
+    for i in full..n {
+        body!(rr, rl, d, v, w, lw, rho, e1, e2, e3, 0, i);
+    }
+    Predicted {
+        vo: vo.iter().sum(),
+        wo: wo.iter().sum(),
+        max: mx.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)),
+    }
+}
+
+/// Inputs of the normalise-and-summarise pass.
+pub(crate) struct Summarize<'a> {
+    pub rr: &'a [f64],
+    pub rl: &'a [f64],
+    pub d: &'a [f64],
+    pub v: &'a [f64],
+    pub w: &'a [f64],
+    /// Log-weights: shifted by `shift` in place (−∞ where the weight is 0).
+    pub lw: &'a mut [f64],
+    /// Receives the unnormalised weights `exp(lw − shift)`.
+    pub buf: &'a mut [f64],
+    pub shift: f64,
+    /// All weights 1 (after an underflow reset).
+    pub uniform: bool,
+    /// Reference point subtracted from (R_R, R_L, D) before the moments.
+    pub r: [f64; 3],
+}
+
+/// Output of [`summarize`]: weight sum, sum of squares and maximum; weighted
+/// sums of (R_R, R_L, D) − r, V, W; weighted products of the shifted
+/// parameters (rr·rr, rr·rl, rr·d, rl·rl, rl·d, d·d).
+pub(crate) struct Sums {
+    pub sum: f64,
+    pub sq: f64,
+    pub max: f64,
+    pub s1: [f64; 5],
+    pub s2: [f64; 6],
+}
+
+#[inline(always)]
+fn summarize_impl(a: Summarize<'_>) -> Sums {
+    let n = a.rr.len();
+    let Summarize {
+        rr,
+        rl,
+        d,
+        v,
+        w,
+        lw,
+        buf,
+        shift,
+        uniform,
+        r,
+    } = a;
+    let (rl, d, v, w, lw, buf) = (
+        &rl[..n],
+        &d[..n],
+        &v[..n],
+        &w[..n],
+        &mut lw[..n],
+        &mut buf[..n],
+    );
+    let mut sum = [0.0f64; LANES];
+    let mut sq = [0.0f64; LANES];
+    let mut max = [0.0f64; LANES];
+    let mut s1 = [[0.0f64; LANES]; 5];
+    let mut s2 = [[0.0f64; LANES]; 6];
+    macro_rules! body {
+        ($rr:ident, $rl:ident, $d:ident, $v:ident, $w:ident, $lw:ident, $buf:ident, $l:expr, $i:expr) => {{
+            let (l, i) = ($l, $i);
+            let (rr, rl, d, v, w, lw, buf) =
+                (&*$rr, &*$rl, &*$d, &*$v, &*$w, &mut *$lw, &mut *$buf);
+            let x = lw[i] - shift;
+            let e = if uniform { 1.0 } else { fast_exp(x) };
+            lw[i] = if e > 0.0 { x } else { f64::NEG_INFINITY };
+            buf[i] = e;
+            sum[l] += e;
+            sq[l] += e * e;
+            max[l] = if e > max[l] { e } else { max[l] };
+            let (a, b, c) = (rr[i] - r[0], rl[i] - r[1], d[i] - r[2]);
+            let (ea, eb, ec) = (e * a, e * b, e * c);
+            s1[0][l] += ea;
+            s1[1][l] += eb;
+            s1[2][l] += ec;
+            s1[3][l] += e * v[i];
+            s1[4][l] += e * w[i];
+            s2[0][l] += ea * a;
+            s2[1][l] += ea * b;
+            s2[2][l] += ea * c;
+            s2[3][l] += eb * b;
+            s2[4][l] += eb * c;
+            s2[5][l] += ec * c;
+        }};
+    }
+    let full = n / LANES * LANES;
+    for c in (0..full).step_by(LANES) {
+        let rr: &[f64; LANES] = rr[c..c + LANES].try_into().unwrap();
+        let rl: &[f64; LANES] = rl[c..c + LANES].try_into().unwrap();
+        let d: &[f64; LANES] = d[c..c + LANES].try_into().unwrap();
+        let v: &[f64; LANES] = v[c..c + LANES].try_into().unwrap();
+        let w: &[f64; LANES] = w[c..c + LANES].try_into().unwrap();
+        let lw: &mut [f64; LANES] = (&mut lw[c..c + LANES]).try_into().unwrap();
+        let buf: &mut [f64; LANES] = (&mut buf[c..c + LANES]).try_into().unwrap();
+        // Whole-chunk operations, the same arithmetic as `body!`.
+        let x: [f64; LANES] = std::array::from_fn(|l| lw[l] - shift);
+        let e: [f64; LANES] = std::array::from_fn(|l| if uniform { 1.0 } else { fast_exp(x[l]) });
+        *lw = std::array::from_fn(|l| if e[l] > 0.0 { x[l] } else { f64::NEG_INFINITY });
+        *buf = e;
+        sum = std::array::from_fn(|l| sum[l] + e[l]);
+        sq = std::array::from_fn(|l| sq[l] + e[l] * e[l]);
+        max = std::array::from_fn(|l| if e[l] > max[l] { e[l] } else { max[l] });
+        let a: [f64; LANES] = std::array::from_fn(|l| rr[l] - r[0]);
+        let b: [f64; LANES] = std::array::from_fn(|l| rl[l] - r[1]);
+        let cc: [f64; LANES] = std::array::from_fn(|l| d[l] - r[2]);
+        let ea: [f64; LANES] = std::array::from_fn(|l| e[l] * a[l]);
+        let eb: [f64; LANES] = std::array::from_fn(|l| e[l] * b[l]);
+        let ec: [f64; LANES] = std::array::from_fn(|l| e[l] * cc[l]);
+        s1[0] = std::array::from_fn(|l| s1[0][l] + ea[l]);
+        s1[1] = std::array::from_fn(|l| s1[1][l] + eb[l]);
+        s1[2] = std::array::from_fn(|l| s1[2][l] + ec[l]);
+        s1[3] = std::array::from_fn(|l| s1[3][l] + e[l] * v[l]);
+        s1[4] = std::array::from_fn(|l| s1[4][l] + e[l] * w[l]);
+        s2[0] = std::array::from_fn(|l| s2[0][l] + ea[l] * a[l]);
+        s2[1] = std::array::from_fn(|l| s2[1][l] + ea[l] * b[l]);
+        s2[2] = std::array::from_fn(|l| s2[2][l] + ea[l] * cc[l]);
+        s2[3] = std::array::from_fn(|l| s2[3][l] + eb[l] * b[l]);
+        s2[4] = std::array::from_fn(|l| s2[4][l] + eb[l] * cc[l]);
+        s2[5] = std::array::from_fn(|l| s2[5][l] + ec[l] * cc[l]);
+    }
+    for i in full..n {
+        body!(rr, rl, d, v, w, lw, buf, 0, i);
+    }
+    let fold = |x: &[f64; LANES]| x.iter().sum::<f64>();
+    Sums {
+        sum: fold(&sum),
+        sq: fold(&sq),
+        max: max.iter().fold(0.0f64, |a, &b| a.max(b)),
+        s1: std::array::from_fn(|k| fold(&s1[k])),
+        s2: std::array::from_fn(|k| fold(&s2[k])),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn predict_avx2(a: Predict<'_>) -> Predicted {
+    predict_impl(a)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn summarize_avx2(a: Summarize<'_>) -> Sums {
+    summarize_impl(a)
+}
+
+/// Random walk, V and W from the wheel rates, log-likelihood, in one pass.
+pub(crate) fn predict(a: Predict<'_>) -> Predicted {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        return unsafe { predict_avx2(a) };
+    }
+    predict_impl(a)
+}
+
+/// Weights from log-weights and the weighted moments, in one pass.
+pub(crate) fn summarize(a: Summarize<'_>) -> Sums {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        return unsafe { summarize_avx2(a) };
+    }
+    summarize_impl(a)
+}
