@@ -3,6 +3,9 @@
 //! motions leave one by one. Numbers are those of `pipeline::icp::run` on the
 //! whole recording (same operations in the same order).
 
+// `!(x > y)` is deliberate: it is also true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use std::collections::{BTreeMap, VecDeque};
 
 use crate::geom::{self, Pose2};

@@ -72,11 +72,12 @@ impl StepBuilder {
     /// A builder; `use_gyro` false ignores gyro samples; `gyro_sigma` is the
     /// per-sample σ (rad/s).
     pub fn new(use_gyro: bool, gyro_sigma: f64) -> Self {
-        let mut gyro = Tail::default();
-        gyro.ended = !use_gyro;
         Self {
             wheels: Tail::default(),
-            gyro,
+            gyro: Tail {
+                ended: !use_gyro,
+                ..Tail::default()
+            },
             obs: VecDeque::new(),
             gyro_sigma,
             covered: None,
