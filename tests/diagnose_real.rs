@@ -32,6 +32,7 @@ fn motions(rec: &Recording, robot: &RobotConfig, stride: usize) -> Vec<Motion> {
         beam_stride: stride,
         ..IcpParams::default()
     };
+    let icp = pipeline::diagnose::icp_for_diagnosis(&icp);
     pipeline::icp::run(rec, robot, &icp).unwrap().motions
 }
 
