@@ -62,6 +62,22 @@ fn run(target: &str, data: &[u8]) -> Result<(), String> {
                 },
                 ..Default::default()
             };
+            // The streaming reader (icp, calibrate) must refuse it as well.
+            let file = std::env::temp_dir().join(format!(
+                "odocal-fuzz-{}-{}.mcap",
+                std::process::id(),
+                data.len()
+            ));
+            std::fs::write(&file, data).unwrap();
+            let streamed = odocal::io::stream::McapStream::open(&file, &ReadOptions::default())
+                .and_then(|mut s| {
+                    let mut n = 0usize;
+                    while s.next_item()?.is_some() {
+                        n += 1;
+                    }
+                    Ok(n)
+                });
+            std::fs::remove_file(&file).unwrap();
             let mut out = Err(String::new());
             for opts in [ReadOptions::default(), reference] {
                 match read_mcap_bytes(data, "fuzz.mcap", &opts) {
@@ -75,6 +91,13 @@ fn run(target: &str, data: &[u8]) -> Result<(), String> {
                         }
                     }
                 }
+            }
+            if let Ok(n) = streamed {
+                // Accepted by the stream: it must then be accepted whole too.
+                assert!(
+                    out.is_ok(),
+                    "streamed {n} items of a file the reader refuses"
+                );
             }
             out
         }

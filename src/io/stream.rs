@@ -17,7 +17,7 @@ use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 use std::sync::Arc;
 
-use mcap::sans_io::{LinearReadEvent, LinearReader};
+use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
 use super::mcap_read::{channel_roles, ReadOptions};
 use super::mcap_streams::{Role, State};
@@ -101,6 +101,9 @@ struct Raw {
     log_time: u64,
 }
 
+/// Largest record (or decompressed chunk) the streaming reader accepts (bytes).
+const MAX_RECORD_BYTES: usize = 1 << 30;
+
 /// A failure while streaming: an MCAP-level problem or a decoding one.
 enum Fail {
     Mcap(String),
@@ -115,7 +118,11 @@ impl<'o> Messages<'o> {
         check_footer(&mut file).map_err(Fail::Mcap)?;
         Ok(Self {
             file,
-            reader: LinearReader::new(),
+            // A corrupt length field must be an error, not an allocation of
+            // petabytes: no record or chunk of a real bag comes near this.
+            reader: LinearReader::new_with_options(
+                LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
+            ),
             opts,
             name,
             schemas: HashMap::new(),
