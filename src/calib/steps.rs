@@ -104,64 +104,6 @@ pub fn usable(m: &Measurement) -> bool {
 /// Longest predict-only step (s) used to fill gaps without observations.
 pub const MAX_GAP_STEP: f64 = 0.1;
 
-/// Linear interpolation of wheel angles at `t`; `None` outside the samples.
-/// `hint` speeds up monotone queries (index of the last bracket found).
-fn angles_at(wheels: &[WheelSample], t: f64, hint: &mut usize) -> Option<(f64, f64)> {
-    let n = wheels.len();
-    if n < 2 || !(t >= wheels[0].stamp) || !(t <= wheels[n - 1].stamp) {
-        return None;
-    }
-    if *hint >= n - 1 || wheels[*hint].stamp > t {
-        *hint = wheels.partition_point(|s| s.stamp <= t).saturating_sub(1);
-    }
-    while *hint + 1 < n - 1 && wheels[*hint + 1].stamp <= t {
-        *hint += 1;
-    }
-    let a = wheels[*hint];
-    let b = wheels[(*hint + 1).min(n - 1)];
-    let dt = b.stamp - a.stamp;
-    if !(dt > 0.0) {
-        return Some((a.right, a.left));
-    }
-    let s = (t - a.stamp) / dt;
-    Some((
-        a.right + (b.right - a.right) * s,
-        a.left + (b.left - a.left) * s,
-    ))
-}
-
-/// Mean gyro rate over `[t0, t1]` (trapezoid integral of the linearly
-/// interpolated samples) and the number of samples inside; `None` when the
-/// gyro stream does not cover the interval.
-fn gyro_mean(gyro: &[GyroSample], t0: f64, t1: f64) -> Option<(f64, usize)> {
-    let n = gyro.len();
-    if n < 2 || t0 < gyro[0].stamp || t1 > gyro[n - 1].stamp || !(t1 > t0) {
-        return None;
-    }
-    let at = |t: f64| {
-        let i = gyro.partition_point(|s| s.stamp <= t).clamp(1, n - 1);
-        let (a, b) = (gyro[i - 1], gyro[i]);
-        let dt = b.stamp - a.stamp;
-        if dt > 0.0 {
-            a.wz + (b.wz - a.wz) * (t - a.stamp) / dt
-        } else {
-            b.wz
-        }
-    };
-    let lo = gyro.partition_point(|s| s.stamp <= t0);
-    let hi = gyro.partition_point(|s| s.stamp < t1);
-    let mut integral = 0.0;
-    let (mut pt, mut pv) = (t0, at(t0));
-    for s in &gyro[lo..hi] {
-        integral += 0.5 * (pv + s.wz) * (s.stamp - pt);
-        pt = s.stamp;
-        pv = s.wz;
-    }
-    integral += 0.5 * (pv + at(t1)) * (t1 - pt);
-    let mean = integral / (t1 - t0);
-    mean.is_finite().then_some((mean, hi - lo))
-}
-
 /// Builds the filter steps. Observations must be sorted by `t0`; those outside
 /// the wheel samples' time span, with `t1 ≤ t0` or non-finite values are
 /// dropped. Gaps between observations (and before the first / after the last)
@@ -175,68 +117,14 @@ pub fn steps(
     gyro: &[GyroSample],
     gyro_sigma: f64,
 ) -> Vec<CalibStep> {
+    let mut b = super::StepBuilder::new(true, gyro_sigma);
+    wheels.iter().for_each(|w| b.push_wheel(*w));
+    b.end_wheels();
+    gyro.iter().for_each(|g| b.push_gyro(*g));
+    b.end_gyro();
+    obs.iter().for_each(|o| b.push_obs(*o));
     let mut out = Vec::with_capacity(obs.len() + 16);
-    let n = wheels.len();
-    if n < 2 {
-        return out;
-    }
-    let (start, end) = (wheels[0].stamp, wheels[n - 1].stamp);
-    let mut hint = 0usize;
-    let make = |t0: f64, t1: f64, hint: &mut usize| -> Option<CalibStep> {
-        let (r0, l0) = angles_at(wheels, t0, hint)?;
-        let (r1, l1) = angles_at(wheels, t1, hint)?;
-        let dt = t1 - t0;
-        let mut s = CalibStep::new(t0, t1, (r1 - r0) / dt, (l1 - l0) / dt);
-        if let Some((wz, k)) = gyro_mean(gyro, t0, t1) {
-            s.push(Measurement {
-                kind: Kind::W,
-                value: wz,
-                sigma: gyro_sigma / (k.max(1) as f64).sqrt(),
-            });
-        }
-        (s.omega_right.is_finite() && s.omega_left.is_finite()).then_some(s)
-    };
-    let fill = |from: f64, to: f64, out: &mut Vec<CalibStep>, hint: &mut usize| {
-        if !(to > from) {
-            return;
-        }
-        let pieces = ((to - from) / MAX_GAP_STEP).ceil().max(1.0) as usize;
-        for k in 0..pieces {
-            let a = from + (to - from) * k as f64 / pieces as f64;
-            let b = from + (to - from) * (k + 1) as f64 / pieces as f64;
-            if let Some(s) = make(a, b, hint) {
-                out.push(s);
-            }
-        }
-    };
-    let mut covered = start;
-    for o in obs {
-        let ok = [o.t0, o.t1, o.v, o.w].iter().all(|x| x.is_finite())
-            && o.t1 > o.t0
-            && o.t0 >= start
-            && o.t1 <= end;
-        if !ok {
-            continue;
-        }
-        if o.t0 > covered {
-            fill(covered, o.t0, &mut out, &mut hint);
-        }
-        if let Some(mut s) = make(o.t0, o.t1, &mut hint) {
-            s.push(Measurement {
-                kind: Kind::V,
-                value: o.v,
-                sigma: o.sigma_v,
-            });
-            s.push(Measurement {
-                kind: Kind::W,
-                value: o.w,
-                sigma: o.sigma_w,
-            });
-            out.push(s);
-            covered = covered.max(o.t1);
-        }
-    }
-    fill(covered, end, &mut out, &mut hint);
+    b.poll(true, &mut |s| out.push(s));
     out
 }
 

@@ -52,7 +52,6 @@ pub mod stream;
 pub mod stream_icp;
 pub mod stream_out;
 pub mod stream_run;
-pub mod stream_steps;
 pub mod tum;
 
 pub use carmen::read_carmen;

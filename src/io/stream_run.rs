@@ -13,8 +13,8 @@ use std::time::Instant;
 use super::stream::{Item, McapStream, StreamInfo};
 use super::stream_icp::{IcpTally, PriorKind, StreamIcp};
 use super::stream_out::AtomicWriter;
-use super::stream_steps::StepBuilder;
 use super::ReadOptions;
+use crate::calib::StepBuilder;
 use crate::calib::{
     self, CalibParams, CalibStep, CalibSummary, Calibrator, Estimate, Multipliers, Params3,
 };

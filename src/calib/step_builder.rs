@@ -1,15 +1,15 @@
-//! [`calib::steps`](crate::calib::steps) fed sample by sample: wheel angles,
-//! gyro rates and velocity observations arrive in stamp order, and each
-//! filter step leaves as soon as the samples around it are known. Only the
-//! samples still needed are kept. The steps are those `calib::steps` builds
-//! from the whole streams (same arithmetic, same brackets).
+//! The calibration steps built sample by sample: wheel angles, gyro rates and
+//! velocity observations arrive in stamp order, and each filter step leaves as
+//! soon as the samples around it are known. Only the samples still needed are
+//! kept, so a recording of any length streams through in flat memory;
+//! [`calib::steps`](crate::calib::steps) is the same builder fed whole streams.
 
 // `!(x > y)` is deliberate: it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use std::collections::VecDeque;
 
-use crate::calib::{CalibStep, Kind, Measurement, MAX_GAP_STEP};
+use super::steps::{CalibStep, Kind, Measurement, MAX_GAP_STEP};
 use crate::motion::VelocityObs;
 use crate::recording::{GyroSample, WheelSample};
 
@@ -209,9 +209,8 @@ impl StepBuilder {
         (s.omega_right.is_finite() && s.omega_left.is_finite()).then_some(s)
     }
 
-    /// Wheel angles at `t` by linear interpolation (the bracket
-    /// `calib::steps` uses: last sample at or before `t`, capped one before
-    /// the stream's last).
+    /// Wheel angles at `t` by linear interpolation between the last sample
+    /// at or before `t` and the next (capped one before the stream's last).
     fn angles_at(&self, t: f64) -> Option<(f64, f64)> {
         let w = &self.wheels.items;
         let n = w.len();
@@ -238,7 +237,9 @@ impl StepBuilder {
         ))
     }
 
-    /// Mean gyro rate over `[t0, t1]` and the samples inside, as `calib::steps`.
+    /// Mean gyro rate over `[t0, t1]` (trapezoid integral of the linearly
+    /// interpolated samples) and the number of samples inside; `None` when
+    /// the gyro stream does not cover the interval.
     fn gyro_mean(&self, t0: f64, t1: f64) -> Option<(f64, usize)> {
         let g = &self.gyro.items;
         let n = g.len();
