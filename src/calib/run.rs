@@ -124,6 +124,63 @@ impl CalibrationRun {
     }
 }
 
+impl CalibSummary {
+    /// The summary of `method` after `iterations` steps that took `total_s`
+    /// (s) in all, ending with the estimate `last`; without any step, the
+    /// nominal parameters with zero std.
+    pub fn after(
+        method: &str,
+        last: Option<&Estimate>,
+        nominal: DiffDrive,
+        iterations: usize,
+        total_s: f64,
+    ) -> Self {
+        let (final_params, std) = match last {
+            Some(e) => (
+                Params3 {
+                    r_right: e.r_right,
+                    r_left: e.r_left,
+                    wheel_base: e.wheel_base,
+                },
+                Params3 {
+                    r_right: e.std_r_right,
+                    r_left: e.std_r_left,
+                    wheel_base: e.std_wheel_base,
+                },
+            ),
+            None => (
+                Params3 {
+                    r_right: nominal.r_right,
+                    r_left: nominal.r_left,
+                    wheel_base: nominal.wheel_base,
+                },
+                Params3 {
+                    r_right: 0.0,
+                    r_left: 0.0,
+                    wheel_base: 0.0,
+                },
+            ),
+        };
+        let ratio = |a: f64, b: f64| if b != 0.0 { a / b } else { f64::NAN };
+        CalibSummary {
+            method: method.to_string(),
+            final_params,
+            std,
+            iterations,
+            mean_iteration_ms: if iterations == 0 {
+                0.0
+            } else {
+                1e3 * total_s / iterations as f64
+            },
+            multipliers: Multipliers {
+                left_wheel_radius: ratio(final_params.r_left, nominal.r_left),
+                right_wheel_radius: ratio(final_params.r_right, nominal.r_right),
+                wheel_separation: ratio(final_params.wheel_base, nominal.wheel_base),
+            },
+        }
+    }
+}
+
 /// Runs `cal` over `steps`. Each step's wheel increment (rate × the part of
 /// its interval not already integrated, so overlapping intervals are not
 /// counted twice) is integrated with `DiffDrive::increment` using the
@@ -166,49 +223,7 @@ pub fn run_observed(
         on_step(&e, cal.cloud());
         last = Some(e);
     }
-    let (final_params, std) = match &last {
-        Some(e) => (
-            Params3 {
-                r_right: e.r_right,
-                r_left: e.r_left,
-                wheel_base: e.wheel_base,
-            },
-            Params3 {
-                r_right: e.std_r_right,
-                r_left: e.std_r_left,
-                wheel_base: e.std_wheel_base,
-            },
-        ),
-        None => (
-            Params3 {
-                r_right: nominal.r_right,
-                r_left: nominal.r_left,
-                wheel_base: nominal.wheel_base,
-            },
-            Params3 {
-                r_right: 0.0,
-                r_left: 0.0,
-                wheel_base: 0.0,
-            },
-        ),
-    };
-    let ratio = |a: f64, b: f64| if b != 0.0 { a / b } else { f64::NAN };
-    let summary = CalibSummary {
-        method: cal.name().to_string(),
-        final_params,
-        std,
-        iterations: steps.len(),
-        mean_iteration_ms: if steps.is_empty() {
-            0.0
-        } else {
-            1e3 * total / steps.len() as f64
-        },
-        multipliers: Multipliers {
-            left_wheel_radius: ratio(final_params.r_left, nominal.r_left),
-            right_wheel_radius: ratio(final_params.r_right, nominal.r_right),
-            wheel_separation: ratio(final_params.wheel_base, nominal.wheel_base),
-        },
-    };
+    let summary = CalibSummary::after(cal.name(), last.as_ref(), nominal, steps.len(), total);
     CalibrationRun {
         summary,
         history,

@@ -15,9 +15,7 @@ use super::stream_icp::{IcpTally, PriorKind, StreamIcp};
 use super::stream_out::AtomicWriter;
 use super::ReadOptions;
 use crate::calib::StepBuilder;
-use crate::calib::{
-    self, CalibParams, CalibStep, CalibSummary, Calibrator, Estimate, Multipliers, Params3,
-};
+use crate::calib::{self, CalibParams, CalibStep, CalibSummary, Calibrator, Estimate};
 use crate::error::InputError;
 use crate::geom::Pose2;
 use crate::icp::{IcpParams, IcpStats};
@@ -306,50 +304,13 @@ impl CalibDriver {
     }
 
     fn summary(&self) -> CalibSummary {
-        let nominal = self.nominal;
-        let (final_params, std) = match &self.last {
-            Some(e) => (
-                Params3 {
-                    r_right: e.r_right,
-                    r_left: e.r_left,
-                    wheel_base: e.wheel_base,
-                },
-                Params3 {
-                    r_right: e.std_r_right,
-                    r_left: e.std_r_left,
-                    wheel_base: e.std_wheel_base,
-                },
-            ),
-            None => (
-                Params3 {
-                    r_right: nominal.r_right,
-                    r_left: nominal.r_left,
-                    wheel_base: nominal.wheel_base,
-                },
-                Params3 {
-                    r_right: 0.0,
-                    r_left: 0.0,
-                    wheel_base: 0.0,
-                },
-            ),
-        };
-        let ratio = |a: f64, b: f64| if b != 0.0 { a / b } else { f64::NAN };
-        CalibSummary {
-            method: self.cal.name().to_string(),
-            final_params,
-            std,
-            iterations: self.steps,
-            mean_iteration_ms: if self.steps == 0 {
-                0.0
-            } else {
-                1e3 * self.total_s / self.steps as f64
-            },
-            multipliers: Multipliers {
-                left_wheel_radius: ratio(final_params.r_left, nominal.r_left),
-                right_wheel_radius: ratio(final_params.r_right, nominal.r_right),
-                wheel_separation: ratio(final_params.wheel_base, nominal.wheel_base),
-            },
-        }
+        CalibSummary::after(
+            self.cal.name(),
+            self.last.as_ref(),
+            self.nominal,
+            self.steps,
+            self.total_s,
+        )
     }
 }
 
