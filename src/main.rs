@@ -514,6 +514,7 @@ fn icp(a: IcpArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let (mut stats, path_length) = if odocal::io::stream::is_mcap(&a.input) {
         // Bags stream through in flat memory, however long.
+        let pb = progress_bar("icp");
         let out = pipeline::icp::run_file(
             &a.input,
             &read_options(&cfg, &robot),
@@ -521,7 +522,9 @@ fn icp(a: IcpArgs) -> anyhow::Result<()> {
             &cfg.icp,
             &a.out,
             a.motions.as_deref(),
+            &mut |f| pb.set_position((f * 1000.0) as u64),
         )?;
+        pb.finish_and_clear();
         (out.stats, out.path_length)
     } else {
         let rec = read_recording(&a.input, &cfg, &robot)?;
@@ -573,6 +576,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
     {
         // Bags stream through in flat memory, however long. (A Rerun
         // recording of the run takes the in-memory path below.)
+        let pb = progress_bar("calibrate");
         let summary = pipeline::calibrate::run_file(
             rec_path,
             &read_options(&cfg, &robot),
@@ -581,7 +585,9 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
             &cfg.calib,
             &cfg.measurements,
             &a.out,
+            &mut |f| pb.set_position((f * 1000.0) as u64),
         )?;
+        pb.finish_and_clear();
         return print_calibration(&summary, a.json, &a.out);
     }
     let (input, rec, icp_out) = match (&a.input, &a.motions_csv, &a.wheels_csv) {

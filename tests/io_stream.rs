@@ -245,6 +245,8 @@ fn streamed_icp_and_calibration_write_the_same_files_as_the_in_memory_run() {
     let rec = read_recording(bag, &read).unwrap();
     let whole = pipeline::icp::run(&rec, &robot, &cfg.icp).unwrap();
     pipeline::icp::write(&whole, &d.join("a.tum"), Some(&d.join("a.csv"))).unwrap();
+    // Progress is the fraction of scans read: rising, ending at 1.
+    let mut fractions = Vec::new();
     let s = pipeline::icp::run_file(
         bag,
         &read,
@@ -252,8 +254,11 @@ fn streamed_icp_and_calibration_write_the_same_files_as_the_in_memory_run() {
         &cfg.icp,
         &d.join("b.tum"),
         Some(&d.join("b.csv")),
+        &mut |f| fractions.push(f),
     )
     .unwrap();
+    assert_eq!(fractions.len(), rec.scans.len());
+    assert!(fractions.windows(2).all(|w| w[1] > w[0]) && fractions.last() == Some(&1.0));
     same_file(&d.join("a.tum"), &d.join("b.tum"));
     same_file(&d.join("a.csv"), &d.join("b.csv"));
     assert_eq!(s.stats.pairs, whole.stats.pairs);
@@ -276,9 +281,17 @@ fn streamed_icp_and_calibration_write_the_same_files_as_the_in_memory_run() {
     let mem = pipeline::calibrate::run(&input, &robot, &params, &cfg.measurements).unwrap();
     let (a, b) = (d.join("cal-a"), d.join("cal-b"));
     pipeline::calibrate::write(&a, &mem).unwrap();
-    let s =
-        pipeline::calibrate::run_file(bag, &read, &robot, &cfg.icp, &params, &cfg.measurements, &b)
-            .unwrap();
+    let s = pipeline::calibrate::run_file(
+        bag,
+        &read,
+        &robot,
+        &cfg.icp,
+        &params,
+        &cfg.measurements,
+        &b,
+        &mut |_| {},
+    )
+    .unwrap();
     same_file(&a.join("calibration.csv"), &b.join("calibration.csv"));
     same_file(&a.join("trajectory.tum"), &b.join("trajectory.tum"));
     let mut expect = mem.summary.clone();
@@ -320,8 +333,17 @@ fn streamed_kalman_calibration_matches_without_and_with_gyro() {
         let mem = pipeline::calibrate::run(&input, &robot, &params, &meas).unwrap();
         let (a, b) = (d.join(format!("a{k}")), d.join(format!("b{k}")));
         pipeline::calibrate::write(&a, &mem).unwrap();
-        let s = pipeline::calibrate::run_file(&bag, &read, &robot, &cfg.icp, &params, &meas, &b)
-            .unwrap();
+        let s = pipeline::calibrate::run_file(
+            &bag,
+            &read,
+            &robot,
+            &cfg.icp,
+            &params,
+            &meas,
+            &b,
+            &mut |_| {},
+        )
+        .unwrap();
         same_file(&a.join("calibration.csv"), &b.join("calibration.csv"));
         same_file(&a.join("trajectory.tum"), &b.join("trajectory.tum"));
         assert_eq!(s.final_params, mem.summary.final_params);
@@ -353,6 +375,7 @@ fn streamed_icp_matches_on_real_bags() {
             &cfg.icp,
             &d.join(format!("b{k}.tum")),
             Some(&b),
+            &mut |_| {},
         )
         .unwrap();
         same_file(&a, &b);

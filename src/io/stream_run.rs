@@ -105,6 +105,7 @@ struct IcpStage {
     motions: Option<(AtomicWriter, PathBuf)>,
     wheels_seen: usize,
     odom_seen: usize,
+    scans_seen: usize,
     matching_s: f64,
 }
 
@@ -140,6 +141,7 @@ impl IcpStage {
             motions: None,
             wheels_seen: 0,
             odom_seen: 0,
+            scans_seen: 0,
             matching_s: 0.0,
         })
     }
@@ -152,7 +154,10 @@ impl IcpStage {
         on_motion: &mut dyn FnMut(&Motion) -> Result<(), StreamError>,
     ) -> Result<(), StreamError> {
         match item {
-            Item::Scan(s) => self.icp.push_scan(s.clone()),
+            Item::Scan(s) => {
+                self.scans_seen += 1;
+                self.icp.push_scan(s.clone())
+            }
             Item::Wheel(w) => {
                 self.icp.push_wheel(w);
                 self.wheels_seen += 1;
@@ -209,7 +214,8 @@ impl IcpStage {
 }
 
 /// Runs ICP over the bag at `input`, writing the trajectory (TUM) to `tum`
-/// and, if asked, the motions CSV, both atomically.
+/// and, if asked, the motions CSV, both atomically; `progress` gets the
+/// fraction of scans read.
 pub fn icp_file(
     input: &Path,
     read: &ReadOptions,
@@ -217,6 +223,7 @@ pub fn icp_file(
     params: &IcpParams,
     tum: &Path,
     motions_csv: Option<&Path>,
+    progress: &mut dyn FnMut(f64),
 ) -> Result<IcpRunSummary, StreamError> {
     let mut stream = McapStream::open(input, read)?;
     let info = stream.info().clone();
@@ -230,6 +237,9 @@ pub fn icp_file(
     let mut none = |_: &Motion| Ok(());
     while let Some(item) = stream.next_item()? {
         stage.feed(&item, &info, &mut none)?;
+        if matches!(item, Item::Scan(_)) {
+            progress(stage.scans_seen as f64 / info.scans as f64);
+        }
     }
     stage.finish(&mut none)?;
     let traj = stage.traj.take().expect("created above");
@@ -317,6 +327,8 @@ impl CalibDriver {
 /// Runs ICP and the calibrator over the bag at `input`, writing
 /// `DIR/calibration.csv`, `DIR/trajectory.tum` and `DIR/summary.json`
 /// atomically. `calib` is used as given (the caller adapts its ranges to the robot).
+// Each argument is a separate stage input the callers hold apart.
+#[allow(clippy::too_many_arguments)]
 pub fn calibrate_file(
     input: &Path,
     read: &ReadOptions,
@@ -325,6 +337,7 @@ pub fn calibrate_file(
     calib: &CalibParams,
     gyro: GyroUse,
     dir: &Path,
+    progress: &mut dyn FnMut(f64),
 ) -> Result<CalibSummary, StreamError> {
     let mut stream = McapStream::open(input, read)?;
     let info = stream.info().clone();
@@ -393,6 +406,9 @@ pub fn calibrate_file(
             Ok(())
         })?;
         feed_steps(&mut steps, false, &mut driver);
+        if matches!(item, Item::Scan(_)) {
+            progress(stage.scans_seen as f64 / info.scans as f64);
+        }
     }
     stage.finish(&mut |m| {
         if let Some(o) = VelocityObs::from_motion(m) {

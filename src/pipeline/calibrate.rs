@@ -117,7 +117,10 @@ pub fn write(dir: &Path, run: &CalibrationRun) -> Result<(), PipelineError> {
 
 /// Streams the MCAP bag at `input` through ICP and the configured calibrator
 /// in flat memory, writing what [`write`] writes into `dir`; same numbers as
-/// [`run`] on the read recording (timings aside).
+/// [`run`] on the read recording (timings aside). `progress` gets the
+/// fraction of scans read.
+// Each argument is a separate stage input the callers hold apart.
+#[allow(clippy::too_many_arguments)]
 pub fn run_file(
     input: &Path,
     read: &crate::io::ReadOptions,
@@ -126,12 +129,13 @@ pub fn run_file(
     params: &CalibParams,
     meas: &MeasurementConfig,
     dir: &Path,
+    progress: &mut dyn FnMut(f64),
 ) -> Result<calib::CalibSummary, PipelineError> {
     let gyro = crate::io::stream_run::GyroUse {
         use_gyro: meas.use_gyro,
         gyro_sigma: meas.gyro_sigma,
     };
     let params = params_for_robot(params, robot);
-    crate::io::stream_run::calibrate_file(input, read, robot, icp, &params, gyro, dir)
+    crate::io::stream_run::calibrate_file(input, read, robot, icp, &params, gyro, dir, progress)
         .map_err(super::icp::stream_error)
 }

@@ -93,7 +93,8 @@ pub fn write(out: &IcpOutput, tum: &Path, motions_csv: Option<&Path>) -> Result<
 
 /// Streams the MCAP bag at `input` through ICP in flat memory and writes the
 /// trajectory (TUM) and, if asked, the motions CSV as [`write`] does; same
-/// numbers as [`run`] on the read recording.
+/// numbers as [`run`] on the read recording. `progress` gets the fraction
+/// of scans read.
 pub fn run_file(
     input: &Path,
     read: &crate::io::ReadOptions,
@@ -101,8 +102,9 @@ pub fn run_file(
     params: &IcpParams,
     tum: &Path,
     motions_csv: Option<&Path>,
+    progress: &mut dyn FnMut(f64),
 ) -> Result<crate::io::stream_run::IcpRunSummary, PipelineError> {
-    crate::io::stream_run::icp_file(input, read, robot, params, tum, motions_csv)
+    crate::io::stream_run::icp_file(input, read, robot, params, tum, motions_csv, progress)
         .map_err(stream_error)
 }
 
