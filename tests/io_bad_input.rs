@@ -1,38 +1,31 @@
 //! Bad input never panics and never yields silent numbers: every case is an
 //! `InputError` naming the file, and the topic and message index where known.
 
-use std::collections::BTreeMap;
-use std::io::Cursor;
-
 use crate::io_roundtrip::synthetic;
+use crate::io_time::Msg;
 use crate::support::{scratch, shared_data};
 use odocal::io::ros_msgs::{Header, JointStateMsg, LaserScanMsg, PoseStampedMsg, RosMsg, Time};
 use odocal::io::{encode_mcap, read_mcap_bytes, read_recording, ReadOptions, WriteOptions};
 use odocal::InputError;
 
 /// An MCAP with one channel per entry: (topic, schema name, messages); the
-/// log time of message i is i ms.
+/// log time of message i is (i + 1) ms.
 fn bag(channels: &[(&str, &str, Vec<Vec<u8>>)]) -> Vec<u8> {
-    let mut w = mcap::WriteOptions::new()
-        .compression_threads(0)
-        .create(Cursor::new(Vec::new()))
-        .unwrap();
-    for (topic, ty, msgs) in channels {
-        let s = w.add_schema(ty, "ros2msg", b"").unwrap();
-        let c = w.add_channel(s, topic, "cdr", &BTreeMap::new()).unwrap();
-        for (i, m) in msgs.iter().enumerate() {
-            let t = 1_000_000 * (i as u64 + 1);
-            let h = mcap::records::MessageHeader {
-                channel_id: c,
-                sequence: i as u32,
-                log_time: t,
-                publish_time: t,
-            };
-            w.write_to_known_channel(&h, m).unwrap();
-        }
-    }
-    w.finish().unwrap();
-    w.into_inner().into_inner()
+    let timed: Vec<(&str, &str, Vec<Msg>)> = channels
+        .iter()
+        .map(|(topic, ty, msgs)| {
+            let msgs = msgs
+                .iter()
+                .enumerate()
+                .map(|(i, m)| Msg {
+                    log_ns: 1_000_000 * (i as u64 + 1),
+                    data: m.clone(),
+                })
+                .collect();
+            (*topic, *ty, msgs)
+        })
+        .collect();
+    crate::io_time::bag(&timed)
 }
 
 fn scan(stamp: f64, beams: usize) -> LaserScanMsg {

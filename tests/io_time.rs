@@ -20,13 +20,13 @@ const SCAN: &str = "sensor_msgs/msg/LaserScan";
 const JS: &str = "sensor_msgs/msg/JointState";
 
 /// One message: log time (ns) and CDR bytes.
-struct Msg {
-    log_ns: u64,
-    data: Vec<u8>,
+pub(crate) struct Msg {
+    pub(crate) log_ns: u64,
+    pub(crate) data: Vec<u8>,
 }
 
 /// A bag with one channel per (topic, schema, messages), in file order.
-fn bag(channels: &[(&str, &str, Vec<Msg>)]) -> Vec<u8> {
+pub(crate) fn bag(channels: &[(&str, &str, Vec<Msg>)]) -> Vec<u8> {
     let mut w = mcap::WriteOptions::new()
         .compression_threads(0)
         .create(Cursor::new(Vec::new()))

@@ -125,7 +125,8 @@ pub struct Stat {
     pub mean: f64,
 }
 
-fn stat(mut x: Vec<f64>) -> Stat {
+/// Median (even count: mean of the middle two) and mean of `x`; NaN for none.
+pub(crate) fn stat(mut x: Vec<f64>) -> Stat {
     if x.is_empty() {
         return Stat {
             median: f64::NAN,

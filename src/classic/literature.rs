@@ -397,17 +397,7 @@ pub(crate) fn stat(mut x: Vec<f64>) -> Stat {
             mean: 0.0,
         };
     }
-    x.sort_by(f64::total_cmp);
-    let k = x.len();
-    let median = if k % 2 == 1 {
-        x[k / 2]
-    } else {
-        0.5 * (x[k / 2 - 1] + x[k / 2])
-    };
-    Stat {
-        median,
-        mean: x.iter().sum::<f64>() / k as f64,
-    }
+    crate::calib::experiments::stat(x)
 }
 
 /// Median and mean of every metric per method over the repetitions.
