@@ -34,12 +34,23 @@ fn crc32(bytes: &[u8]) -> u32 {
 /// Returns `false` (leaving `mcap` untouched) if the layout is not the
 /// expected one.
 pub fn canonicalize_summary(mcap: &mut [u8]) -> bool {
-    let n = mcap.len();
-    if n < 2 * MAGIC_LEN + FOOTER {
+    canonicalize_summary_tail(mcap, 0)
+}
+
+/// [`canonicalize_summary`] on the end of a file only: `tail` holds the
+/// file's bytes from offset `base` to its end, and `base` is at or before the
+/// summary section (so a long file need not be read whole).
+pub fn canonicalize_summary_tail(tail: &mut [u8], base: usize) -> bool {
+    let mcap = tail;
+    let n = base + mcap.len();
+    if n < 2 * MAGIC_LEN + FOOTER || mcap.len() < MAGIC_LEN + FOOTER {
         return false;
     }
+    // Absolute file offsets; `at(i)` is where offset i sits in `mcap`.
+    let at = |i: usize| i - base;
     let footer = n - MAGIC_LEN - FOOTER;
-    let (Some(start), Some(offsets)) = (u64_at(mcap, footer + 9), u64_at(mcap, footer + 17)) else {
+    let (Some(start), Some(offsets)) = (u64_at(mcap, at(footer) + 9), u64_at(mcap, at(footer) + 17))
+    else {
         return false;
     };
     let end = if offsets == 0 {
@@ -48,21 +59,23 @@ pub fn canonicalize_summary(mcap: &mut [u8]) -> bool {
         offsets as usize
     };
     let start = start as usize;
-    if start == 0 || start > end || end > footer {
+    if start == 0 || start < base || start > end || end > footer {
         return false;
     }
     // Records of the summary section before the summary offsets.
     let mut recs: Vec<(u8, usize, usize)> = Vec::new();
     let mut i = start;
     while i < end {
-        let Some(len) = u64_at(mcap, i + 1) else {
+        let Some(len) = u64_at(mcap, at(i) + 1) else {
             return false;
         };
-        let stop = i + 9 + len as usize;
+        let Some(stop) = (i + 9).checked_add(len as usize) else {
+            return false;
+        };
         if stop > end {
             return false;
         }
-        recs.push((mcap[i], i, stop));
+        recs.push((mcap[at(i)], at(i), at(stop)));
         i = stop;
     }
     let id = |b: &[u8], r: &(u8, usize, usize)| u16::from_le_bytes([b[r.1 + 9], b[r.1 + 10]]);
@@ -88,9 +101,9 @@ pub fn canonicalize_summary(mcap: &mut [u8]) -> bool {
         }
         k = run_end;
     }
-    let crc_at = footer + 25;
+    let crc_at = at(footer) + 25;
     if mcap[crc_at..crc_at + 4] != [0, 0, 0, 0] {
-        let crc = crc32(&mcap[start..crc_at]);
+        let crc = crc32(&mcap[at(start)..crc_at]);
         mcap[crc_at..crc_at + 4].copy_from_slice(&crc.to_le_bytes());
     }
     true

@@ -3,14 +3,16 @@
 //! `offered_qos_profiles` channel metadata. Same recording → same bytes.
 
 use std::collections::BTreeMap;
-use std::io::Cursor;
+use std::fs::File;
+use std::io::{BufWriter, Cursor, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use super::atomic::write_bytes_atomic;
 use super::cdr::CdrWriter;
-use super::mcap_canon::canonicalize_summary;
+use super::mcap_canon::{canonicalize_summary, canonicalize_summary_tail};
+use super::stream_out::AtomicWriter;
 use super::mcap_read::TopicConfig;
 use super::ros_msgs::{
     Header, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, Pose, Quat, RosMsg,
@@ -20,6 +22,7 @@ use super::ros_schema::schema_text;
 use crate::geom::{self, Pose2};
 use crate::recording::{Recording, StampedPose, WheelSample};
 use crate::robot::RobotConfig;
+use crate::scan::LaserScan;
 
 /// Topic, joint and frame names of a written bag.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -117,12 +120,109 @@ pub fn write_mcap(path: &Path, rec: &Recording, opts: &WriteOptions) -> Result<(
 
 /// The MCAP bytes [`write_mcap`] writes.
 pub fn encode_mcap(rec: &Recording, opts: &WriteOptions) -> Result<Vec<u8>, mcap::McapError> {
+    let mut feed = SliceFeed(&rec.scans);
+    let mut bytes = encode_into(Cursor::new(Vec::new()), rec, &mut feed, opts)?.into_inner();
+    canonicalize_summary(&mut bytes);
+    Ok(bytes)
+}
+
+/// Laser scans handed to the writer in stamp order: held in memory, or cast
+/// on demand by a simulator, so that a long recording need not fit in memory.
+pub trait ScanFeed {
+    /// Number of scans.
+    fn len(&self) -> usize;
+    /// Whether there are no scans.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Stamp of scan `i` (s); stamps must not decrease.
+    fn stamp(&self, i: usize) -> f64;
+    /// Scan `i`; the writer asks for `i = 0, 1, 2, …` in turn.
+    fn scan(&mut self, i: usize) -> &LaserScan;
+}
+
+/// Scans already in memory.
+struct SliceFeed<'a>(&'a [LaserScan]);
+
+impl ScanFeed for SliceFeed<'_> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn stamp(&self, i: usize) -> f64 {
+        self.0[i].stamp
+    }
+    fn scan(&mut self, i: usize) -> &LaserScan {
+        &self.0[i]
+    }
+}
+
+/// Writes `rec` (its `scans` ignored: they come from `feed`) to `path`,
+/// streaming: the file grows message by message in a temporary sibling
+/// that is renamed over `path` once complete. The bytes equal those of
+/// [`write_mcap`] for the same recording with the feed's scans in it.
+pub fn write_mcap_streaming(
+    path: &Path,
+    rec: &Recording,
+    feed: &mut dyn ScanFeed,
+    opts: &WriteOptions,
+) -> Result<(), WriteError> {
+    let file = path.display().to_string();
+    let io_err = |source| WriteError::Io {
+        file: file.clone(),
+        source,
+    };
+    let mut out = AtomicWriter::create(path).map_err(io_err)?;
+    encode_into(out.writer(), rec, feed, opts).map_err(|source| WriteError::Mcap {
+        file: file.clone(),
+        source,
+    })?;
+    canonicalize_file_summary(out.writer()).map_err(io_err)?;
+    out.commit().map_err(io_err)
+}
+
+/// Canonicalises the summary of the MCAP file written so far by `w`
+/// (see [`canonicalize_summary_tail`]): reads the summary back, sorts it and
+/// writes it in place.
+fn canonicalize_file_summary(w: &mut BufWriter<File>) -> std::io::Result<()> {
+    w.flush()?;
+    let f = w.get_mut();
+    let len = f.seek(SeekFrom::End(0))?;
+    let tail_len = 8 + 29; // footer record + magic
+    if len < tail_len as u64 {
+        return Ok(());
+    }
+    let mut tail = vec![0u8; tail_len];
+    f.seek(SeekFrom::Start(len - tail_len as u64))?;
+    f.read_exact(&mut tail)?;
+    let start = u64::from_le_bytes(tail[9..17].try_into().expect("8 bytes"));
+    if start == 0 || start >= len {
+        return Ok(());
+    }
+    let mut summary = vec![0u8; (len - start) as usize];
+    f.seek(SeekFrom::Start(start))?;
+    f.read_exact(&mut summary)?;
+    if canonicalize_summary_tail(&mut summary, start as usize) {
+        f.seek(SeekFrom::Start(start))?;
+        f.write_all(&summary)?;
+    }
+    f.seek(SeekFrom::End(0))?;
+    Ok(())
+}
+
+/// Writes the recording's messages (scans from `feed`) as an MCAP file into
+/// `out`, and returns it once the file is finished (summary not yet canonical).
+fn encode_into<W: Write + Seek>(
+    out: W,
+    rec: &Recording,
+    feed: &mut dyn ScanFeed,
+    opts: &WriteOptions,
+) -> Result<W, mcap::McapError> {
     let mut w = mcap::WriteOptions::new()
         .profile("ros2")
         .library("odocal")
         .compression(Some(mcap::Compression::Zstd))
         .compression_threads(0)
-        .create(Cursor::new(Vec::new()))?;
+        .create(out)?;
     let t = &opts.topics;
     let reference_has_heading = rec.reference.iter().any(|p| p.has_heading);
     let ref_type = if reference_has_heading || rec.reference.is_empty() {
@@ -148,7 +248,7 @@ pub fn encode_mcap(rec: &Recording, opts: &WriteOptions) -> Result<Vec<u8>, mcap
             JointStateMsg::TYPE,
             rec.wheels.len(),
         ),
-        (Stream::Scan, &t.scan, LaserScanMsg::TYPE, rec.scans.len()),
+        (Stream::Scan, &t.scan, LaserScanMsg::TYPE, feed.len()),
         (Stream::Odom, &t.odom, OdometryMsg::TYPE, rec.odom.len()),
     ] {
         if n > 0 {
@@ -168,7 +268,11 @@ pub fn encode_mcap(rec: &Recording, opts: &WriteOptions) -> Result<Vec<u8>, mcap
         let meta = BTreeMap::from([("offered_qos_profiles".to_string(), qos.to_string())]);
         channel[s as usize] = w.add_channel(schema, topic, "cdr", &meta)?;
     }
-    let start = rec.time_span().map(|(a, _)| a).unwrap_or(0.0);
+    let first_scan = (!feed.is_empty()).then(|| feed.stamp(0));
+    let start = match (rec.time_span().map(|(a, _)| a), first_scan) {
+        (Some(a), Some(b)) => a.min(b),
+        (a, b) => a.or(b).unwrap_or(0.0),
+    };
     // Every message as (stamp, stream, index), merged in stamp order.
     let mut order: Vec<(f64, Stream, usize)> = Vec::new();
     for &(s, _, _, n) in &streams {
@@ -178,7 +282,7 @@ pub fn encode_mcap(rec: &Recording, opts: &WriteOptions) -> Result<Vec<u8>, mcap
                 Stream::Reference => rec.reference[i].stamp,
                 Stream::Imu => rec.gyro[i].stamp,
                 Stream::Joints => rec.wheels[i].stamp,
-                Stream::Scan => rec.scans[i].stamp,
+                Stream::Scan => feed.stamp(i),
                 Stream::Odom => rec.odom[i].stamp,
             };
             order.push((stamp, s, i));
@@ -256,7 +360,7 @@ pub fn encode_mcap(rec: &Recording, opts: &WriteOptions) -> Result<Vec<u8>, mcap
                 .write(&mut cdr)
             }
             Stream::Scan => {
-                let sc = &rec.scans[i];
+                let sc = feed.scan(i);
                 let n = sc.ranges.len();
                 LaserScanMsg {
                     header: header(&opts.laser_frame),
@@ -287,9 +391,7 @@ pub fn encode_mcap(rec: &Recording, opts: &WriteOptions) -> Result<Vec<u8>, mcap
         seq[k] += 1;
     }
     w.finish()?;
-    let mut bytes = w.into_inner().into_inner();
-    canonicalize_summary(&mut bytes);
-    Ok(bytes)
+    Ok(w.into_inner())
 }
 
 fn odometry(header: Header, opts: &WriteOptions, p: &StampedPose) -> OdometryMsg {

@@ -56,7 +56,9 @@ pub mod tum;
 
 pub use carmen::read_carmen;
 pub use mcap_read::{read_mcap, read_mcap_bytes, ReadOptions, TopicConfig};
-pub use mcap_write::{encode_mcap, write_mcap, WriteError, WriteOptions};
+pub use mcap_write::{
+    encode_mcap, write_mcap, write_mcap_streaming, ScanFeed, WriteError, WriteOptions,
+};
 
 use crate::error::InputError;
 use crate::recording::Recording;

@@ -27,7 +27,14 @@ impl AtomicWriter {
         }
         remove_stale_temps(path);
         let tmp = temp_path(path);
-        let w = BufWriter::with_capacity(1 << 16, File::create(&tmp)?);
+        // Readable too, so that a writer may patch what it wrote (an MCAP summary).
+        let f = fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&tmp)?;
+        let w = BufWriter::with_capacity(1 << 16, f);
         Ok(Self {
             path: path.to_path_buf(),
             tmp,

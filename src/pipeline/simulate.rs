@@ -3,9 +3,10 @@
 
 use super::PipelineError;
 use crate::effects::Effect;
-use crate::io::{self, TopicConfig, WriteOptions};
+use crate::io::{self, ScanFeed, TopicConfig, WriteOptions};
 use crate::robot::RobotConfig;
-use crate::sim::{self, SimConfig, Truth};
+use crate::scan::LaserScan;
+use crate::sim::{self, LaserSim, SimConfig, Truth};
 use serde::Serialize;
 use std::path::Path;
 
@@ -36,7 +37,9 @@ pub struct SimulateSummary {
     pub effects: Vec<String>,
 }
 
-/// Simulates and writes `out` (MCAP) and optionally `truth_path` (JSON), both atomically.
+/// Simulates and writes `out` (MCAP) and optionally `truth_path` (JSON), both
+/// atomically. The scans are cast block by block while the bag is written,
+/// so memory does not grow with the number of scans.
 pub fn run(
     cfg: &SimConfig,
     topics: &TopicConfig,
@@ -46,21 +49,33 @@ pub fn run(
     truth_path: Option<&Path>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(SimulateSummary, Truth), PipelineError> {
-    let (rec, truth) = sim::simulate(cfg, robot, effects, progress)?;
+    let sim::SimRun {
+        recording: rec,
+        truth,
+        laser,
+    } = sim::prepare(cfg, robot, effects, progress)?;
     let mut opts = WriteOptions::for_robot(robot);
     opts.topics = topics.clone();
-    io::write_mcap(out, &rec, &opts).map_err(|e| PipelineError::write(out, e))?;
+    let mut feed = CastScans {
+        laser: &laser,
+        block: Vec::new(),
+        first: 0,
+        progress,
+    };
+    io::write_mcap_streaming(out, &rec, &mut feed, &opts)
+        .map_err(|e| PipelineError::write(out, e))?;
     if let Some(tp) = truth_path {
         io::atomic::write_bytes_atomic(tp, truth.to_json().as_bytes())
             .map_err(|e| PipelineError::write(tp, e))?;
     }
+    (feed.progress)(1.0);
     let summary = SimulateSummary {
         out: out.display().to_string(),
         truth: truth_path.map(|p| p.display().to_string()),
         scenario: truth.scenario.clone(),
         seed: truth.seed,
         duration_s: truth.duration_s,
-        scans: rec.scans.len(),
+        scans: laser.len(),
         wheel_samples: rec.wheels.len(),
         gyro_samples: rec.gyro.len(),
         reference_poses: rec.reference.len(),
@@ -68,4 +83,31 @@ pub fn run(
         effects: effects.iter().map(|e| e.to_string()).collect(),
     };
     Ok((summary, truth))
+}
+
+/// Scans cast on demand for the writer, one parallel block at a time.
+struct CastScans<'a, 'p> {
+    laser: &'a LaserSim,
+    /// The current block: scans `first .. first + block.len()`.
+    block: Vec<LaserScan>,
+    first: usize,
+    progress: &'p mut dyn FnMut(f64),
+}
+
+impl ScanFeed for CastScans<'_, '_> {
+    fn len(&self) -> usize {
+        self.laser.len()
+    }
+    fn stamp(&self, i: usize) -> f64 {
+        self.laser.stamps()[i]
+    }
+    fn scan(&mut self, i: usize) -> &LaserScan {
+        if i < self.first || i >= self.first + self.block.len() {
+            let end = (i + LaserSim::BLOCK).min(self.laser.len());
+            self.block = self.laser.scans(i..end);
+            self.first = i;
+            (self.progress)(0.1 + 0.9 * end as f64 / self.laser.len() as f64);
+        }
+        &self.block[i - self.first]
+    }
 }

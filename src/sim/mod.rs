@@ -30,9 +30,9 @@ pub use config::{
 pub use drive::{drive, Drive};
 pub use effects::TrueRobot;
 pub use path::Path;
-pub use run::simulate;
+pub use run::{prepare, simulate, SimRun};
 pub use scenario::{Route, Scenario, BUILTIN_SCENARIOS};
-pub use sensors::{encoder_samples, gyro_samples, laser_scans, reference_poses, WheelTrack};
+pub use sensors::{encoder_samples, gyro_samples, reference_poses, LaserSim, WheelTrack};
 pub use truth::{TrueParameters, TruePose, Truth};
 pub use world::{World, WorldSpec};
 

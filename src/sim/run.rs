@@ -6,7 +6,7 @@ use super::drive::drive;
 use super::effects::TrueRobot;
 use super::scenario::Scenario;
 use super::sensors::{
-    encoder_samples, gyro_samples, laser_scans, reference_poses, sample_times, WheelTrack,
+    encoder_samples, gyro_samples, reference_poses, sample_times, LaserSim, WheelTrack,
 };
 use super::truth::{TrueParameters, TruePose, Truth};
 use super::SimError;
@@ -25,6 +25,35 @@ pub fn simulate(
     effects: &[Effect],
     progress: &mut dyn FnMut(f64),
 ) -> Result<(Recording, Truth), SimError> {
+    let SimRun {
+        mut recording,
+        truth,
+        laser,
+    } = prepare(cfg, robot, effects, progress)?;
+    recording.scans = laser.all(&mut |f| progress(0.1 + 0.9 * f));
+    progress(1.0);
+    Ok((recording, truth))
+}
+
+/// A run ready to be written: the truth and every stream but the laser's,
+/// whose scans [`LaserSim`] casts on demand (so that a long run need not be
+/// held in memory).
+pub struct SimRun {
+    /// The recording without its scans (`scans` is empty).
+    pub recording: Recording,
+    /// What really happened.
+    pub truth: Truth,
+    /// The laser of the run; scan k of it is scan k of [`simulate`]'s recording.
+    pub laser: LaserSim,
+}
+
+/// Drives the scenario and simulates every sensor but the laser (progress up to 0.1).
+pub fn prepare(
+    cfg: &SimConfig,
+    robot: &RobotConfig,
+    effects: &[Effect],
+    progress: &mut dyn FnMut(f64),
+) -> Result<SimRun, SimError> {
     cfg.validate()?;
     robot
         .validate()
@@ -51,18 +80,9 @@ pub fn simulate(
     let gyro = gyro_samples(&cfg.gyro, &motion, &true_robot, cfg.seed, duration);
     let reference = reference_poses(&cfg.reference, &motion, cfg.seed, duration);
     progress(0.1);
-    let scans = laser_scans(
-        &cfg.laser,
-        &scenario.world,
-        &motion,
-        &true_robot,
-        cfg.seed,
-        duration,
-        &mut |f| progress(0.1 + 0.9 * f),
-    );
     let recording = Recording {
         source: format!("simulated:{}", scenario.name),
-        scans,
+        scans: Vec::new(),
         wheels,
         gyro,
         odom: Vec::new(),
@@ -113,6 +133,17 @@ pub fn simulate(
         trajectory,
         settings: cfg.clone(),
     };
-    progress(1.0);
-    Ok((recording, truth))
+    let laser = LaserSim::new(
+        &cfg.laser,
+        scenario.world,
+        motion,
+        true_robot,
+        cfg.seed,
+        duration,
+    );
+    Ok(SimRun {
+        recording,
+        truth,
+        laser,
+    })
 }

@@ -147,39 +147,88 @@ pub fn reference_poses(
         .collect()
 }
 
-/// Laser scans at `cfg.rate_hz`, each beam cast from the true laser pose at
-/// its own time in the sweep (LMS111: one turn per scan period), with
-/// Gaussian range noise; no echo is +inf and too close is −inf (REP 117).
-/// Scans run in parallel with one generator per scan, so the result does not
-/// depend on the thread count. `progress` gets the fraction done.
-pub fn laser_scans(
-    cfg: &LaserConfig,
-    world: &World,
-    drive: &Drive,
-    robot: &TrueRobot,
+/// The simulated LMS111 of one run: owns what it needs to cast any scan on
+/// demand, so a long recording can be written scan by scan instead of held
+/// in memory. Scan `k` depends only on `k` (its own generator), never on
+/// which scans were made before it.
+#[derive(Clone)]
+pub struct LaserSim {
+    cfg: LaserConfig,
+    world: World,
+    drive: Drive,
+    robot: TrueRobot,
     seed: u64,
-    duration: f64,
-    progress: &mut dyn FnMut(f64),
-) -> Vec<LaserScan> {
-    let beams = cfg.beams();
-    let inc = cfg.resolution_deg.to_radians();
-    let angle_min = -((beams - 1) as f64) * inc / 2.0;
-    let period = 1.0 / cfg.rate_hz;
-    let time_inc = period * cfg.resolution_deg / 360.0;
-    let sweep = time_inc * (beams - 1) as f64;
-    let mount = robot.laser.pose();
-    let noise = Normal::new(0.0, cfg.noise_sigma).expect("validated sigma");
-    let laser_pose = |t: f64| {
-        let [x, y, th] = drive.pose_at(t);
-        let p = geom::pose(x, y, th) * mount;
+    stamps: Vec<f64>,
+}
+
+impl LaserSim {
+    /// The laser of a run of `duration` s: one scan per period whose sweep ends within the run.
+    pub fn new(
+        cfg: &LaserConfig,
+        world: World,
+        drive: Drive,
+        robot: TrueRobot,
+        seed: u64,
+        duration: f64,
+    ) -> Self {
+        let sweep = Self::sweep(cfg);
+        let stamps = sample_times(cfg.rate_hz, duration, sweep).collect();
+        Self {
+            cfg: cfg.clone(),
+            world,
+            drive,
+            robot,
+            seed,
+            stamps,
+        }
+    }
+
+    /// Time from the first to the last beam of a sweep (s).
+    fn sweep(cfg: &LaserConfig) -> f64 {
+        let period = 1.0 / cfg.rate_hz;
+        let time_inc = period * cfg.resolution_deg / 360.0;
+        time_inc * (cfg.beams() - 1) as f64
+    }
+
+    /// Stamps of every scan (s), increasing.
+    pub fn stamps(&self) -> &[f64] {
+        &self.stamps
+    }
+
+    /// Number of scans in the run.
+    pub fn len(&self) -> usize {
+        self.stamps.len()
+    }
+
+    /// Whether the run is too short for a single scan.
+    pub fn is_empty(&self) -> bool {
+        self.stamps.is_empty()
+    }
+
+    /// True laser pose `[x, y, θ unwrapped]` at `t` (s).
+    fn laser_pose(&self, t: f64) -> [f64; 3] {
+        let [x, y, th] = self.drive.pose_at(t);
+        let p = geom::pose(x, y, th) * self.robot.laser.pose();
         // Heading continuous with the body's unwrapped heading.
-        [p.translation.x, p.translation.y, th + robot.laser.yaw]
-    };
-    let one = |k: usize, stamp: f64| {
-        let mut rng = stream_rng(seed, STREAM_LASER, k as u64);
-        let a = laser_pose(stamp);
+        [p.translation.x, p.translation.y, th + self.robot.laser.yaw]
+    }
+
+    /// Scan `k`: every beam cast from the true laser pose at its own time in
+    /// the sweep, with Gaussian range noise; no echo is +inf and too close is
+    /// −inf (REP 117).
+    pub fn scan(&self, k: usize) -> LaserScan {
+        let cfg = &self.cfg;
+        let stamp = self.stamps[k];
+        let beams = cfg.beams();
+        let inc = cfg.resolution_deg.to_radians();
+        let angle_min = -((beams - 1) as f64) * inc / 2.0;
+        let period = 1.0 / cfg.rate_hz;
+        let time_inc = period * cfg.resolution_deg / 360.0;
+        let noise = Normal::new(0.0, cfg.noise_sigma).expect("validated sigma");
+        let mut rng = stream_rng(self.seed, STREAM_LASER, k as u64);
+        let a = self.laser_pose(stamp);
         let b = if cfg.sweep_motion {
-            laser_pose(stamp + sweep)
+            self.laser_pose(stamp + Self::sweep(cfg))
         } else {
             a
         };
@@ -189,7 +238,7 @@ pub fn laser_scans(
                 let o = Point2::new(a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f);
                 let th = a[2] + (b[2] - a[2]) * f + angle_min + i as f64 * inc;
                 let e = noise.sample(&mut rng);
-                match world.cast_ray(o, th, cfg.range_max) {
+                match self.world.cast_ray(o, th, cfg.range_max) {
                     None => f32::INFINITY,
                     Some(r) if r < cfg.range_min => f32::NEG_INFINITY,
                     Some(r) if r + e > cfg.range_max => f32::INFINITY,
@@ -207,13 +256,25 @@ pub fn laser_scans(
             range_max: cfg.range_max,
             ranges,
         }
-    };
-    let stamps: Vec<f64> = sample_times(cfg.rate_hz, duration, sweep).collect();
-    let mut out = Vec::with_capacity(stamps.len());
-    for chunk in (0..stamps.len()).collect::<Vec<_>>().chunks(250) {
-        let part: Vec<LaserScan> = chunk.par_iter().map(|&k| one(k, stamps[k])).collect();
-        out.extend(part);
-        progress(out.len() as f64 / stamps.len() as f64);
     }
-    out
+
+    /// Scans `range`, cast in parallel (the result does not depend on the thread count).
+    pub fn scans(&self, range: std::ops::Range<usize>) -> Vec<LaserScan> {
+        range.into_par_iter().map(|k| self.scan(k)).collect()
+    }
+
+    /// Every scan of the run, in blocks of [`Self::BLOCK`]; `progress` gets the fraction done.
+    pub fn all(&self, progress: &mut dyn FnMut(f64)) -> Vec<LaserScan> {
+        let n = self.len();
+        let mut out = Vec::with_capacity(n);
+        while out.len() < n {
+            let start = out.len();
+            out.extend(self.scans(start..(start + Self::BLOCK).min(n)));
+            progress(out.len() as f64 / n as f64);
+        }
+        out
+    }
+
+    /// Scans cast together: enough to keep every core busy, few enough to stay small (541 beams each).
+    pub const BLOCK: usize = 250;
 }
