@@ -167,3 +167,24 @@ fn every_fuzz_finding_is_now_an_error_value() {
     }
     assert!(n > 0, "no regression inputs found in {}", dir().display());
 }
+
+#[test]
+fn chunk_header_string_length_is_refused_before_any_allocation() {
+    // libFuzzer found a chunk whose compression-name length field claims
+    // 2.7 GB: the `mcap` parser would reserve that much before noticing.
+    // Both readers must refuse it from the length check itself.
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fuzz-regressions/mcap_read/string-length-in-chunk-header");
+    let whole = odocal::io::read_recording(&file, &ReadOptions::default()).unwrap_err();
+    let streamed = odocal::io::stream::McapStream::open(&file, &ReadOptions::default())
+        .and_then(|mut s| {
+            while s.next_item()?.is_some() {}
+            Ok(())
+        })
+        .unwrap_err();
+    for e in [whole, streamed] {
+        let m = e.to_string();
+        assert!(m.contains("claims 2734686212 bytes"), "{m}");
+        assert!(m.contains("string-length-in-chunk-header"), "{m}");
+    }
+}

@@ -411,7 +411,10 @@ fn simulate_writes_scans_as_it_casts_them_with_the_in_memory_bytes() {
     let mut opts = odocal::io::WriteOptions::for_robot(&robot);
     opts.topics = cfg.topics.clone();
     let bytes = odocal::io::encode_mcap(&rec, &opts).unwrap();
-    assert!(std::fs::read(&out).unwrap() == bytes, "streamed bag differs");
+    assert!(
+        std::fs::read(&out).unwrap() == bytes,
+        "streamed bag differs"
+    );
     assert!(fractions.windows(2).all(|w| w[0] <= w[1]));
     assert_eq!(fractions.last(), Some(&1.0));
     // The summary section still reads with the official reader's index.

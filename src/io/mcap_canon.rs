@@ -49,7 +49,8 @@ pub fn canonicalize_summary_tail(tail: &mut [u8], base: usize) -> bool {
     // Absolute file offsets; `at(i)` is where offset i sits in `mcap`.
     let at = |i: usize| i - base;
     let footer = n - MAGIC_LEN - FOOTER;
-    let (Some(start), Some(offsets)) = (u64_at(mcap, at(footer) + 9), u64_at(mcap, at(footer) + 17))
+    let (Some(start), Some(offsets)) =
+        (u64_at(mcap, at(footer) + 9), u64_at(mcap, at(footer) + 17))
     else {
         return false;
     };

@@ -12,13 +12,13 @@ use serde::{Deserialize, Serialize};
 use super::atomic::write_bytes_atomic;
 use super::cdr::CdrWriter;
 use super::mcap_canon::{canonicalize_summary, canonicalize_summary_tail};
-use super::stream_out::AtomicWriter;
 use super::mcap_read::TopicConfig;
 use super::ros_msgs::{
     Header, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, Pose, Quat, RosMsg,
     TfMessage, Time, TransformStamped, Vec3,
 };
 use super::ros_schema::schema_text;
+use super::stream_out::AtomicWriter;
 use crate::geom::{self, Pose2};
 use crate::recording::{Recording, StampedPose, WheelSample};
 use crate::robot::RobotConfig;

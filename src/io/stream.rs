@@ -84,6 +84,15 @@ pub struct StreamInfo {
 struct Messages<'o> {
     file: File,
     reader: LinearReader,
+    /// The records of the chunk being read (decompressed and checked) and
+    /// the offset of the next one.
+    chunk: Vec<u8>,
+    chunk_pos: usize,
+    catalog: Catalog<'o>,
+}
+
+/// Schemas and channels seen so far, and what each message is for.
+struct Catalog<'o> {
     opts: &'o ReadOptions,
     name: String,
     schemas: HashMap<u16, Arc<mcap::Schema<'static>>>,
@@ -120,20 +129,39 @@ impl<'o> Messages<'o> {
             file,
             // A corrupt length field must be an error, not an allocation of
             // petabytes: no record or chunk of a real bag comes near this.
+            // Chunks come whole and are opened by `mcap_guard`, which checks
+            // every length in them before anything is parsed.
             reader: LinearReader::new_with_options(
-                LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
+                LinearReaderOptions::default()
+                    .with_record_length_limit(MAX_RECORD_BYTES)
+                    .with_emit_chunks(true),
             ),
-            opts,
-            name,
-            schemas: HashMap::new(),
-            channels: HashMap::new(),
-            total: 0,
+            chunk: Vec::new(),
+            chunk_pos: 0,
+            catalog: Catalog {
+                opts,
+                name,
+                schemas: HashMap::new(),
+                channels: HashMap::new(),
+                total: 0,
+            },
         })
     }
 
     /// The next message of a channel that plays a role (others are skipped).
     fn next(&mut self) -> Result<Option<Raw>, Fail> {
         loop {
+            if self.chunk_pos < self.chunk.len() {
+                let (opcode, body) =
+                    super::mcap_guard::chunk_records(&self.chunk[self.chunk_pos..])
+                        .next()
+                        .expect("open_chunk checked every record of the chunk");
+                self.chunk_pos += 9 + body.len();
+                match self.catalog.handle(opcode, body)? {
+                    Some(raw) => return Ok(Some(raw)),
+                    None => continue,
+                }
+            }
             let event = match self.reader.next_event() {
                 None => return Ok(None),
                 Some(e) => e.map_err(|e| Fail::Mcap(e.to_string()))?,
@@ -147,60 +175,83 @@ impl<'o> Messages<'o> {
                 }
                 LinearReadEvent::Record { opcode, data } => (opcode, data),
             };
-            let record = mcap::parse_record(opcode, data).map_err(|e| Fail::Mcap(e.to_string()))?;
-            match record {
-                mcap::records::Record::Schema { header, data } => {
-                    self.schemas.insert(
-                        header.id,
-                        Arc::new(mcap::Schema {
-                            id: header.id,
-                            name: header.name,
-                            encoding: header.encoding,
-                            data: std::borrow::Cow::Owned(data.into_owned()),
-                        }),
-                    );
-                }
-                mcap::records::Record::Channel(ch) => {
-                    if self.channels.contains_key(&ch.id) {
-                        continue;
-                    }
-                    let channel = mcap::Channel {
-                        id: ch.id,
-                        topic: ch.topic,
-                        schema: self.schemas.get(&ch.schema_id).cloned(),
-                        message_encoding: ch.message_encoding,
-                        metadata: ch.metadata,
-                    };
-                    let roles = channel_roles(&channel, self.opts).map_err(|m| {
-                        Fail::Input(InputError::new(&self.name, m).topic(&channel.topic))
-                    })?;
-                    self.channels.insert(ch.id, (channel.topic, roles, 0));
-                }
-                mcap::records::Record::Message { header, data } => {
-                    self.total += 1;
-                    let Some((topic, roles, count)) = self.channels.get_mut(&header.channel_id)
-                    else {
-                        return Err(Fail::Mcap(format!(
-                            "message refers to unknown channel {}",
-                            header.channel_id
-                        )));
-                    };
-                    let index = *count;
-                    *count += 1;
-                    if roles.is_empty() {
-                        continue;
-                    }
-                    return Ok(Some(Raw {
-                        roles: roles.clone(),
-                        topic: topic.clone(),
-                        index,
-                        data: data.into_owned(),
-                        log_time: header.log_time,
-                    }));
-                }
-                _ => {}
+            if opcode == CHUNK {
+                let inner = super::mcap_guard::open_chunk(data).map_err(Fail::Mcap)?;
+                let inner = inner
+                    .ok_or_else(|| Fail::Mcap("chunk with an unsupported compression".into()))?;
+                self.chunk.clear();
+                self.chunk.extend_from_slice(&inner);
+                self.chunk_pos = 0;
+                continue;
+            }
+            if let Some(raw) = self.catalog.handle(opcode, data)? {
+                return Ok(Some(raw));
             }
         }
+    }
+}
+
+/// MCAP opcode of a chunk.
+const CHUNK: u8 = 0x06;
+
+impl Catalog<'_> {
+    /// Takes in one record: schemas and channels are remembered, a message
+    /// of a channel with a role is returned, anything else is passed over.
+    fn handle(&mut self, opcode: u8, data: &[u8]) -> Result<Option<Raw>, Fail> {
+        super::mcap_guard::check_record(opcode, data).map_err(Fail::Mcap)?;
+        let record = mcap::parse_record(opcode, data).map_err(|e| Fail::Mcap(e.to_string()))?;
+        match record {
+            mcap::records::Record::Schema { header, data } => {
+                self.schemas.insert(
+                    header.id,
+                    Arc::new(mcap::Schema {
+                        id: header.id,
+                        name: header.name,
+                        encoding: header.encoding,
+                        data: std::borrow::Cow::Owned(data.into_owned()),
+                    }),
+                );
+            }
+            mcap::records::Record::Channel(ch) => {
+                if self.channels.contains_key(&ch.id) {
+                    return Ok(None);
+                }
+                let channel = mcap::Channel {
+                    id: ch.id,
+                    topic: ch.topic,
+                    schema: self.schemas.get(&ch.schema_id).cloned(),
+                    message_encoding: ch.message_encoding,
+                    metadata: ch.metadata,
+                };
+                let roles = channel_roles(&channel, self.opts).map_err(|m| {
+                    Fail::Input(InputError::new(&self.name, m).topic(&channel.topic))
+                })?;
+                self.channels.insert(ch.id, (channel.topic, roles, 0));
+            }
+            mcap::records::Record::Message { header, data } => {
+                self.total += 1;
+                let Some((topic, roles, count)) = self.channels.get_mut(&header.channel_id) else {
+                    return Err(Fail::Mcap(format!(
+                        "message refers to unknown channel {}",
+                        header.channel_id
+                    )));
+                };
+                let index = *count;
+                *count += 1;
+                if roles.is_empty() {
+                    return Ok(None);
+                }
+                return Ok(Some(Raw {
+                    roles: roles.clone(),
+                    topic: topic.clone(),
+                    index,
+                    data: data.into_owned(),
+                    log_time: header.log_time,
+                }));
+            }
+            _ => {}
+        }
+        Ok(None)
     }
 }
 
@@ -304,7 +355,7 @@ impl<'o> McapStream<'o> {
     pub fn open(path: &Path, opts: &'o ReadOptions) -> Result<Self, InputError> {
         let info = first_pass(path, opts).map_err(|f| canonical(path, opts, f))?;
         let messages = Messages::open(path, opts).map_err(|f| canonical(path, opts, f))?;
-        let state = State::new(&messages.name, opts);
+        let state = State::new(&messages.catalog.name, opts);
         Ok(Self {
             path: path.to_path_buf(),
             messages,
@@ -342,7 +393,7 @@ impl<'o> McapStream<'o> {
                 return Ok(None);
             }
             match self.messages.next() {
-                Err(f) => return Err(canonical(&self.path, self.messages.opts, f)),
+                Err(f) => return Err(canonical(&self.path, self.messages.catalog.opts, f)),
                 Ok(None) => {
                     self.done = true;
                     for b in 0..self.buffers.len() {
@@ -353,7 +404,7 @@ impl<'o> McapStream<'o> {
                 }
                 Ok(Some(raw)) => {
                     self.decode(raw)
-                        .map_err(|f| canonical(&self.path, self.messages.opts, f))?;
+                        .map_err(|f| canonical(&self.path, self.messages.catalog.opts, f))?;
                 }
             }
         }
@@ -365,7 +416,7 @@ impl<'o> McapStream<'o> {
                 .handle(*role, &raw.data, raw.log_time)
                 .map_err(|m| {
                     Fail::Input(
-                        InputError::new(&self.messages.name, m)
+                        InputError::new(&self.messages.catalog.name, m)
                             .topic(raw.topic.as_str())
                             .at(format!("message {}", raw.index)),
                     )
@@ -378,7 +429,7 @@ impl<'o> McapStream<'o> {
         fresh.extend(rec.gyro.drain(..).map(Item::Gyro));
         fresh.extend(rec.odom.drain(..).map(Item::Odom));
         fresh.extend(rec.reference.drain(..).map(Item::Reference));
-        let tol = self.messages.opts.reorder_tolerance;
+        let tol = self.messages.catalog.opts.reorder_tolerance;
         for item in fresh {
             let s = item.stream();
             self.decoded[s] += 1;
@@ -410,7 +461,7 @@ impl<'o> McapStream<'o> {
 /// Counts the messages of each stream and resolves the laser mount.
 fn first_pass(path: &Path, opts: &ReadOptions) -> Result<StreamInfo, Fail> {
     let mut m = Messages::open(path, opts)?;
-    let name = m.name.clone();
+    let name = m.catalog.name.clone();
     let mut state = State::new(&name, opts);
     let mut info = StreamInfo::default();
     while let Some(raw) = m.next()? {
