@@ -569,14 +569,25 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         cfg.calib.seed = s;
     }
     let mut logger = rerun_logger(a.rrd.clone(), &a.connect, a.spawn)?;
-    if let Some(rec_path) = a
-        .input
-        .as_ref()
-        .filter(|p| logger.is_none() && odocal::io::stream::is_mcap(p))
-    {
-        // Bags stream through in flat memory, however long. (A Rerun
-        // recording of the run takes the in-memory path below.)
+    if let Some(rec_path) = a.input.as_ref().filter(|p| odocal::io::stream::is_mcap(p)) {
+        // Bags stream through in flat memory, however long, also when the
+        // run is recorded for Rerun (the recorder bounds what it keeps).
+        use odocal::io::stream_run::{NoObserver, RunObserver};
+        use pipeline::record_stream::{RecorderOptions, StreamRecorder};
         let pb = progress_bar("calibrate");
+        let mut quiet = NoObserver;
+        let mut recorder = logger.as_deref_mut().map(|l| {
+            StreamRecorder::new(
+                l,
+                RecorderOptions::default(),
+                robot.diff_drive(),
+                robot.laser.pose(),
+            )
+        });
+        let observer: &mut dyn RunObserver = match recorder.as_mut() {
+            Some(r) => r,
+            None => &mut quiet,
+        };
         let summary = pipeline::calibrate::run_file(
             rec_path,
             &read_options(&cfg, &robot),
@@ -586,8 +597,18 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
             &cfg.measurements,
             &a.out,
             &mut |f| pb.set_position((f * 1000.0) as u64),
+            observer,
         )?;
         pb.finish_and_clear();
+        if let Some(r) = recorder {
+            let notes = r.finish().map_err(|e| PipelineError::Write {
+                path: "rerun recording".into(),
+                message: e.to_string(),
+            })?;
+            for n in notes {
+                eprintln!("note: {n}");
+            }
+        }
         return print_calibration(&summary, a.json, &a.out);
     }
     let (input, rec, icp_out) = match (&a.input, &a.motions_csv, &a.wheels_csv) {

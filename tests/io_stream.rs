@@ -290,6 +290,7 @@ fn streamed_icp_and_calibration_write_the_same_files_as_the_in_memory_run() {
         &cfg.measurements,
         &b,
         &mut |_| {},
+        &mut odocal::io::stream_run::NoObserver,
     )
     .unwrap();
     same_file(&a.join("calibration.csv"), &b.join("calibration.csv"));
@@ -342,6 +343,7 @@ fn streamed_kalman_calibration_matches_without_and_with_gyro() {
             &meas,
             &b,
             &mut |_| {},
+            &mut odocal::io::stream_run::NoObserver,
         )
         .unwrap();
         same_file(&a.join("calibration.csv"), &b.join("calibration.csv"));

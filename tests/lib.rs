@@ -32,6 +32,7 @@ mod io_read;
 mod io_roundtrip;
 mod io_stream;
 mod io_time;
+mod record_stream;
 mod sim_effects;
 mod sim_scenario;
 mod sim_sensors;

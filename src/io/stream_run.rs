@@ -22,6 +22,29 @@ use crate::icp::{IcpParams, IcpStats};
 use crate::motion::{Motion, VelocityObs};
 use crate::robot::{DiffDrive, RobotConfig};
 
+/// Sees a streamed calibration as it goes, e.g. to record it for a viewer.
+/// Every method has a no-op default; calls come in the run's order and the
+/// observer keeps (and reports) its own failures.
+pub trait RunObserver {
+    /// The run starts on a bag with these streams (from the reader's first pass).
+    fn start(&mut self, _info: &StreamInfo) {}
+    /// A sample read from the bag, in the order the stream yields it.
+    fn item(&mut self, _item: &Item) {}
+    /// A pose of the integrated ICP trajectory (odometry frame) at `t` (s).
+    fn icp_pose(&mut self, _t: f64, _pose: &Pose2) {}
+    /// A scan pair matched or flagged by ICP.
+    fn motion(&mut self, _motion: &Motion) {}
+    /// A filter step: its estimate and, for particle filters, the cloud.
+    fn step(&mut self, _estimate: &Estimate, _cloud: Option<calib::CloudView<'_>>) {}
+    /// A pose of the calibrated odometry (odometry frame) at `t` (s).
+    fn calibrated_pose(&mut self, _t: f64, _pose: &Pose2) {}
+}
+
+/// An observer that ignores the run.
+pub struct NoObserver;
+
+impl RunObserver for NoObserver {}
+
 /// Why a streamed run failed.
 #[derive(Debug, thiserror::Error)]
 pub enum StreamError {
@@ -97,8 +120,9 @@ impl TumOut {
 }
 
 /// The ICP stage over a bag: matcher, tally, trajectory and motions outputs.
-struct IcpStage {
+struct IcpStage<'o> {
     icp: StreamIcp,
+    observer: &'o mut dyn RunObserver,
     kind: PriorKind,
     tally: IcpTally,
     traj: Option<TumOut>,
@@ -109,12 +133,13 @@ struct IcpStage {
     matching_s: f64,
 }
 
-impl IcpStage {
+impl<'o> IcpStage<'o> {
     fn new(
         info: &StreamInfo,
         source: &str,
         robot: &RobotConfig,
         params: &IcpParams,
+        observer: &'o mut dyn RunObserver,
     ) -> Result<Self, StreamError> {
         if info.scans < 2 {
             return Err(InputError::new(
@@ -135,6 +160,7 @@ impl IcpStage {
             .map_err(|e| StreamError::BadArgument(e.to_string()))?;
         Ok(Self {
             icp,
+            observer,
             kind,
             tally: IcpTally::default(),
             traj: None,
@@ -153,6 +179,7 @@ impl IcpStage {
         info: &StreamInfo,
         on_motion: &mut dyn FnMut(&Motion) -> Result<(), StreamError>,
     ) -> Result<(), StreamError> {
+        self.observer.item(item);
         match item {
             Item::Scan(s) => {
                 self.scans_seen += 1;
@@ -188,7 +215,9 @@ impl IcpStage {
         for m in &done {
             let mut res = Ok(());
             let traj = &mut self.traj;
+            let observer = &mut *self.observer;
             self.tally.add(m, &mut |t, p| {
+                observer.icp_pose(t, p);
                 if let Some(out) = traj.as_mut() {
                     if res.is_ok() {
                         res = out.pose(t, p);
@@ -196,6 +225,7 @@ impl IcpStage {
                 }
             });
             res?;
+            self.observer.motion(m);
             if let Some((w, path)) = self.motions.as_mut() {
                 super::csv::write_motion_row(w.writer(), m).map_err(write_err(path))?;
             }
@@ -227,7 +257,14 @@ pub fn icp_file(
 ) -> Result<IcpRunSummary, StreamError> {
     let mut stream = McapStream::open(input, read)?;
     let info = stream.info().clone();
-    let mut stage = IcpStage::new(&info, &input.display().to_string(), robot, params)?;
+    let mut quiet = NoObserver;
+    let mut stage = IcpStage::new(
+        &info,
+        &input.display().to_string(),
+        robot,
+        params,
+        &mut quiet,
+    )?;
     stage.traj = Some(TumOut::create(tum)?);
     if let Some(p) = motions_csv {
         let mut w = AtomicWriter::create(p).map_err(write_err(p))?;
@@ -272,27 +309,34 @@ struct CalibDriver {
 }
 
 impl CalibDriver {
-    fn push_pose(&mut self, t: f64, p: Pose2) -> Result<(), StreamError> {
+    fn push_pose(
+        &mut self,
+        t: f64,
+        p: Pose2,
+        obs: &mut dyn RunObserver,
+    ) -> Result<(), StreamError> {
         if t.is_finite() && self.last_t.is_none_or(|l| t > l) {
             self.last_t = Some(t);
             self.traj.pose(t, &p)?;
+            obs.calibrated_pose(t, &p);
         }
         Ok(())
     }
 
-    fn step(&mut self, s: &CalibStep) -> Result<(), StreamError> {
+    fn step(&mut self, s: &CalibStep, obs: &mut dyn RunObserver) -> Result<(), StreamError> {
         if self.covered.is_none() {
             self.covered = Some(s.t0);
-            self.push_pose(s.t0, Pose2::identity())?;
+            self.push_pose(s.t0, Pose2::identity(), obs)?;
         }
         let t = Instant::now();
         let e = self.cal.step(s);
         self.total_s += t.elapsed().as_secs_f64();
+        obs.step(&e, self.cal.cloud());
         let covered = self.covered.expect("set above");
         let dt = s.t1 - s.t0.max(covered);
         if dt > 0.0 {
             self.pose *= e.drive().increment(s.omega_right * dt, s.omega_left * dt);
-            self.push_pose(s.t1, self.pose)?;
+            self.push_pose(s.t1, self.pose, obs)?;
             self.covered = Some(s.t1);
         }
         let row = [
@@ -338,10 +382,12 @@ pub fn calibrate_file(
     gyro: GyroUse,
     dir: &Path,
     progress: &mut dyn FnMut(f64),
+    observer: &mut dyn RunObserver,
 ) -> Result<CalibSummary, StreamError> {
     let mut stream = McapStream::open(input, read)?;
     let info = stream.info().clone();
-    let mut stage = IcpStage::new(&info, &input.display().to_string(), robot, icp)?;
+    observer.start(&info);
+    let mut stage = IcpStage::new(&info, &input.display().to_string(), robot, icp, observer)?;
     if info.wheels < 2 {
         return Err(StreamError::BadArgument(
             "the input has no wheel encoder data (JointState) to calibrate".into(),
@@ -372,10 +418,13 @@ pub fn calibrate_file(
     }
     let (mut wheels_seen, mut gyro_seen) = (0usize, 0usize);
     let mut failed: Option<StreamError> = None;
-    let mut feed_steps = |steps: &mut StepBuilder, all_done: bool, driver: &mut CalibDriver| {
+    let mut feed_steps = |steps: &mut StepBuilder,
+                          all_done: bool,
+                          driver: &mut CalibDriver,
+                          obs: &mut dyn RunObserver| {
         steps.poll(all_done, &mut |s| {
             if failed.is_none() {
-                if let Err(e) = driver.step(&s) {
+                if let Err(e) = driver.step(&s, obs) {
                     failed = Some(e);
                 }
             }
@@ -405,7 +454,7 @@ pub fn calibrate_file(
             }
             Ok(())
         })?;
-        feed_steps(&mut steps, false, &mut driver);
+        feed_steps(&mut steps, false, &mut driver, &mut *stage.observer);
         if matches!(item, Item::Scan(_)) {
             progress(stage.scans_seen as f64 / info.scans as f64);
         }
@@ -418,7 +467,7 @@ pub fn calibrate_file(
     })?;
     steps.end_wheels();
     steps.end_gyro();
-    feed_steps(&mut steps, true, &mut driver);
+    feed_steps(&mut steps, true, &mut driver, &mut *stage.observer);
     if let Some(e) = failed {
         return Err(e);
     }

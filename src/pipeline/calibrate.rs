@@ -130,12 +130,15 @@ pub fn run_file(
     meas: &MeasurementConfig,
     dir: &Path,
     progress: &mut dyn FnMut(f64),
+    observer: &mut dyn crate::io::stream_run::RunObserver,
 ) -> Result<calib::CalibSummary, PipelineError> {
     let gyro = crate::io::stream_run::GyroUse {
         use_gyro: meas.use_gyro,
         gyro_sigma: meas.gyro_sigma,
     };
     let params = params_for_robot(params, robot);
-    crate::io::stream_run::calibrate_file(input, read, robot, icp, &params, gyro, dir, progress)
-        .map_err(super::icp::stream_error)
+    crate::io::stream_run::calibrate_file(
+        input, read, robot, icp, &params, gyro, dir, progress, observer,
+    )
+    .map_err(super::icp::stream_error)
 }

@@ -10,6 +10,7 @@ pub mod evaluate;
 pub mod experiment;
 pub mod icp;
 pub mod record;
+pub mod record_stream;
 pub mod simulate;
 
 pub use config::{load_robot, Config};
