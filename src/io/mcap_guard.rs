@@ -206,25 +206,38 @@ pub(crate) fn chunk_records(inner: &[u8]) -> impl Iterator<Item = (u8, &[u8])> {
     records(inner).map(|(_, opcode, body)| (opcode, body))
 }
 
-/// Checks every record of a whole MCAP file, chunks opened, up to the footer.
-/// A file cut short is not an error here (`lenient` or not): the main reader
-/// reports it with context; only fields that would mislead a parser are.
-pub(crate) fn check_file(bytes: &[u8]) -> Result<(), String> {
+/// Checks every record of a whole MCAP file, chunks opened, up to the
+/// footer, and returns where the well-formed records end. A record whose
+/// length runs past the end of the file is an error unless `lenient` (a file
+/// known to be cut short): then the records before it are all there is to
+/// read, and the caller must read only `bytes[..end]` (the `mcap` reader
+/// would otherwise overflow on a length near 2⁶⁴).
+pub(crate) fn check_file(bytes: &[u8], lenient: bool) -> Result<usize, String> {
     if !bytes.starts_with(mcap::MAGIC) {
-        return Ok(());
+        return Ok(bytes.len());
     }
-    let body = &bytes[mcap::MAGIC.len()..];
-    for (i, (_, opcode, rec)) in records(body).enumerate() {
+    let start = mcap::MAGIC.len();
+    let body = &bytes[start..];
+    let mut end = 0usize;
+    for (i, (pos, opcode, rec)) in records(body).enumerate() {
         let at = |m: String| format!("corrupt MCAP: record {i} (opcode {opcode:#04x}): {m}");
         check_record(opcode, rec).map_err(at)?;
         if opcode == op::CHUNK {
             open_chunk(rec).map_err(at)?;
         }
+        end = pos + 9 + rec.len();
         if opcode == op::FOOTER {
-            break;
+            return Ok(bytes.len());
         }
     }
-    Ok(())
+    if let (Some(len), false) = (u64_at(body, end + 1), lenient) {
+        return Err(format!(
+            "corrupt MCAP: record at byte {} claims {len} bytes, only {} left in the file",
+            start + end,
+            body.len() - end - 9
+        ));
+    }
+    Ok(if lenient { start + end } else { bytes.len() })
 }
 
 #[cfg(test)]
@@ -277,7 +290,7 @@ mod tests {
         }
         w.finish().unwrap();
         let mut bytes = w.into_inner().into_inner();
-        assert_eq!(check_file(&bytes), Ok(()));
+        assert_eq!(check_file(&bytes, false), Ok(bytes.len()));
         let body = &bytes[8..];
         let (pos, _, chunk) = records(body).find(|r| r.1 == op::CHUNK).expect("a chunk");
         let inner = open_chunk(chunk).unwrap().unwrap();
@@ -285,7 +298,7 @@ mod tests {
         assert_eq!(ops.iter().filter(|&&o| o == op::MESSAGE).count(), 10);
         // Flip the stated CRC.
         bytes[8 + pos + 9 + 24] ^= 1;
-        let e = check_file(&bytes).unwrap_err();
+        let e = check_file(&bytes, false).unwrap_err();
         assert!(e.contains("CRC"), "{e}");
     }
 }

@@ -112,7 +112,7 @@ pub fn read_mcap_bytes(
     if let Err(e) = mcap::read::footer(bytes) {
         return Err(truncated(bytes, file, e));
     }
-    super::mcap_guard::check_file(bytes)
+    super::mcap_guard::check_file(bytes, false)
         .map_err(|m| InputError::new(file, m).at("after 0 messages"))?;
     let mut stream = mcap::read::RawMessageStream::new(bytes).map_err(|e| mcap_err(e, 0))?;
     let mut st = State::new(file, opts);
@@ -152,11 +152,12 @@ pub fn read_mcap_bytes(
 /// The error for a file without a valid footer: names the last message that
 /// could still be read (topic and per-topic index), so the cut can be found.
 fn truncated(bytes: &[u8], file: &str, e: mcap::McapError) -> InputError {
-    let lenient = super::mcap_guard::check_file(bytes)
+    // Only the complete records of the cut file are read.
+    let lenient = super::mcap_guard::check_file(bytes, true)
         .map_err(|_| mcap::McapError::UnexpectedEof)
-        .and_then(|_| {
+        .and_then(|end| {
             mcap::read::RawMessageStream::new_with_options(
-                bytes,
+                &bytes[..end],
                 mcap::read::Options::IgnoreEndMagic.into(),
             )
         });
