@@ -135,6 +135,9 @@ pub struct StreamRecorder<'a> {
     pts: Vec<Point2<f64>>,
 }
 
+/// Most scans kept waiting for their ICP pose (a few are, normally).
+const MAX_PENDING: usize = 2048;
+
 /// How long after a trajectory's start the recorder waits for the reference
 /// to cover it, and how much of the reference it keeps for anchoring (s).
 const ANCHOR_WINDOW_S: f64 = 30.0;
@@ -327,6 +330,10 @@ impl RunObserver for StreamRecorder<'_> {
         match item {
             Item::Scan(s) => {
                 self.pending.push_back((self.scans_read, s.clone()));
+                // Scans ICP never places (stamps that do not advance) are let go.
+                if self.pending.len() > MAX_PENDING {
+                    self.pending.pop_front();
+                }
                 self.unpassed.push_back(s.stamp);
                 self.scans_read += 1;
             }
