@@ -217,9 +217,6 @@ impl ScanMatcher {
                     continue;
                 }
                 let alt = self.attempt(g, PriorSource::ConstantVelocity);
-                if std::env::var("DBG").is_ok() {
-                    eprintln!("t0 {t0:.3} k {k} guess {:?} -> {:?} inl {} fail {:?} | best {:?} inl {} fail {:?}", geom::xyt(g), geom::xyt(&alt.motion), alt.reg.inliers, alt.failure, geom::xyt(&best.motion), best.reg.inliers, best.failure);
-                }
                 let admissible = alt.failure.is_none()
                     && (!possible || self.agrees_with_prior(&alt.motion, prior, source));
                 if admissible && (best.failure.is_some() || alt.reg.inliers > best.reg.inliers) {
