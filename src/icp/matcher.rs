@@ -197,16 +197,16 @@ impl ScanMatcher {
                 .map(|&i| self.own.normal(i).unwrap_or([f64::NAN; 2])),
         );
         let dt = t1 - t0;
-        // The match from a given prior that the robot could not have driven
-        // in dt (odometry that froze, then caught up in one jump), like a
-        // failed one, is tried again from the constant-velocity
-        // guess and from the previous pair's increment as it was (where the
-        // stamps bunch up, velocity × dt is not a guess). A possible prior
-        // still bounds the answer (a retry must agree with it too); an
-        // impossible one does not, and the match with more inliers is kept.
+        // A failed match from a given prior is tried again from the
+        // constant-velocity guess and from the previous pair's increment as
+        // it was (where the stamps bunch up, velocity × dt is not a guess).
+        // A prior the robot could have driven in dt still bounds the answer
+        // (a retry must agree with it too); one it could not (odometry that
+        // froze, then caught up in one jump) does not. The retry with more
+        // inliers is kept.
         let possible = self.within_limits(prior, &Matrix3::zeros(), dt);
         let mut best = self.attempt(prior, source);
-        if source == PriorSource::Given && (best.failure.is_some() || !possible) {
+        if source == PriorSource::Given && best.failure.is_some() {
             let guesses = [
                 self.constant_velocity(dt),
                 self.velocity.map(|(inc, _)| inc),
