@@ -105,7 +105,12 @@ pub struct Scratch {
 ///    the residuals (MAD), within [`min_kappa`, gate / 3], never widening,
 /// 4. take the reweighted Gauss–Newton step of Σ ρ(e) with
 ///    `e = nᵀ (R p + t − c)` (Newton's curvature once the correspondences
-///    are frozen), halving the step length while steps reverse.
+///    are frozen), plus the prior term `½ σ² (x − init)ᵀ P (x − init)`
+///    (`P` = `prior_precision`, σ the residuals' robust scale), halving the
+///    step length while steps reverse.
+///
+/// The returned covariance is the residuals' alone: the prior never makes a
+/// loose direction look measured.
 pub fn register(
     reference: &Reference,
     source: &[[f64; 2]],
