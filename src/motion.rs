@@ -20,6 +20,10 @@ pub enum PairFailure {
     Inconsistent,
     /// The result disagrees with the motion prior beyond plausibility.
     Implausible,
+    /// The first match after failed pairs: it starts from a pose the failed
+    /// pairs' prior placed, so it holds that prior's error too (right for
+    /// chaining, not a measurement of this interval).
+    Bridged,
 }
 
 impl PairFailure {
@@ -33,6 +37,7 @@ impl PairFailure {
             Self::BadTime => "bad_time",
             Self::Inconsistent => "inconsistent",
             Self::Implausible => "implausible",
+            Self::Bridged => "bridged",
         }
     }
 }

@@ -4,7 +4,7 @@
 use super::params::{IcpParams, IcpParamsError};
 use super::preprocess::{Preprocessor, ScanPoints};
 use super::reference::Reference;
-use super::register::{register, RegisterSettings, Scratch};
+use super::register::{register, RegisterSettings, Registration, Scratch};
 use super::threshold::AdaptiveThreshold;
 use crate::geom::{self, Pose2};
 use crate::motion::{Motion, PairFailure};
@@ -56,6 +56,8 @@ pub struct ScanMatcher {
     ref_from_last: Pose2,
     /// Covariance of `ref_from_last` from its registration (local map only).
     last_cov: Matrix3<f64>,
+    /// Failed pairs since the last successful match.
+    misses: usize,
     last: Option<(f64, usize)>,
     velocity: Option<(Pose2, f64)>,
     keyframes: VecDeque<(Pose2, ScanPoints)>,
@@ -91,9 +93,10 @@ impl ScanMatcher {
                 p.min_motion,
                 p.threshold_range,
             ),
-            reference: Reference::new(p.normal_window),
+            reference: Reference::new(p.normal_window, p.normal_length),
             ref_from_last: Pose2::identity(),
             last_cov: Matrix3::zeros(),
+            misses: 0,
             last: None,
             velocity: None,
             keyframes: VecDeque::new(),
@@ -101,7 +104,7 @@ impl ScanMatcher {
             src: Vec::new(),
             kept: Vec::new(),
             normals: Vec::new(),
-            own: Reference::new(p.normal_window),
+            own: Reference::new(p.normal_window, p.normal_length),
             scratch: Scratch::default(),
             info: MatchInfo::default(),
             params,
@@ -135,15 +138,9 @@ impl ScanMatcher {
             return None;
         };
         let dt = t1 - t0;
-        let (prior, source) = match (prior.filter(pose_finite), self.velocity) {
+        let (prior, source) = match (prior.filter(pose_finite), self.constant_velocity(dt)) {
             (Some(p), _) => (p, PriorSource::Given),
-            (None, Some((inc, vdt))) if dt.is_finite() && dt > 0.0 => {
-                let (ds, dth) = geom::arc_of_increment(&inc);
-                (
-                    geom::arc_increment(ds / vdt, dth / vdt, dt),
-                    PriorSource::ConstantVelocity,
-                )
-            }
+            (None, Some(cv)) => (cv, PriorSource::ConstantVelocity),
             _ => (Pose2::identity(), PriorSource::None),
         };
         self.info = MatchInfo {
@@ -181,11 +178,7 @@ impl ScanMatcher {
             }
             return Some(m);
         }
-        let m = self.match_pair(t0, t1, &prior, source);
-        if m.failure.is_some() {
-            self.start_reference(self.ref_from_last * prior);
-        }
-        Some(m)
+        Some(self.match_pair(t0, t1, &prior, source))
     }
 
     fn match_pair(&mut self, t0: f64, t1: f64, prior: &Pose2, source: PriorSource) -> Motion {
@@ -203,6 +196,101 @@ impl ScanMatcher {
                 .iter()
                 .map(|&i| self.own.normal(i).unwrap_or([f64::NAN; 2])),
         );
+        let dt = t1 - t0;
+        // A failed match from a given prior is tried again from the
+        // constant-velocity guess and from the previous pair's increment as
+        // it was (where the stamps bunch up, velocity × dt is not a guess).
+        // A prior the robot could have driven in dt still bounds the answer
+        // (a retry must agree with it too); one it could not (odometry that
+        // froze, then caught up in one jump) does not. The retry with more
+        // inliers is kept.
+        let possible = self.within_limits(prior, &Matrix3::zeros(), dt);
+        let mut best = self.attempt(prior, source);
+        if source == PriorSource::Given && best.failure.is_some() {
+            let guesses = [
+                self.constant_velocity(dt),
+                self.velocity.map(|(inc, _)| inc),
+            ];
+            for (k, guess) in guesses.iter().enumerate() {
+                let Some(g) = guess else { continue };
+                if k == 1 && guesses[0].is_some_and(|cv| close(&cv, g)) {
+                    continue;
+                }
+                let alt = self.attempt(g, PriorSource::ConstantVelocity);
+                let admissible = alt.failure.is_none()
+                    && (!possible || self.agrees_with_prior(&alt.motion, prior, source));
+                if admissible && (best.failure.is_some() || alt.reg.inliers > best.reg.inliers) {
+                    best = alt;
+                }
+            }
+        }
+        let Attempt {
+            reg,
+            ref_from_cur,
+            motion,
+            failure,
+            init,
+            source,
+        } = best;
+        self.info.prior_source = source;
+        if let Some(u) = reg.uncertainty {
+            self.info.conditioning = u.conditioning;
+            self.info.weak_direction = u.weak_direction;
+            self.info.rms = u.rms;
+        }
+        if let Some(f) = failure {
+            let mut m = self.failed(t0, t1, prior, f);
+            m.iterations = reg.iterations;
+            m.inliers = reg.inliers as u32;
+            self.bridge(prior, m.cov);
+            return m;
+        }
+        // A geometrically sound match that the robot could not have driven
+        // in dt (bursts of scans stamped milliseconds apart): the stamps are
+        // wrong, not the geometry. The motion is kept for the trajectory but
+        // flagged, so it never becomes a velocity observation.
+        let u = reg.uncertainty.expect("checked by attempt");
+        let cov = if self.params.local_map {
+            // motion = inv(W_last) W_cur, both registered against the map.
+            let (ja, jb) = between_jacobians(&self.ref_from_last, &ref_from_cur);
+            ja * self.last_cov * ja.transpose() + jb * u.cov * jb.transpose()
+        } else {
+            u.cov
+        };
+        let time_ok = self.within_limits(&motion, &cov, dt);
+        let bridged = self.misses > 0;
+        if !bridged {
+            self.threshold.update(&geom::between(&init, &motion));
+            if time_ok {
+                self.velocity = Some((motion, dt));
+            }
+        }
+        self.advance(ref_from_cur, u.cov);
+        let [dx, dy, dtheta] = geom::xyt(&motion);
+        Motion {
+            t0,
+            t1,
+            dx,
+            dy,
+            dtheta,
+            cov,
+            iterations: reg.iterations,
+            inliers: reg.inliers as u32,
+            failure: if !time_ok {
+                Some(PairFailure::BadTime)
+            } else if bridged {
+                Some(PairFailure::Bridged)
+            } else {
+                None
+            },
+        }
+    }
+
+    /// One registration of the prepared source from the initial guess
+    /// `prior` (motion since the last scan), with its quality checks. A
+    /// given prior is also a weak prior term (`prior_sigma_*`).
+    fn attempt(&mut self, prior: &Pose2, source: PriorSource) -> Attempt {
+        let p = &self.params;
         let init = geom::xyt(&(self.ref_from_last * prior));
         let set = RegisterSettings {
             threshold: self.threshold.threshold(),
@@ -213,6 +301,13 @@ impl ScanMatcher {
             convergence: p.convergence,
             min_correspondences: p.min_correspondences,
             cov_inflation: p.cov_inflation,
+            prior_precision: if source == PriorSource::Given {
+                let prec = |s: f64| if s > 0.0 { 1.0 / (s * s) } else { 0.0 };
+                let pt = prec(p.prior_sigma_xy);
+                [pt, pt, prec(p.prior_sigma_theta)]
+            } else {
+                [0.0; 3]
+            },
         };
         let reg = register(
             &self.reference,
@@ -227,8 +322,12 @@ impl ScanMatcher {
         self.info.reference_points = self.reference.len();
         let ref_from_cur = geom::pose(reg.pose[0], reg.pose[1], reg.pose[2]);
         let motion = geom::between(&self.ref_from_last, &ref_from_cur);
+        // Only points with a surface of their own can ever be matched
+        // (clutter, isolated returns and open ends never are): the inlier
+        // fraction counts those.
+        let matchable = self.normals.iter().filter(|n| n[0].is_finite()).count();
         let min_inliers =
-            (p.min_correspondences as f64).max(p.min_inlier_fraction * self.src.len() as f64);
+            (p.min_correspondences as f64).max(p.min_inlier_fraction * matchable as f64);
         let failure = if (reg.inliers as f64) < min_inliers {
             Some(PairFailure::TooFewCorrespondences)
         } else if !reg.converged {
@@ -243,47 +342,24 @@ impl ScanMatcher {
         } else {
             None
         };
-        if let Some(u) = reg.uncertainty {
-            self.info.conditioning = u.conditioning;
-            self.info.weak_direction = u.weak_direction;
-            self.info.rms = u.rms;
+        Attempt {
+            reg,
+            ref_from_cur,
+            motion,
+            failure,
+            init: *prior,
+            source,
         }
-        if let Some(f) = failure {
-            let mut m = self.failed(t0, t1, prior, f);
-            m.iterations = reg.iterations;
-            m.inliers = reg.inliers as u32;
-            return m;
+    }
+
+    /// The previous valid motion's velocity carried over `dt` (s), if any.
+    fn constant_velocity(&self, dt: f64) -> Option<Pose2> {
+        let (inc, vdt) = self.velocity?;
+        if !(dt.is_finite() && dt > 0.0) {
+            return None;
         }
-        // A geometrically sound match that the robot could not have driven
-        // in dt (bursts of scans stamped milliseconds apart): the stamps are
-        // wrong, not the geometry. The motion is kept for the trajectory but
-        // flagged, so it never becomes a velocity observation.
-        let u = reg.uncertainty.expect("checked above");
-        let cov = if self.params.local_map {
-            // motion = inv(W_last) W_cur, both registered against the map.
-            let (ja, jb) = between_jacobians(&self.ref_from_last, &ref_from_cur);
-            ja * self.last_cov * ja.transpose() + jb * u.cov * jb.transpose()
-        } else {
-            u.cov
-        };
-        let time_ok = self.within_limits(&motion, &cov, t1 - t0);
-        self.threshold.update(&geom::between(prior, &motion));
-        if time_ok {
-            self.velocity = Some((motion, t1 - t0));
-        }
-        self.advance(ref_from_cur, u.cov);
-        let [dx, dy, dtheta] = geom::xyt(&motion);
-        Motion {
-            t0,
-            t1,
-            dx,
-            dy,
-            dtheta,
-            cov,
-            iterations: reg.iterations,
-            inliers: reg.inliers as u32,
-            failure: (!time_ok).then_some(PairFailure::BadTime),
-        }
+        let (ds, dth) = geom::arc_of_increment(&inc);
+        Some(geom::arc_increment(ds / vdt, dth / vdt, dt))
     }
 
     /// Whether a matched motion is within the robot's speed and turn-rate
@@ -309,9 +385,29 @@ impl ScanMatcher {
             && dth.abs() <= p.prior_rot_tol
     }
 
+    /// After a failed match: the scan is placed by the prior. The local map
+    /// is kept for the next scans to re-localise against (one odd scan — a
+    /// crowd in front of the laser, a mis-stamped sweep — then costs nothing
+    /// but its own pair), unless `MAP_PATIENCE` scans in a row failed: then
+    /// the current scan alone starts a new map.
+    /// `cov` is the failed pair's (as wide as the gates, isotropic in x, y).
+    fn bridge(&mut self, prior: &Pose2, cov: Matrix3<f64>) {
+        self.misses += 1;
+        let ref_from_cur = self.ref_from_last * prior;
+        if self.params.local_map && self.misses <= MAP_PATIENCE && !self.keyframes.is_empty() {
+            // Uncertainty of the bridged pose: the last one's plus the
+            // prior's (isotropic in x, y, so the same in the map frame).
+            self.last_cov += cov;
+            self.ref_from_last = ref_from_cur;
+        } else {
+            self.start_reference(ref_from_cur);
+        }
+    }
+
     /// After a successful match: the current scan becomes the reference (scan
     /// to scan) or may become a keyframe (local map).
     fn advance(&mut self, ref_from_cur: Pose2, cov: Matrix3<f64>) {
+        self.misses = 0;
         if !self.params.local_map {
             self.start_reference(Pose2::identity());
             return;
@@ -386,6 +482,27 @@ impl ScanMatcher {
             failure: Some(f),
         }
     }
+}
+
+/// One registration and its verdict, before the matcher's state changes.
+struct Attempt {
+    reg: Registration,
+    ref_from_cur: Pose2,
+    motion: Pose2,
+    failure: Option<PairFailure>,
+    /// The initial guess (motion since the last scan) it started from.
+    init: Pose2,
+    source: PriorSource,
+}
+
+/// Failed scans in a row after which the local map is given up for a new
+/// one started at the current scan.
+const MAP_PATIENCE: usize = 3;
+
+/// Two guesses close enough (1 cm, 0.5°) to converge alike.
+fn close(a: &Pose2, b: &Pose2) -> bool {
+    let [x, y, t] = geom::xyt(&geom::between(a, b));
+    x.hypot(y) < 0.01 && t.abs() < 0.01
 }
 
 fn pose_finite(p: &Pose2) -> bool {

@@ -8,20 +8,25 @@
 //!   the prior's twist), with surface links between neighbouring beams;
 //!   optional beam stride / voxel thinning of the source scan.
 //! - `reference`: the local map (or previous scan) with a line fitted through
-//!   every point's surface neighbourhood and a kd-tree, built once.
+//!   every point's surface neighbourhood (at most `normal_window + 1` beams,
+//!   and about `normal_length` m of surface) and a kd-tree, built once.
 //! - `register`: foot on the nearest point's fitted line + Geman–McClure
 //!   weights + Gauss–Newton steps, until the pose change is below
-//!   `convergence`. Fitted lines rather than the raw polyline keep the range
-//!   noise of the reference out of the estimate (the zigzag polyline made
-//!   motions ~2 % short).
+//!   `convergence`, with a weak prior term at the odometry guess that holds
+//!   the directions the geometry leaves loose (corridors). Fitted lines
+//!   rather than the raw polyline keep the range noise of the reference out
+//!   of the estimate (the zigzag polyline made motions ~2 % short).
 //! - `threshold`: KISS-ICP's adaptive gate from the prior's recent error.
 //! - `covariance`: Hessian × residual variance × inflation; the choice and the
 //!   inflation are explained there.
-//! - `matcher`: the streaming [`ScanMatcher`] with prior selection and
-//!   failure flags; `run`: whole recordings and [`integrate`].
+//! - `matcher`: the streaming [`ScanMatcher`] with prior selection, retries
+//!   of failed matches from the constant-velocity guess, failure flags, and
+//!   a local map kept across a few failed scans; `run`: whole recordings and
+//!   [`integrate`].
 //!
 //! Failed pairs (too few points or correspondences, not converged, degenerate,
-//! bad time, inconsistent beams, implausible jump vs the prior) carry
+//! bad time, inconsistent beams, implausible jump vs the prior, first match
+//! after failed scans) carry
 //! `Motion::failure`, so `VelocityObs::from_motion` never turns them into
 //! observations.
 

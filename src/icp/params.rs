@@ -26,6 +26,10 @@ pub struct IcpParams {
     /// window containing it): averages the range noise out of the surface the
     /// source is matched against.
     pub normal_window: usize,
+    /// Surface length (m) a line window should span: where `normal_window`
+    /// beams would span more (sparse 1° scanners, long ranges), the window
+    /// has fewer points, down to 3. 0 = always `normal_window`.
+    pub normal_length: f64,
     /// Largest angle (rad) between a source point's own surface normal and
     /// the reference line it is matched to.
     pub max_normal_angle: f64,
@@ -39,7 +43,8 @@ pub struct IcpParams {
     pub min_points: usize,
     /// Fewest correspondences, absolute.
     pub min_correspondences: usize,
-    /// Fewest correspondences as a fraction of the source points.
+    /// Fewest correspondences as a fraction of the source points that have a
+    /// surface line of their own (only those can be matched).
     pub min_inlier_fraction: f64,
     /// Largest number of iterations before the pair is declared not converged.
     pub max_iterations: u32,
@@ -69,6 +74,13 @@ pub struct IcpParams {
     pub prior_rel_tol: f64,
     /// Largest plausible rotation deviation from the prior (rad).
     pub prior_rot_tol: f64,
+    /// Standard deviation (m) of the given prior's translation (the wheel
+    /// odometry), per pair: a weak prior term in the registration that holds
+    /// the directions the geometry leaves loose (a corridor's axis) at the
+    /// odometry. 0 = no prior term. The covariance stays the scan's alone.
+    pub prior_sigma_xy: f64,
+    /// Same for the given prior's heading change (rad).
+    pub prior_sigma_theta: f64,
     /// Largest plausible speed (m/s) and turn rate (rad/s) of the robot.
     pub max_speed: f64,
     /// See `max_speed` (rad/s).
@@ -101,12 +113,13 @@ impl Default for IcpParams {
             gap_factor: 6.0,
             max_gap: 0.5,
             normal_window: 8,
+            normal_length: 0.3,
             max_normal_angle: 0.5,
             min_kappa: 0.005,
             deskew: true,
             min_points: 20,
             min_correspondences: 15,
-            min_inlier_fraction: 0.5,
+            min_inlier_fraction: 0.3,
             max_iterations: 60,
             convergence: 1e-5,
             initial_threshold: 1.0,
@@ -119,6 +132,8 @@ impl Default for IcpParams {
             prior_trans_tol: 0.25,
             prior_rel_tol: 0.5,
             prior_rot_tol: 0.35,
+            prior_sigma_xy: 0.02,
+            prior_sigma_theta: 0.5,
             max_speed: 3.0,
             max_turn_rate: 3.0,
             speed_slack: 0.01,
@@ -174,9 +189,12 @@ impl IcpParams {
         }
         let nonneg = [
             ("min_range", self.min_range),
+            ("normal_length", self.normal_length),
             ("voxel_size", self.voxel_size),
             ("min_motion", self.min_motion),
             ("prior_rel_tol", self.prior_rel_tol),
+            ("prior_sigma_xy", self.prior_sigma_xy),
+            ("prior_sigma_theta", self.prior_sigma_theta),
             ("min_inlier_fraction", self.min_inlier_fraction),
         ];
         for (name, v) in nonneg {

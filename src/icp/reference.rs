@@ -45,8 +45,10 @@ pub struct Reference {
     link: Vec<bool>,
     lines: Vec<Line>,
     tree: Option<ImmutableKdTree<f64, 2>>,
-    /// Neighbours on each side used in the line fits.
+    /// Most points after the first in one line fit.
     window: usize,
+    /// Surface length (m) a line fit should span; 0 = always `window`.
+    length: f64,
     /// Mean squared fit distances of the lines (scratch for the median).
     scatter: Vec<f64>,
     /// Prefix sums of x, y, x², xy, y² along one surface (scratch).
@@ -72,10 +74,17 @@ pub struct Closest {
 
 impl Reference {
     /// An empty reference whose line fits use windows of `window + 1`
-    /// consecutive linked points (`window` at least 1).
-    pub fn new(window: usize) -> Self {
+    /// consecutive linked points (`window` at least 1), fewer (down to 3
+    /// points) where that many would span more than `length` m of surface
+    /// (`length` = 0: always `window + 1`).
+    pub fn new(window: usize, length: f64) -> Self {
         Self {
             window: window.max(1),
+            length: if length.is_finite() {
+                length.max(0.0)
+            } else {
+                0.0
+            },
             ..Default::default()
         }
     }
@@ -168,15 +177,14 @@ impl Reference {
             while end + 1 < n && self.link[end] {
                 end += 1;
             }
+            let m = self.window_of(start, end, k);
             if end > start {
-                let m = k.min(end - start);
                 self.fit_windows(start, end, m);
             }
             for j in start..=end {
                 if end == start {
                     break;
                 }
-                let m = k.min(end - start);
                 let lo_first = j.saturating_sub(m).max(start);
                 let lo_last = j.min(end - m);
                 let mut best: Option<(f64, Fit)> = None;
@@ -219,6 +227,29 @@ impl Reference {
             if l.score > limit {
                 l.ok = false;
             }
+        }
+    }
+
+    /// Points after the first in the line fits of the surface `start..=end`:
+    /// `k`, or fewer so that a window spans about `length` m at the
+    /// surface's mean point spacing (sparse beams at long range or on 1°
+    /// scanners would otherwise fit lines across corners and curves), at
+    /// least 2, at most the surface.
+    fn window_of(&self, start: usize, end: usize, k: usize) -> usize {
+        let m = k.min(end - start);
+        if self.length <= 0.0 || end == start {
+            return m;
+        }
+        let arc: f64 = self.pts[start..=end]
+            .windows(2)
+            .map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt())
+            .sum();
+        let spacing = arc / (end - start) as f64;
+        let fit = (self.length / spacing).round();
+        if fit.is_finite() && fit < m as f64 {
+            (fit as usize).max(2).min(m)
+        } else {
+            m
         }
     }
 
@@ -428,7 +459,7 @@ mod tests {
                 [12.0 + e, -3.0 + 0.05 * i as f64]
             })
             .collect();
-        let mut r = Reference::new(4);
+        let mut r = Reference::new(4, 0.0);
         r.pts = pts.clone();
         r.link = vec![true; pts.len()];
         r.fit_windows(3, 30, 4);
@@ -453,7 +484,7 @@ mod tests {
             link: vec![true, true, false, false],
             range: vec![1.0; 4],
         };
-        let mut r = Reference::new(2);
+        let mut r = Reference::new(2, 0.0);
         r.set(&sp);
         let c = r.closest([0.3, 0.2]).unwrap();
         assert!((c.target[0] - 0.3).abs() < 1e-12 && c.target[1].abs() < 1e-12);
@@ -483,7 +514,7 @@ mod tests {
             range: vec![1.0; n],
             pts,
         };
-        let mut r = Reference::new(6);
+        let mut r = Reference::new(6, 0.0);
         r.set(&sp);
         let c = r.closest([0.41, 0.9]).unwrap();
         assert!(c.normal[0].abs() < 0.05, "{c:?}");
@@ -492,7 +523,7 @@ mod tests {
 
     #[test]
     fn empty_reference_answers_nothing() {
-        let mut r = Reference::new(6);
+        let mut r = Reference::new(6, 0.0);
         r.set(&ScanPoints::default());
         assert!(r.is_empty());
         assert!(r.closest([0.0, 0.0]).is_none());

@@ -40,6 +40,11 @@ pub struct RegisterSettings {
     pub min_correspondences: usize,
     /// Covariance inflation factor.
     pub cov_inflation: f64,
+    /// Inverse variances (1/m², 1/m², 1/rad²) of a prior centred on the
+    /// initial guess; zeros for none. Holds the directions the geometry
+    /// leaves loose (a corridor's axis) at the guess, and barely moves the
+    /// others, where hundreds of residuals outweigh it.
+    pub prior_precision: [f64; 3],
 }
 
 /// Lever arm (m) that turns a rotation step into a point displacement when
@@ -100,7 +105,12 @@ pub struct Scratch {
 ///    the residuals (MAD), within [`min_kappa`, gate / 3], never widening,
 /// 4. take the reweighted Gauss–Newton step of Σ ρ(e) with
 ///    `e = nᵀ (R p + t − c)` (Newton's curvature once the correspondences
-///    are frozen), halving the step length while steps reverse.
+///    are frozen), plus the prior term `½ σ² (x − init)ᵀ P (x − init)`
+///    (`P` = `prior_precision`, σ the residuals' robust scale), halving the
+///    step length while steps reverse.
+///
+/// The returned covariance is the residuals' alone: the prior never makes a
+/// loose direction look measured.
 pub fn register(
     reference: &Reference,
     source: &[[f64; 2]],
@@ -227,6 +237,20 @@ pub fn register(
             h += curv * j * j.transpose();
             g += (w * e) * j;
             k.w = w;
+        }
+        // The prior in the units of this cost: Σ ρ(e) is the negative
+        // log-likelihood times the residual variance, which the kernel's
+        // scale estimates (and the covariance inflation corrects for the
+        // residuals' correlation, as in `covariance`).
+        let var = (kappa / KAPPA_PER_SIGMA).powi(2) * set.cov_inflation;
+        let off = [
+            pose[0] - init[0],
+            pose[1] - init[1],
+            crate::geom::wrap_angle(pose[2] - init[2]),
+        ];
+        for k in 0..3 {
+            h[(k, k)] += var * set.prior_precision[k];
+            g[k] += var * set.prior_precision[k] * off[k];
         }
         let damp = DAMPING * h.trace();
         for k in 0..3 {
