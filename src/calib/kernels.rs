@@ -345,6 +345,60 @@ fn summarize_impl(a: Summarize<'_>) -> Sums {
     }
 }
 
+/// Inputs of the resampling move: particle k takes ancestor `anc[k]`'s
+/// parameters θ and becomes `max(a·θ + c + L·ε_k, MIN_LENGTH)` (Liu–West;
+/// `l` = the lower triangle of L row by row, `ε_k` from `e`).
+pub(crate) struct GatherMove<'a> {
+    pub anc: &'a [usize],
+    pub src: [&'a [f64]; 3],
+    pub dst: [&'a mut [f64]; 3],
+    pub e: [&'a [f64]; 3],
+    pub a: f64,
+    pub c: [f64; 3],
+    pub l: [f64; 6],
+}
+
+#[inline(always)]
+fn gather_move_impl(g: GatherMove<'_>) {
+    let GatherMove {
+        anc,
+        src: [srr, srl, sd],
+        dst: [rr, rl, d],
+        e: [e1, e2, e3],
+        a,
+        c,
+        l,
+    } = g;
+    let n = anc.len();
+    let (rr, rl, d) = (&mut rr[..n], &mut rl[..n], &mut d[..n]);
+    let (e1, e2, e3) = (&e1[..n], &e2[..n], &e3[..n]);
+    for k in 0..n {
+        let i = anc[k];
+        let j0 = l[0] * e1[k];
+        let j1 = l[1] * e1[k] + l[2] * e2[k];
+        let j2 = l[3] * e1[k] + l[4] * e2[k] + l[5] * e3[k];
+        rr[k] = (a * srr[i] + c[0] + j0).max(MIN_LENGTH);
+        rl[k] = (a * srl[i] + c[1] + j1).max(MIN_LENGTH);
+        d[k] = (a * sd[i] + c[2] + j2).max(MIN_LENGTH);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn gather_move_avx2(g: GatherMove<'_>) {
+    gather_move_impl(g)
+}
+
+/// Gathers the ancestors' parameters and applies the resampling move.
+pub(crate) fn gather_move(g: GatherMove<'_>) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        return unsafe { gather_move_avx2(g) };
+    }
+    gather_move_impl(g)
+}
+
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn predict_avx2(a: Predict<'_>) -> Predicted {

@@ -458,7 +458,7 @@ impl ParticleFilter {
         let (rr, rl, d) = (&mut dst.rr[..n], &mut dst.rl[..n], &mut dst.d[..n]);
         let (e1, e2, e3) = (&e1[..n], &e2[..n], &e3[..n]);
         if moving {
-            let (c0, c1, c2) = ((1.0 - a) * m[0], (1.0 - a) * m[1], (1.0 - a) * m[2]);
+            let c = [(1.0 - a) * m[0], (1.0 - a) * m[1], (1.0 - a) * m[2]];
             let l = [
                 h * l[0][0],
                 h * l[1][0],
@@ -467,15 +467,15 @@ impl ParticleFilter {
                 h * l[2][1],
                 h * l[2][2],
             ];
-            for k in 0..n {
-                let i = anc[k];
-                let j0 = l[0] * e1[k];
-                let j1 = l[1] * e1[k] + l[2] * e2[k];
-                let j2 = l[3] * e1[k] + l[4] * e2[k] + l[5] * e3[k];
-                rr[k] = (a * srr[i] + c0 + j0).max(MIN_LENGTH);
-                rl[k] = (a * srl[i] + c1 + j1).max(MIN_LENGTH);
-                d[k] = (a * sd[i] + c2 + j2).max(MIN_LENGTH);
-            }
+            kernels::gather_move(kernels::GatherMove {
+                anc,
+                src: [srr, srl, sd],
+                dst: [rr, rl, d],
+                e: [e1, e2, e3],
+                a,
+                c,
+                l,
+            });
         } else {
             for k in 0..n {
                 let i = anc[k];
