@@ -372,14 +372,20 @@ fn gather_move_impl(g: GatherMove<'_>) {
     let n = anc.len();
     let (rr, rl, d) = (&mut rr[..n], &mut rl[..n], &mut d[..n]);
     let (e1, e2, e3) = (&e1[..n], &e2[..n], &e3[..n]);
+    // Gather (scalar loads), then move in place (a vectorised loop).
     for k in 0..n {
         let i = anc[k];
+        rr[k] = srr[i];
+        rl[k] = srl[i];
+        d[k] = sd[i];
+    }
+    for k in 0..n {
         let j0 = l[0] * e1[k];
         let j1 = l[1] * e1[k] + l[2] * e2[k];
         let j2 = l[3] * e1[k] + l[4] * e2[k] + l[5] * e3[k];
-        rr[k] = (a * srr[i] + c[0] + j0).max(MIN_LENGTH);
-        rl[k] = (a * srl[i] + c[1] + j1).max(MIN_LENGTH);
-        d[k] = (a * sd[i] + c[2] + j2).max(MIN_LENGTH);
+        rr[k] = (a * rr[k] + c[0] + j0).max(MIN_LENGTH);
+        rl[k] = (a * rl[k] + c[1] + j1).max(MIN_LENGTH);
+        d[k] = (a * d[k] + c[2] + j2).max(MIN_LENGTH);
     }
 }
 

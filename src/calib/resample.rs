@@ -76,13 +76,15 @@ fn systematic(u: f64, n: usize, w: &[f64], out: &mut Vec<usize>) {
     let inv = 1.0 / n as f64;
     let mut j = 0usize;
     let mut c = w[0];
-    for k in 0..n {
+    let from = out.len();
+    out.resize(from + n, 0);
+    for (k, slot) in out[from..].iter_mut().enumerate() {
         let u = (k as f64 + u) * inv;
         while c <= u && j < last {
             j += 1;
             c += w[j];
         }
-        out.push(j);
+        *slot = j;
     }
 }
 
