@@ -93,7 +93,9 @@ pub struct VelocityObs {
 
 impl VelocityObs {
     /// Velocities from a valid motion: the constant (V, W) whose arc over dt
-    /// gives the motion (`V = arc length/dt`, `W = dθ/dt`), with σ propagated
+    /// best explains the motion (`V = arc length/dt`, `W = dθ/dt`, the arc
+    /// length from the displacement projected on the arc's chord direction
+    /// dθ/2, see [`arc_along_chord`]), with σ propagated
     /// from the covariance (`σ_V = sqrt(cov_xx)/dt`, `σ_W = sqrt(cov_θθ)/dt`).
     /// `None` for failed pairs or dt ≤ 0, so a failed match never becomes a
     /// confident observation.
@@ -102,8 +104,7 @@ impl VelocityObs {
         if !m.is_valid() || !(dt > 0.0) || !dt.is_finite() {
             return None;
         }
-        let inc = crate::geom::pose(m.dx, m.dy, m.dtheta);
-        let (ds, dth) = crate::geom::arc_of_increment(&inc);
+        let (ds, dth) = arc_along_chord(m.dx, m.dy, m.dtheta);
         let sv = m.cov[(0, 0)].max(0.0).sqrt() / dt;
         let sw = m.cov[(2, 2)].max(0.0).sqrt() / dt;
         let obs = Self {
@@ -119,6 +120,24 @@ impl VelocityObs {
             .all(|x| x.is_finite())
             .then_some(obs)
     }
+}
+
+/// Signed arc length (m) and turn (rad) of the constant-velocity arc that
+/// best explains a base-frame increment (dx, dy, dθ) (m, m, rad): an arc of
+/// length s ends at `s·sinc(dθ/2)·(cos dθ/2, sin dθ/2)`, so under isotropic
+/// noise on (dx, dy) the least-squares s projects the displacement on that
+/// direction. Unlike the chord's norm, this is not inflated by noise (or a
+/// mounting error) across the direction of travel, and its sign needs no
+/// rule when the robot turns in place.
+pub fn arc_along_chord(dx: f64, dy: f64, dtheta: f64) -> (f64, f64) {
+    let h = 0.5 * dtheta;
+    let along = dx * h.cos() + dy * h.sin();
+    let factor = if h.abs() < 1e-6 {
+        1.0 + h * h / 6.0
+    } else {
+        h / h.sin()
+    };
+    (along * factor, dtheta)
 }
 
 #[cfg(test)]
@@ -137,6 +156,24 @@ mod tests {
             inliers: 500,
             failure: None,
         }
+    }
+
+    #[test]
+    fn arc_length_ignores_displacement_across_the_chord() {
+        // Exact arcs come back exactly, forwards, backwards and in place.
+        for (v, w) in [(1.0, 0.0), (0.8, 0.5), (-0.3, 1.2), (0.0, 2.0), (0.5, -3.0)] {
+            let [dx, dy, dth] = crate::geom::xyt(&crate::geom::arc_increment(v, w, 0.5));
+            let (s, th) = arc_along_chord(dx, dy, dth);
+            assert!((s - 0.5 * v).abs() < 1e-12, "{v} {w}: {s}");
+            assert!((th - 0.5 * w).abs() < 1e-12);
+        }
+        // A sideways offset (noise, a mounting error) does not lengthen the
+        // arc; the chord's norm would (0.1044 m here).
+        let (s, _) = arc_along_chord(0.1, 0.03, 0.0);
+        assert!((s - 0.1).abs() < 1e-15);
+        // Turning in place with an offset across the chord: no travel.
+        let (s, _) = arc_along_chord(-0.01 * 0.5f64.sin(), 0.01 * 0.5f64.cos(), 1.0);
+        assert!(s.abs() < 1e-15);
     }
 
     #[test]

@@ -138,3 +138,36 @@ fn adaptive_pf_matches_the_authors_on_lstraight_within_one_percent() {
         a.axle
     );
 }
+
+/// Runs the Adaptive-PF on `set` and asserts radii and axle within 1 % of
+/// the authors' maximum-likelihood estimates (same settings for every set).
+fn within_one_percent_of_the_authors(set: &str) {
+    let Some((k, a, _)) = calibrate(set, Method::AdaptivePf) else {
+        return;
+    };
+    eprintln!(
+        "{set}: {k:?} vs authors r_R {} r_L {} axle {}",
+        a.r_diam / 2.0,
+        a.l_diam / 2.0,
+        a.axle
+    );
+    for (name, got, want) in [
+        ("r_right", k.r_right, a.r_diam / 2.0),
+        ("r_left", k.r_left, a.l_diam / 2.0),
+        ("wheel_base", k.wheel_base, a.axle),
+    ] {
+        assert!(rel(got, want) < 0.01, "{set} {name}: {got} vs {want}");
+    }
+}
+
+#[test]
+fn adaptive_pf_matches_the_authors_on_l90_within_one_percent() {
+    // Configuration B: laser turned by −89°, many turns in place.
+    within_one_percent_of_the_authors("l90");
+}
+
+#[test]
+fn adaptive_pf_matches_the_authors_on_lmov_within_one_percent() {
+    // Configuration C: laser 39 mm off the axis, turned by −107°.
+    within_one_percent_of_the_authors("lmov");
+}

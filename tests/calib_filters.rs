@@ -55,7 +55,7 @@ fn no_nan(r: &CalibrationRun) -> bool {
 #[test]
 fn adaptive_pf_and_kalman_baselines_converge_to_the_truth() {
     for seed in [11u64, 12] {
-        let (d, st) = synth(seed, 40.0, None);
+        let (d, st) = synth(seed, 60.0, None);
         let k = d.truth;
         for m in [Method::AdaptivePf, Method::Dkf, Method::Akf] {
             let r = calibrate(m, seed, &st);

@@ -1,5 +1,7 @@
 //! Augmented extended Kalman filter: state [V, W, R_R, R_L, D], the
-//! parameters as random walks, V and W re-predicted from the wheel rates.
+//! parameters as random walks, V and W re-predicted from the wheel rates
+//! with the velocity model's noise (`NoiseParams::model_sigma_v`,
+//! `model_sigma_w`, the same the particle filters use) as process noise.
 
 use super::kalman::{model, observability, prior, turn_rate_for_observability};
 use super::params::CalibParams;
@@ -32,16 +34,18 @@ impl AugmentedKf {
             x[2 + i] = m[i];
             p[(2 + i, 2 + i)] = pm[(i, i)];
         }
-        let (qv, qp) = (
-            params.noise.kalman_velocity_sigma.powi(2),
-            params.noise.kalman_param_sigma.powi(2),
+        let n = &params.noise;
+        let (qv, qw, qp) = (
+            n.model_sigma_v.powi(2),
+            n.model_sigma_w.powi(2),
+            n.kalman_param_sigma.powi(2),
         );
         p[(0, 0)] = qv;
-        p[(1, 1)] = qv;
+        p[(1, 1)] = qw;
         Self {
             x,
             p,
-            q: V5::new(qv, qv, qp, qp, qp),
+            q: V5::new(qv, qw, qp, qp, qp),
             floor: params.noise.sigma_floor,
             dof: params.noise.robust_dof,
             w_obs: params.noise.observability_turn_rate,

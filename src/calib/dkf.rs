@@ -1,7 +1,10 @@
 //! Dual Kalman filter (Wan & Nelson): a state filter on [V, W] that predicts
 //! with the parameter filter's latest estimate, and a parameter filter on
-//! [R_R, R_L, D] that takes the state filter's latest estimate (with its
-//! variance) as its measurement.
+//! [R_R, R_L, D] that takes the state filter's latest estimate as its
+//! measurement, with the state's variance plus the velocity model's own
+//! noise (`NoiseParams::model_sigma_v`, `model_sigma_w`: encoder
+//! quantisation, slip), without which the parameter filter would trust each
+//! step's wheel-rate prediction as exact and chase its noise.
 
 use super::kalman::{model, observability, prior, turn_rate_for_observability};
 use super::params::CalibParams;
@@ -20,6 +23,7 @@ pub struct DualKf {
     floor: f64,
     dof: f64,
     w_obs: f64,
+    model_var: [f64; 2],
 }
 
 impl DualKf {
@@ -34,6 +38,10 @@ impl DualKf {
             floor: params.noise.sigma_floor,
             dof: params.noise.robust_dof,
             w_obs: params.noise.observability_turn_rate,
+            model_var: [
+                params.noise.model_sigma_v.powi(2),
+                params.noise.model_sigma_w.powi(2),
+            ],
         }
     }
 }
@@ -66,7 +74,7 @@ impl Calibrator for DualKf {
             seen[k] = true;
         }
         // Parameter filter, measurement update: the state estimate observes
-        // f(θ) with the state filter's posterior variance.
+        // f(θ) with the state filter's posterior variance plus the model's.
         for k in 0..2 {
             if !seen[k] {
                 continue;
@@ -74,14 +82,16 @@ impl Calibrator for DualKf {
             let (f, j) = model(&self.theta, s.omega_right, s.omega_left);
             let h = j[k];
             let ph = self.p_theta * h;
-            let sv = h.dot(&ph) + px[k].max(self.floor * self.floor);
+            let meas_var = px[k].max(self.floor * self.floor) + self.model_var[k];
+            let sv = h.dot(&ph) + meas_var;
             let mut gain = ph / sv;
             // Partial update (Schmidt–Kalman): D moves only as far as it is
             // observable; Joseph form keeps P consistent for any gain.
             gain[2] *= obs;
             self.theta += gain * (x[k] - f[k]);
             let ikh = Matrix3::identity() - gain * h.transpose();
-            self.p_theta = ikh * self.p_theta * ikh.transpose() + gain * gain.transpose() * px[k];
+            self.p_theta =
+                ikh * self.p_theta * ikh.transpose() + gain * gain.transpose() * meas_var;
         }
         self.p_theta = 0.5 * (self.p_theta + self.p_theta.transpose());
         self.theta = self.theta.map(|t| t.max(1e-6));

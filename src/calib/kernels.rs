@@ -1,4 +1,4 @@
-//! The particle filter's two per-step passes over its particle columns, kept
+//! The particle filter's per-step passes over its particle columns, kept
 //! apart so they can be compiled twice: for the baseline CPU and, picked at
 //! run time, with AVX2 (same instructions' results, wider registers: no fused
 //! multiply-add is enabled, so both versions give bit-identical numbers).
@@ -165,7 +165,7 @@ fn predict_impl(a: Predict<'_>) -> Predicted {
     }
 }
 
-/// Inputs of the normalise-and-summarise pass.
+/// Inputs of the normalise-and-summarise passes.
 pub(crate) struct Summarize<'a> {
     pub rr: &'a [f64],
     pub rl: &'a [f64],
@@ -174,7 +174,7 @@ pub(crate) struct Summarize<'a> {
     pub w: &'a [f64],
     /// Log-weights: shifted by `shift` in place (−∞ where the weight is 0).
     pub lw: &'a mut [f64],
-    /// Receives the unnormalised weights `exp(lw − shift)`.
+    /// Receives the normalised weights `exp(lw − shift) / Σ`.
     pub buf: &'a mut [f64],
     pub shift: f64,
     /// All weights 1 (after an underflow reset).
@@ -183,15 +183,138 @@ pub(crate) struct Summarize<'a> {
     pub r: [f64; 3],
 }
 
-/// Output of [`summarize`]: weight sum, sum of squares and maximum; weighted
-/// sums of (R_R, R_L, D) − r, V, W; weighted products of the shifted
-/// parameters (rr·rr, rr·rl, rr·d, rl·rl, rl·d, d·d).
+/// Output of [`summarize`]: sum, sum of squares and maximum of the
+/// unnormalised weights; normalised-weight means of (R_R, R_L, D) − r, V, W;
+/// normalised-weight products of the shifted parameters (rr·rr, rr·rl,
+/// rr·d, rl·rl, rl·d, d·d).
 pub(crate) struct Sums {
     pub sum: f64,
     pub sq: f64,
     pub max: f64,
     pub s1: [f64; 5],
     pub s2: [f64; 6],
+}
+
+/// First pass: unnormalised weights, their sum, sum of squares and maximum,
+/// and the weighted sums of V and W (5 accumulators: no register spills).
+#[inline(always)]
+fn weigh_impl(
+    lw: &mut [f64],
+    buf: &mut [f64],
+    v: &[f64],
+    w: &[f64],
+    shift: f64,
+    uniform: bool,
+) -> [f64; 5] {
+    let n = lw.len();
+    let (buf, v, w) = (&mut buf[..n], &v[..n], &w[..n]);
+    let mut sum = [0.0f64; LANES];
+    let mut sq = [0.0f64; LANES];
+    let mut max = [0.0f64; LANES];
+    let mut sv = [0.0f64; LANES];
+    let mut sw = [0.0f64; LANES];
+    // Element-wise exponentials first (a plain loop the compiler vectorises,
+    // exp included), then the reductions over the buffer.
+    if uniform {
+        lw.iter_mut().for_each(|x| *x -= shift);
+        buf.fill(1.0);
+    } else {
+        for i in 0..n {
+            let x = lw[i] - shift;
+            let e = fast_exp(x);
+            lw[i] = if e > 0.0 { x } else { f64::NEG_INFINITY };
+            buf[i] = e;
+        }
+    }
+    let full = n / LANES * LANES;
+    for c in (0..full).step_by(LANES) {
+        let e: &[f64; LANES] = buf[c..c + LANES].try_into().unwrap();
+        let v: &[f64; LANES] = v[c..c + LANES].try_into().unwrap();
+        let w: &[f64; LANES] = w[c..c + LANES].try_into().unwrap();
+        sum = std::array::from_fn(|l| sum[l] + e[l]);
+        sq = std::array::from_fn(|l| sq[l] + e[l] * e[l]);
+        max = std::array::from_fn(|l| if e[l] > max[l] { e[l] } else { max[l] });
+        sv = std::array::from_fn(|l| sv[l] + e[l] * v[l]);
+        sw = std::array::from_fn(|l| sw[l] + e[l] * w[l]);
+    }
+    for i in full..n {
+        let e = buf[i];
+        sum[0] += e;
+        sq[0] += e * e;
+        max[0] = if e > max[0] { e } else { max[0] };
+        sv[0] += e * v[i];
+        sw[0] += e * w[i];
+    }
+    let fold = |x: &[f64; LANES]| x.iter().sum::<f64>();
+    [
+        fold(&sum),
+        fold(&sq),
+        max.iter().fold(0.0f64, |a, &b| a.max(b)),
+        fold(&sv),
+        fold(&sw),
+    ]
+}
+
+/// Second pass: scales the weights by `inv` (normalises them) and takes the
+/// weighted first and second moments of the shifted parameters (9
+/// accumulators).
+#[inline(always)]
+fn moments_impl(
+    buf: &mut [f64],
+    rr: &[f64],
+    rl: &[f64],
+    d: &[f64],
+    r: [f64; 3],
+    inv: f64,
+) -> ([f64; 3], [f64; 6]) {
+    let n = buf.len();
+    let (rr, rl, d) = (&rr[..n], &rl[..n], &d[..n]);
+    let mut s1 = [[0.0f64; LANES]; 3];
+    let mut s2 = [[0.0f64; LANES]; 6];
+    let full = n / LANES * LANES;
+    for c in (0..full).step_by(LANES) {
+        let buf: &mut [f64; LANES] = (&mut buf[c..c + LANES]).try_into().unwrap();
+        let rr: &[f64; LANES] = rr[c..c + LANES].try_into().unwrap();
+        let rl: &[f64; LANES] = rl[c..c + LANES].try_into().unwrap();
+        let d: &[f64; LANES] = d[c..c + LANES].try_into().unwrap();
+        let e: [f64; LANES] = std::array::from_fn(|l| buf[l] * inv);
+        *buf = e;
+        let a: [f64; LANES] = std::array::from_fn(|l| rr[l] - r[0]);
+        let b: [f64; LANES] = std::array::from_fn(|l| rl[l] - r[1]);
+        let cc: [f64; LANES] = std::array::from_fn(|l| d[l] - r[2]);
+        let ea: [f64; LANES] = std::array::from_fn(|l| e[l] * a[l]);
+        let eb: [f64; LANES] = std::array::from_fn(|l| e[l] * b[l]);
+        let ec: [f64; LANES] = std::array::from_fn(|l| e[l] * cc[l]);
+        s1[0] = std::array::from_fn(|l| s1[0][l] + ea[l]);
+        s1[1] = std::array::from_fn(|l| s1[1][l] + eb[l]);
+        s1[2] = std::array::from_fn(|l| s1[2][l] + ec[l]);
+        s2[0] = std::array::from_fn(|l| s2[0][l] + ea[l] * a[l]);
+        s2[1] = std::array::from_fn(|l| s2[1][l] + ea[l] * b[l]);
+        s2[2] = std::array::from_fn(|l| s2[2][l] + ea[l] * cc[l]);
+        s2[3] = std::array::from_fn(|l| s2[3][l] + eb[l] * b[l]);
+        s2[4] = std::array::from_fn(|l| s2[4][l] + eb[l] * cc[l]);
+        s2[5] = std::array::from_fn(|l| s2[5][l] + ec[l] * cc[l]);
+    }
+    for i in full..n {
+        let e = buf[i] * inv;
+        buf[i] = e;
+        let (a, b, c) = (rr[i] - r[0], rl[i] - r[1], d[i] - r[2]);
+        let (ea, eb, ec) = (e * a, e * b, e * c);
+        s1[0][0] += ea;
+        s1[1][0] += eb;
+        s1[2][0] += ec;
+        s2[0][0] += ea * a;
+        s2[1][0] += ea * b;
+        s2[2][0] += ea * c;
+        s2[3][0] += eb * b;
+        s2[4][0] += eb * c;
+        s2[5][0] += ec * c;
+    }
+    let fold = |x: &[f64; LANES]| x.iter().sum::<f64>();
+    (
+        std::array::from_fn(|k| fold(&s1[k])),
+        std::array::from_fn(|k| fold(&s2[k])),
+    )
 }
 
 #[inline(always)]
@@ -209,92 +332,77 @@ fn summarize_impl(a: Summarize<'_>) -> Sums {
         uniform,
         r,
     } = a;
-    let (rl, d, v, w, lw, buf) = (
-        &rl[..n],
-        &d[..n],
-        &v[..n],
-        &w[..n],
-        &mut lw[..n],
-        &mut buf[..n],
-    );
-    let mut sum = [0.0f64; LANES];
-    let mut sq = [0.0f64; LANES];
-    let mut max = [0.0f64; LANES];
-    let mut s1 = [[0.0f64; LANES]; 5];
-    let mut s2 = [[0.0f64; LANES]; 6];
-    macro_rules! body {
-        ($rr:ident, $rl:ident, $d:ident, $v:ident, $w:ident, $lw:ident, $buf:ident, $l:expr, $i:expr) => {{
-            let (l, i) = ($l, $i);
-            let (rr, rl, d, v, w, lw, buf) =
-                (&*$rr, &*$rl, &*$d, &*$v, &*$w, &mut *$lw, &mut *$buf);
-            let x = lw[i] - shift;
-            let e = if uniform { 1.0 } else { fast_exp(x) };
-            lw[i] = if e > 0.0 { x } else { f64::NEG_INFINITY };
-            buf[i] = e;
-            sum[l] += e;
-            sq[l] += e * e;
-            max[l] = if e > max[l] { e } else { max[l] };
-            let (a, b, c) = (rr[i] - r[0], rl[i] - r[1], d[i] - r[2]);
-            let (ea, eb, ec) = (e * a, e * b, e * c);
-            s1[0][l] += ea;
-            s1[1][l] += eb;
-            s1[2][l] += ec;
-            s1[3][l] += e * v[i];
-            s1[4][l] += e * w[i];
-            s2[0][l] += ea * a;
-            s2[1][l] += ea * b;
-            s2[2][l] += ea * c;
-            s2[3][l] += eb * b;
-            s2[4][l] += eb * c;
-            s2[5][l] += ec * c;
-        }};
-    }
-    let full = n / LANES * LANES;
-    for c in (0..full).step_by(LANES) {
-        let rr: &[f64; LANES] = rr[c..c + LANES].try_into().unwrap();
-        let rl: &[f64; LANES] = rl[c..c + LANES].try_into().unwrap();
-        let d: &[f64; LANES] = d[c..c + LANES].try_into().unwrap();
-        let v: &[f64; LANES] = v[c..c + LANES].try_into().unwrap();
-        let w: &[f64; LANES] = w[c..c + LANES].try_into().unwrap();
-        let lw: &mut [f64; LANES] = (&mut lw[c..c + LANES]).try_into().unwrap();
-        let buf: &mut [f64; LANES] = (&mut buf[c..c + LANES]).try_into().unwrap();
-        // Whole-chunk operations, the same arithmetic as `body!`.
-        let x: [f64; LANES] = std::array::from_fn(|l| lw[l] - shift);
-        let e: [f64; LANES] = std::array::from_fn(|l| if uniform { 1.0 } else { fast_exp(x[l]) });
-        *lw = std::array::from_fn(|l| if e[l] > 0.0 { x[l] } else { f64::NEG_INFINITY });
-        *buf = e;
-        sum = std::array::from_fn(|l| sum[l] + e[l]);
-        sq = std::array::from_fn(|l| sq[l] + e[l] * e[l]);
-        max = std::array::from_fn(|l| if e[l] > max[l] { e[l] } else { max[l] });
-        let a: [f64; LANES] = std::array::from_fn(|l| rr[l] - r[0]);
-        let b: [f64; LANES] = std::array::from_fn(|l| rl[l] - r[1]);
-        let cc: [f64; LANES] = std::array::from_fn(|l| d[l] - r[2]);
-        let ea: [f64; LANES] = std::array::from_fn(|l| e[l] * a[l]);
-        let eb: [f64; LANES] = std::array::from_fn(|l| e[l] * b[l]);
-        let ec: [f64; LANES] = std::array::from_fn(|l| e[l] * cc[l]);
-        s1[0] = std::array::from_fn(|l| s1[0][l] + ea[l]);
-        s1[1] = std::array::from_fn(|l| s1[1][l] + eb[l]);
-        s1[2] = std::array::from_fn(|l| s1[2][l] + ec[l]);
-        s1[3] = std::array::from_fn(|l| s1[3][l] + e[l] * v[l]);
-        s1[4] = std::array::from_fn(|l| s1[4][l] + e[l] * w[l]);
-        s2[0] = std::array::from_fn(|l| s2[0][l] + ea[l] * a[l]);
-        s2[1] = std::array::from_fn(|l| s2[1][l] + ea[l] * b[l]);
-        s2[2] = std::array::from_fn(|l| s2[2][l] + ea[l] * cc[l]);
-        s2[3] = std::array::from_fn(|l| s2[3][l] + eb[l] * b[l]);
-        s2[4] = std::array::from_fn(|l| s2[4][l] + eb[l] * cc[l]);
-        s2[5] = std::array::from_fn(|l| s2[5][l] + ec[l] * cc[l]);
-    }
-    for i in full..n {
-        body!(rr, rl, d, v, w, lw, buf, 0, i);
-    }
-    let fold = |x: &[f64; LANES]| x.iter().sum::<f64>();
+    let (lw, buf) = (&mut lw[..n], &mut buf[..n]);
+    let [sum, sq, max, sv, sw] = weigh_impl(lw, buf, v, w, shift, uniform);
+    let inv = 1.0 / sum;
+    let (m, s2) = moments_impl(buf, rr, rl, d, r, inv);
     Sums {
-        sum: fold(&sum),
-        sq: fold(&sq),
-        max: max.iter().fold(0.0f64, |a, &b| a.max(b)),
-        s1: std::array::from_fn(|k| fold(&s1[k])),
-        s2: std::array::from_fn(|k| fold(&s2[k])),
+        sum,
+        sq,
+        max,
+        s1: [m[0], m[1], m[2], sv * inv, sw * inv],
+        s2,
     }
+}
+
+/// Inputs of the resampling move: particle k takes ancestor `anc[k]`'s
+/// parameters θ and becomes `max(a·θ + c + L·ε_k, MIN_LENGTH)` (Liu–West;
+/// `l` = the lower triangle of L row by row, `ε_k` from `e`).
+pub(crate) struct GatherMove<'a> {
+    pub anc: &'a [usize],
+    pub src: [&'a [f64]; 3],
+    pub dst: [&'a mut [f64]; 3],
+    pub e: [&'a [f64]; 3],
+    pub a: f64,
+    pub c: [f64; 3],
+    pub l: [f64; 6],
+}
+
+#[inline(always)]
+fn gather_move_impl(g: GatherMove<'_>) {
+    let GatherMove {
+        anc,
+        src: [srr, srl, sd],
+        dst: [rr, rl, d],
+        e: [e1, e2, e3],
+        a,
+        c,
+        l,
+    } = g;
+    let n = anc.len();
+    let (rr, rl, d) = (&mut rr[..n], &mut rl[..n], &mut d[..n]);
+    let (e1, e2, e3) = (&e1[..n], &e2[..n], &e3[..n]);
+    // Gather (scalar loads), then move in place (a vectorised loop).
+    for k in 0..n {
+        let i = anc[k];
+        rr[k] = srr[i];
+        rl[k] = srl[i];
+        d[k] = sd[i];
+    }
+    for k in 0..n {
+        let j0 = l[0] * e1[k];
+        let j1 = l[1] * e1[k] + l[2] * e2[k];
+        let j2 = l[3] * e1[k] + l[4] * e2[k] + l[5] * e3[k];
+        rr[k] = (a * rr[k] + c[0] + j0).max(MIN_LENGTH);
+        rl[k] = (a * rl[k] + c[1] + j1).max(MIN_LENGTH);
+        d[k] = (a * d[k] + c[2] + j2).max(MIN_LENGTH);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn gather_move_avx2(g: GatherMove<'_>) {
+    gather_move_impl(g)
+}
+
+/// Gathers the ancestors' parameters and applies the resampling move.
+pub(crate) fn gather_move(g: GatherMove<'_>) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        return unsafe { gather_move_avx2(g) };
+    }
+    gather_move_impl(g)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -319,7 +427,8 @@ pub(crate) fn predict(a: Predict<'_>) -> Predicted {
     predict_impl(a)
 }
 
-/// Weights from log-weights and the weighted moments, in one pass.
+/// Normalised weights from log-weights and the weighted moments, in two
+/// passes (split so that neither runs out of vector registers).
 pub(crate) fn summarize(a: Summarize<'_>) -> Sums {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {

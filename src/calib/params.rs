@@ -112,9 +112,12 @@ pub struct NoiseParams {
     pub sigma_floor: f64,
     /// σ of the velocity model itself (m/s): added in quadrature to every V
     /// measurement's σ (encoder quantisation, slip, timing), the analytic
-    /// form of seed 000's jitter on V.
+    /// form of seed 000's jitter on V. The Kalman baselines use the same
+    /// model noise: the AKF as the process noise of V, the DKF in its
+    /// parameter filter's measurement variance.
     pub model_sigma_v: f64,
-    /// σ of the turn-rate model (rad/s), added in quadrature to W's σ.
+    /// σ of the turn-rate model (rad/s), added in quadrature to W's σ (and
+    /// used by the Kalman baselines as for V).
     pub model_sigma_w: f64,
     /// Liu–West kernel shrinkage `a` applied at each resampling of the
     /// particle filters: θ ← a·θ + (1−a)·θ̄ + sqrt(1−a²)·L·ε with L the
@@ -136,7 +139,9 @@ pub struct NoiseParams {
     pub observability_turn_rate: f64,
     /// Kalman baselines: σ of the parameter random walk per step (m).
     pub kalman_param_sigma: f64,
-    /// Kalman baselines: σ of the velocity process noise (m/s, rad/s).
+    /// Dual Kalman filter: σ of its state filter's prior on V and W around
+    /// the wheel-rate prediction (m/s, rad/s); loose, so the state estimate
+    /// the parameter filter learns from follows the measurements.
     pub kalman_velocity_sigma: f64,
 }
 

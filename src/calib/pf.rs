@@ -1,8 +1,10 @@
 //! The particle-filter calibrator (seed 000, section III), optionally with the
 //! Adaptive-PF rules of section V and a change detector. Particles are stored
-//! as a structure of arrays; one step is two fused passes over them (predict
-//! and reweight; normalise and summarise) plus, when triggered, one pass that
-//! resamples and moves. A step allocates nothing once the buffers have grown.
+//! as a structure of arrays; one step is a fused predict-and-reweight pass,
+//! two normalise-and-summarise passes (register-sized, so they stay
+//! vectorised) and, when triggered, one pass that resamples and moves into a
+//! spare set swapped in afterwards. A step allocates nothing once the buffers
+//! have grown.
 
 // `!(x > y)` is deliberate: it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
@@ -25,9 +27,10 @@ use rand::{RngExt, SeedableRng};
 /// The particle set: χ = [V, W, R_R, R_L, D] per particle (eq. 1).
 #[derive(Debug, Clone, Default)]
 pub struct Particles {
-    /// Forward velocities V (m/s) of the last prediction.
+    /// Forward velocities V (m/s) of the last prediction (not carried
+    /// through a resampling: the next prediction recomputes them).
     pub v: Vec<f64>,
-    /// Turn rates W (rad/s) of the last prediction.
+    /// Turn rates W (rad/s) of the last prediction (same caveat as `v`).
     pub w: Vec<f64>,
     /// Right wheel radii R_R (m).
     pub rr: Vec<f64>,
@@ -319,7 +322,7 @@ impl ParticleFilter {
     }
 
     /// Normalises the weights (log-sum-exp with the maximum `mx`) and, in the
-    /// same pass, accumulates the weighted means of every column and the
+    /// same two passes, accumulates the weighted means of every column and the
     /// covariance of the parameters. Returns the estimate at time `t`.
     fn normalize_and_summarize(&mut self, mx: f64, t: f64) -> Estimate {
         let n = self.p.len();
@@ -350,9 +353,8 @@ impl ParticleFilter {
             r,
         });
         self.weights.finish(sum, sq, emax, reset);
-        let inv = 1.0 / sum;
-        let m: [f64; 5] = std::array::from_fn(|k| s1[k] * inv);
-        let c = |k: usize, x: usize, y: usize| s2[k] * inv - m[x] * m[y];
+        let m = s1;
+        let c = |k: usize, x: usize, y: usize| s2[k] - m[x] * m[y];
         let cov = Matrix3::new(
             c(0, 0, 0),
             c(1, 0, 1),
@@ -448,27 +450,38 @@ impl ParticleFilter {
         let [o1, o2, o3] = self.pool.offsets::<3, _>(n, &mut self.rng);
         let pool = self.pool.data();
         let (e1, e2, e3) = (&pool[o1..o1 + n], &pool[o2..o2 + n], &pool[o3..o3 + n]);
-        let src = &self.p;
-        let dst = &mut self.spare;
+        // Gather and move in one pass (ancestors ascend: sequential reads).
+        // V and W are not carried over: the next prediction overwrites them.
         let anc = &self.ancestors[..n];
+        let (src, dst) = (&self.p, &mut self.spare);
+        let (srr, srl, sd) = (&src.rr[..], &src.rl[..], &src.d[..]);
         let (rr, rl, d) = (&mut dst.rr[..n], &mut dst.rl[..n], &mut dst.d[..n]);
-        let (v, w) = (&mut dst.v[..n], &mut dst.w[..n]);
-        let (c0, c1, c2) = ((1.0 - a) * m[0], (1.0 - a) * m[1], (1.0 - a) * m[2]);
-        for k in 0..n {
-            let i = anc[k];
-            v[k] = src.v[i];
-            w[k] = src.w[i];
-            if moving {
-                let j0 = h * l[0][0] * e1[k];
-                let j1 = h * (l[1][0] * e1[k] + l[1][1] * e2[k]);
-                let j2 = h * (l[2][0] * e1[k] + l[2][1] * e2[k] + l[2][2] * e3[k]);
-                rr[k] = (a * src.rr[i] + c0 + j0).max(MIN_LENGTH);
-                rl[k] = (a * src.rl[i] + c1 + j1).max(MIN_LENGTH);
-                d[k] = (a * src.d[i] + c2 + j2).max(MIN_LENGTH);
-            } else {
-                rr[k] = src.rr[i];
-                rl[k] = src.rl[i];
-                d[k] = src.d[i];
+        let (e1, e2, e3) = (&e1[..n], &e2[..n], &e3[..n]);
+        if moving {
+            let c = [(1.0 - a) * m[0], (1.0 - a) * m[1], (1.0 - a) * m[2]];
+            let l = [
+                h * l[0][0],
+                h * l[1][0],
+                h * l[1][1],
+                h * l[2][0],
+                h * l[2][1],
+                h * l[2][2],
+            ];
+            kernels::gather_move(kernels::GatherMove {
+                anc,
+                src: [srr, srl, sd],
+                dst: [rr, rl, d],
+                e: [e1, e2, e3],
+                a,
+                c,
+                l,
+            });
+        } else {
+            for k in 0..n {
+                let i = anc[k];
+                rr[k] = srr[i];
+                rl[k] = srl[i];
+                d[k] = sd[i];
             }
         }
         std::mem::swap(&mut self.p, &mut self.spare);

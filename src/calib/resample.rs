@@ -69,6 +69,25 @@ pub fn inverse_cdf(su: &[f64], w: &[f64], out: &mut Vec<usize>) {
     }
 }
 
+/// [`inverse_cdf`] of the evenly spaced points `(k + u)/n`, k < n, computed
+/// on the fly (no buffer of uniforms).
+fn systematic(u: f64, n: usize, w: &[f64], out: &mut Vec<usize>) {
+    let last = w.iter().rposition(|&x| x > 0.0).unwrap_or(w.len() - 1);
+    let inv = 1.0 / n as f64;
+    let mut j = 0usize;
+    let mut c = w[0];
+    let from = out.len();
+    out.resize(from + n, 0);
+    for (k, slot) in out[from..].iter_mut().enumerate() {
+        let u = (k as f64 + u) * inv;
+        while c <= u && j < last {
+            j += 1;
+            c += w[j];
+        }
+        *slot = j;
+    }
+}
+
 /// Draws ancestors with a reusable scratch buffer (no allocation once warm).
 #[derive(Debug, Clone, Default)]
 pub struct Resampler {
@@ -103,16 +122,15 @@ impl Resampler {
                 sorted_uniforms(n, rng, &mut self.su);
                 inverse_cdf(&self.su, w, out);
             }
-            Scheme::Stratified | Scheme::Systematic => {
+            Scheme::Systematic => {
+                let u: f64 = rng.random();
+                systematic(u, n, w, out);
+            }
+            Scheme::Stratified => {
                 self.su.clear();
                 let inv = 1.0 / n as f64;
-                if scheme == Scheme::Systematic {
-                    let u: f64 = rng.random();
-                    self.su.extend((0..n).map(|k| (k as f64 + u) * inv));
-                } else {
-                    self.su
-                        .extend((0..n).map(|k| (k as f64 + rng.random::<f64>()) * inv));
-                }
+                self.su
+                    .extend((0..n).map(|k| (k as f64 + rng.random::<f64>()) * inv));
                 inverse_cdf(&self.su, w, out);
             }
             Scheme::Residual => {

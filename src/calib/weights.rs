@@ -107,20 +107,19 @@ impl Weights {
         self.max = mx;
     }
 
-    /// The log-weights and the weight buffer together, for a fused pass that
-    /// writes `exp(log − max)` into the buffer and then calls
-    /// [`Weights::finish`].
+    /// The log-weights and the weight buffer together, for fused passes that
+    /// write the normalised `exp(log − max) / Σ` into the buffer and then
+    /// call [`Weights::finish`].
     pub(crate) fn parts_mut(&mut self) -> (&mut [f64], &mut Vec<f64>) {
         (&mut self.log, &mut self.norm)
     }
 
-    /// Completes a fused normalisation: the buffer holds unnormalised weights
-    /// with sum `sum`, sum of squares `sq` and largest `max` (all finite,
-    /// positive sum); scales them to sum 1 and records N_eff, the largest weight and
-    /// whether the pass had to reset them.
+    /// Completes a fused normalisation: the buffer already holds the
+    /// normalised weights of unnormalised ones with sum `sum`, sum of squares
+    /// `sq` and largest `max` (all finite, positive sum); records N_eff, the
+    /// largest weight and whether the pass had to reset them.
     pub(crate) fn finish(&mut self, sum: f64, sq: f64, max: f64, reset: bool) {
         let inv = 1.0 / sum;
-        self.norm.iter_mut().for_each(|w| *w *= inv);
         self.ess = sum * sum / sq;
         self.max = max * inv;
         self.reset = reset;
