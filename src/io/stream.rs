@@ -179,8 +179,7 @@ impl<'o> Messages<'o> {
                 let inner = super::mcap_guard::open_chunk(data).map_err(Fail::Mcap)?;
                 let inner = inner
                     .ok_or_else(|| Fail::Mcap("chunk with an unsupported compression".into()))?;
-                self.chunk.clear();
-                self.chunk.extend_from_slice(&inner);
+                self.chunk = inner.into_owned();
                 self.chunk_pos = 0;
                 continue;
             }
