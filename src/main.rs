@@ -48,7 +48,7 @@ enum Command {
 
 #[derive(Args)]
 struct ExperimentArgs {
-    /// resampling (Table I), montecarlo (Table II), changing (radii step at 55 s),
+    /// resampling (Table I), montecarlo (Table II), montecarlo-scans (Table II on simulated scans through ICP), changing (radii step at 55 s),
     /// literature (every method side by side), square, umbmark, heading-pf, tachometer.
     name: String,
     /// Monte Carlo runs (literature: repetitions; umbmark: robots; heading-pf: trials).
@@ -60,7 +60,7 @@ struct ExperimentArgs {
     /// Output directory (NAME.md, NAME.json, NAME.png).
     #[arg(long, value_name = "DIR", default_value = "odocal-experiments")]
     out: PathBuf,
-    /// Experiment settings (TOML tables: literature, square, umbmark, heading_pf).
+    /// Experiment settings (TOML tables: literature, square, umbmark, heading_pf, scans).
     #[arg(long, value_name = "FILE.toml")]
     settings: Option<PathBuf>,
     /// Folder with the seed tables (square_path.csv, encoder_vs_tachometer.csv, ...).
@@ -950,6 +950,7 @@ fn experiment(a: ExperimentArgs) -> anyhow::Result<()> {
         robot: &robot,
         settings: &settings,
         tables: a.tables.as_deref(),
+        icp: &cfg.icp,
     };
     let res = pipeline::experiment::run(&a.name, &inputs, &a.out)?;
     if a.json {

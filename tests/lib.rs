@@ -1,6 +1,7 @@
 //! Integration tests, compiled as one binary.
 
 mod calib_censi;
+mod calib_end_to_end;
 mod calib_filters;
 mod calib_resample;
 mod classic_cli;

@@ -81,10 +81,7 @@ impl Calibrator for AugmentedKf {
             let nu = m.value - self.x[k];
             let r = r / student_t_weight(nu * nu / (self.p[(k, k)] + r), self.dof);
             let sv = self.p[(k, k)] + r;
-            let mut gain: V5 = self.p.column(k) / sv;
-            // Partial update (Schmidt–Kalman): D moves only as far as it is
-            // observable; Joseph form keeps P consistent for any gain.
-            gain[4] *= obs;
+            let gain: V5 = self.p.column(k) / sv;
             self.x += gain * (m.value - self.x[k]);
             let mut ikh = M5::identity();
             for i in 0..5 {

@@ -84,10 +84,7 @@ impl Calibrator for DualKf {
             let ph = self.p_theta * h;
             let meas_var = px[k].max(self.floor * self.floor) + self.model_var[k];
             let sv = h.dot(&ph) + meas_var;
-            let mut gain = ph / sv;
-            // Partial update (Schmidt–Kalman): D moves only as far as it is
-            // observable; Joseph form keeps P consistent for any gain.
-            gain[2] *= obs;
+            let gain = ph / sv;
             self.theta += gain * (x[k] - f[k]);
             let ikh = Matrix3::identity() - gain * h.transpose();
             self.p_theta =

@@ -10,7 +10,7 @@ use super::resample::Scheme;
 use super::synth::{draw_truth, generate, SynthData, SynthParams};
 use super::trigger::Trigger;
 use super::{build, run, steps, CalibrationRun};
-use crate::geom;
+use crate::geom::{self, Pose2};
 use crate::robot::DiffDrive;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -70,21 +70,50 @@ pub struct RunMetrics {
     pub convergence_s: Option<f64>,
 }
 
-/// Scores a finished run against the synthetic truth.
-pub fn score(r: &CalibrationRun, data: &SynthData, fraction: f64) -> RunMetrics {
-    let end = data.truth_at(f64::INFINITY);
+/// What a Monte Carlo run is scored against: the true parameters and motion.
+pub trait RunTruth {
+    /// True parameters in effect at `t` (s).
+    fn params_at(&self, t: f64) -> DiffDrive;
+    /// True mean (V, W) over `[t0, t1]` (m/s, rad/s).
+    fn mean_velocity(&self, t0: f64, t1: f64) -> (f64, f64);
+    /// True pose of the base at `t` (s), in any fixed frame.
+    fn pose_at(&self, t: f64) -> Option<Pose2>;
+    /// When the radii jump, if they do (convergence is measured from then).
+    fn change_time(&self) -> Option<f64>;
+}
+
+impl RunTruth for SynthData {
+    fn params_at(&self, t: f64) -> DiffDrive {
+        self.truth_at(t)
+    }
+    fn mean_velocity(&self, t0: f64, t1: f64) -> (f64, f64) {
+        SynthData::mean_velocity(self, t0, t1)
+    }
+    fn pose_at(&self, t: f64) -> Option<Pose2> {
+        self.reference.pose_at(t)
+    }
+    fn change_time(&self) -> Option<f64> {
+        self.radius_step.map(|s| s.time)
+    }
+}
+
+/// Scores a finished run against its truth. The calibrated odometry starts
+/// at the identity; the true trajectory is expressed in its own pose at
+/// that first stamp before comparing.
+pub fn score(r: &CalibrationRun, truth: &dyn RunTruth, fraction: f64) -> RunMetrics {
+    let end = truth.params_at(f64::INFINITY);
     let f = r.summary.final_params;
     let (mut sv, mut sw, mut n) = (0.0, 0.0, 0usize);
     let mut t0 = r.trajectory.stamps.first().copied().unwrap_or(0.0);
     let mut conv_from: Option<f64> = Some(t0);
-    let start = data.radius_step.map_or(t0, |s| s.time);
+    let start = truth.change_time().unwrap_or(t0);
     for h in &r.history {
-        let (v, w) = data.mean_velocity(t0, h.t);
+        let (v, w) = truth.mean_velocity(t0, h.t);
         t0 = h.t;
         sv += (h.v - v).powi(2);
         sw += (h.w - w).powi(2);
         n += 1;
-        let k = data.truth_at(h.t);
+        let k = truth.params_at(h.t);
         let ok = (h.r_right - k.r_right).abs() < fraction * k.r_right
             && (h.r_left - k.r_left).abs() < fraction * k.r_left;
         match (ok, conv_from) {
@@ -93,9 +122,11 @@ pub fn score(r: &CalibrationRun, data: &SynthData, fraction: f64) -> RunMetrics 
             _ => {}
         }
     }
+    let origin = r.trajectory.stamps.first().and_then(|&t| truth.pose_at(t));
     let (mut sxy, mut sth, mut m) = (0.0, 0.0, 0usize);
     for (t, p) in r.trajectory.stamps.iter().zip(&r.trajectory.poses) {
-        if let Some(q) = data.reference.pose_at(*t) {
+        if let (Some(o), Some(q)) = (origin, truth.pose_at(*t)) {
+            let q = geom::between(&o, &q);
             let d = p.translation.vector - q.translation.vector;
             sxy += d.norm_squared();
             sth += geom::wrap_angle(geom::heading(p) - geom::heading(&q)).powi(2);
@@ -220,32 +251,85 @@ impl MonteCarloTable {
 /// truth `draw_truth(seed + k)`, data `generate(.., seed + k)`, filter seed
 /// `config.seed + k`) and summarises each.
 pub fn montecarlo(mc: &MonteCarloParams, configs: &[(String, CalibParams)]) -> MonteCarloTable {
+    let span = mc.synth.duration - mc.synth.radius_step.map_or(0.0, |s| s.time);
+    let runs = MonteCarloRuns {
+        runs: mc.runs,
+        seed: mc.seed,
+        nominal: mc.nominal,
+        convergence_fraction: mc.convergence_fraction,
+        parallel: mc.parallel,
+        span,
+    };
+    let make = |seed: u64| -> Result<PreparedRun<SynthData>, std::convert::Infallible> {
+        let data = generate(&mc.synth, draw_truth(seed), seed);
+        let st = steps(&data.obs, &data.wheels, &data.gyro, mc.synth.gyro_sigma);
+        Ok((st, data))
+    };
+    match montecarlo_with(&runs, configs, &make) {
+        Ok(t) => t,
+        Err(never) => match never {},
+    }
+}
+
+/// The frame of a Monte Carlo experiment whatever its data.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MonteCarloRuns {
+    /// Number of runs.
+    pub runs: usize,
+    /// Seed of run 0; run k uses `seed + k` (data and filter).
+    pub seed: u64,
+    /// Nominal parameters [R_R, R_L, D] (m) the calibrators start from.
+    pub nominal: [f64; 3],
+    /// Convergence: radius error below this fraction of the truth.
+    pub convergence_fraction: f64,
+    /// Run the runs on all cores.
+    pub parallel: bool,
+    /// Time a run that never converges counts as (s).
+    pub span: f64,
+}
+
+/// The data of one run: filter steps and the truth that scores them.
+pub type PreparedRun<T> = (Vec<super::CalibStep>, T);
+
+/// Runs every configuration on the runs `make(seed + k)` prepares (filter
+/// seed `config.seed + k`) and summarises each; the first error of `make`
+/// stops the experiment.
+pub fn montecarlo_with<T, E>(
+    mc: &MonteCarloRuns,
+    configs: &[(String, CalibParams)],
+    make: &(dyn Fn(u64) -> Result<PreparedRun<T>, E> + Sync),
+) -> Result<MonteCarloTable, E>
+where
+    T: RunTruth + Send,
+    E: Send,
+{
     let nominal = DiffDrive {
         r_right: mc.nominal[0],
         r_left: mc.nominal[1],
         wheel_base: mc.nominal[2],
     };
-    let one = |k: usize| -> Vec<RunMetrics> {
-        let seed = mc.seed.wrapping_add(k as u64);
-        let data = generate(&mc.synth, draw_truth(seed), seed);
-        let st = steps(&data.obs, &data.wheels, &data.gyro, mc.synth.gyro_sigma);
-        configs
+    let one = |k: usize| -> Result<Vec<RunMetrics>, E> {
+        let (st, truth) = make(mc.seed.wrapping_add(k as u64))?;
+        Ok(configs
             .iter()
             .map(|(_, p)| {
                 let mut p = p.clone();
                 p.seed = p.seed.wrapping_add(k as u64);
                 let mut cal = build(&p, nominal).expect("experiment configs are valid");
                 let r = run(cal.as_mut(), &st, nominal);
-                score(&r, &data, mc.convergence_fraction)
+                score(&r, &truth, mc.convergence_fraction)
             })
-            .collect()
+            .collect())
     };
     let per_run: Vec<Vec<RunMetrics>> = if mc.parallel {
-        (0..mc.runs).into_par_iter().map(one).collect()
+        (0..mc.runs)
+            .into_par_iter()
+            .map(one)
+            .collect::<Result<_, E>>()?
     } else {
-        (0..mc.runs).map(one).collect()
+        (0..mc.runs).map(one).collect::<Result<_, E>>()?
     };
-    let span = mc.synth.duration - mc.synth.radius_step.map_or(0.0, |s| s.time);
+    let span = mc.span;
     let rows = configs
         .iter()
         .enumerate()
@@ -270,10 +354,10 @@ pub fn montecarlo(mc: &MonteCarloParams, configs: &[(String, CalibParams)]) -> M
             }
         })
         .collect();
-    MonteCarloTable {
+    Ok(MonteCarloTable {
         runs: mc.runs,
         rows,
-    }
+    })
 }
 
 /// Seed 000's Table II configurations: adaptive-pf, pf, dkf, akf, none.

@@ -32,10 +32,12 @@ pub(crate) struct Predict<'a> {
     /// Random-walk σ of the radii and of D (m).
     pub sr: f64,
     pub sd: f64,
-    /// D's observability in [0, 1] and the mean D (m): W is predicted with
-    /// `D̄ + obs·(D − D̄)`, so an unobservable D is neither selected nor moved.
+    /// D's observability in [0, 1] and the belief's ratio D̄ / (R̄_R + R̄_L):
+    /// W is predicted with the wheel base `obs·D + (1 − obs)·ratio·(R_R + R_L)`,
+    /// so an unobservable D is not selected on, while a common scale of the
+    /// radii and D stays invisible to W (only V sees it).
     pub obs: f64,
-    pub dbar: f64,
+    pub ratio: f64,
     /// Likelihood `−kv (V − zv)² − kw (W − zw)²`.
     pub kv: f64,
     pub zv: f64,
@@ -78,13 +80,13 @@ fn predict_impl(a: Predict<'_>) -> Predicted {
         sr,
         sd,
         obs,
-        dbar,
+        ratio,
         kv,
         zv,
         kw,
         zw,
     } = a;
-    let dfix = (1.0 - obs) * dbar;
+    let rfix = (1.0 - obs) * ratio;
     let (rl, d, v, w, lw, rho) = (
         &mut rl[..n],
         &mut d[..n],
@@ -109,7 +111,7 @@ fn predict_impl(a: Predict<'_>) -> Predicted {
             d[i] = c;
             let (x, y) = (wr * a, wl * b);
             let vi = 0.5 * (x + y);
-            let wi = (x - y) / (dfix + obs * c);
+            let wi = (x - y) / (rfix * (a + b) + obs * c);
             v[i] = vi;
             w[i] = wi;
             vo[l] += rho[i] * vi;
@@ -140,7 +142,8 @@ fn predict_impl(a: Predict<'_>) -> Predicted {
         let x: [f64; LANES] = std::array::from_fn(|l| wr * a[l]);
         let y: [f64; LANES] = std::array::from_fn(|l| wl * b[l]);
         let vi: [f64; LANES] = std::array::from_fn(|l| 0.5 * (x[l] + y[l]));
-        let wi: [f64; LANES] = std::array::from_fn(|l| (x[l] - y[l]) / (dfix + obs * cc[l]));
+        let wi: [f64; LANES] =
+            std::array::from_fn(|l| (x[l] - y[l]) / (rfix * (a[l] + b[l]) + obs * cc[l]));
         let ev: [f64; LANES] = std::array::from_fn(|l| vi[l] - zv);
         let ew: [f64; LANES] = std::array::from_fn(|l| wi[l] - zw);
         let q: [f64; LANES] =
@@ -436,4 +439,113 @@ pub(crate) fn summarize(a: Summarize<'_>) -> Sums {
         return unsafe { summarize_avx2(a) };
     }
     summarize_impl(a)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// W of particles on the ray k·(R_R, R_L, D) through the belief, with no
+    /// random walk, for observability `obs`; both the scalar and the
+    /// dispatched (AVX2) pass, which must agree bit for bit.
+    fn w_on_scale_ray(obs: f64) -> Vec<f64> {
+        let (r, l, dd) = (0.32, 0.33, 0.65);
+        let ks = [0.97, 0.98, 0.99, 1.0, 1.01, 1.02, 1.03, 1.04, 1.05];
+        let n = ks.len();
+        let mut out = vec![];
+        for dispatched in [false, true] {
+            let mut rr: Vec<f64> = ks.iter().map(|k| k * r).collect();
+            let mut rl: Vec<f64> = ks.iter().map(|k| k * l).collect();
+            let mut d: Vec<f64> = ks.iter().map(|k| k * dd).collect();
+            let (mut v, mut w, mut lw) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            let rho = vec![1.0 / n as f64; n];
+            let zero = vec![0.0; n];
+            let a = Predict {
+                rr: &mut rr,
+                rl: &mut rl,
+                d: &mut d,
+                v: &mut v,
+                w: &mut w,
+                lw: &mut lw,
+                rho: &rho,
+                e: [&zero, &zero, &zero],
+                wr: 3.0,
+                wl: 2.5,
+                sr: 0.0,
+                sd: 0.0,
+                obs,
+                ratio: dd / (r + l),
+                kv: 0.0,
+                zv: 0.0,
+                kw: 1.0,
+                zw: 0.1,
+            };
+            if dispatched {
+                predict(a);
+            } else {
+                predict_impl(a);
+            }
+            out.extend(w);
+        }
+        let (a, b) = out.split_at(n);
+        assert_eq!(a, b, "scalar and dispatched passes differ");
+        a.to_vec()
+    }
+
+    #[test]
+    fn a_common_scale_of_radii_and_wheel_base_never_changes_w() {
+        // The full model (obs = 1) and the straight-run model (obs = 0), and
+        // anything between, predict the same W all along the ray: W cannot
+        // see the scale, whatever D's observability.
+        let expected = (3.0 * 0.32 - 2.5 * 0.33) / 0.65;
+        for obs in [0.0, 0.3, 1.0] {
+            for w in w_on_scale_ray(obs) {
+                assert!(
+                    (w - expected).abs() < 1e-12,
+                    "obs {obs}: W {w} vs {expected}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn an_unobservable_wheel_base_is_not_selected_on() {
+        // Same radii, different D: at obs = 0 every particle predicts the
+        // same W (no weight difference from D); at obs = 1 W follows 1/D.
+        let run = |obs: f64| {
+            let n = 4;
+            let (mut rr, mut rl) = (vec![0.32; n], vec![0.33; n]);
+            let mut d = vec![0.6, 0.65, 0.7, 0.75];
+            let (mut v, mut w, mut lw) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            let rho = vec![0.25; n];
+            let zero = vec![0.0; n];
+            predict(Predict {
+                rr: &mut rr,
+                rl: &mut rl,
+                d: &mut d,
+                v: &mut v,
+                w: &mut w,
+                lw: &mut lw,
+                rho: &rho,
+                e: [&zero, &zero, &zero],
+                wr: 3.0,
+                wl: 2.5,
+                sr: 0.0,
+                sd: 0.0,
+                obs,
+                ratio: 0.65 / 0.65,
+                kv: 0.0,
+                zv: 0.0,
+                kw: 1.0,
+                zw: 0.0,
+            });
+            (w, lw)
+        };
+        let (w0, lw0) = run(0.0);
+        assert!(w0.iter().all(|&x| x == w0[0]) && lw0.iter().all(|&x| x == lw0[0]));
+        let (w1, _) = run(1.0);
+        for (x, dd) in w1.iter().zip([0.6, 0.65, 0.7, 0.75]) {
+            assert!((x - (3.0 * 0.32 - 2.5 * 0.33) / dd).abs() < 1e-12);
+        }
+    }
 }

@@ -133,9 +133,15 @@ pub struct NoiseParams {
     /// 2012). 0 = the plain Gaussian likelihood.
     pub robust_dof: f64,
     /// Turn rate (rad/s) below which the wheel base is only partly
-    /// observable: the random walk of D, and the Kalman filters' gain on D,
-    /// are scaled by `min(1, |W|/observability_turn_rate)` (a straight run
-    /// carries no information about D; without this D wanders). 0 = off.
+    /// observable, with `obs = min(1, |W|/observability_turn_rate)`: the
+    /// random walk of D is scaled by `obs` (a straight run carries no
+    /// information about D), and the particle filters predict W with the
+    /// wheel base `obs·D + (1 − obs)·(D̄/(R̄_R + R̄_L))·(R_R + R_L)`, so that
+    /// in a straight run D is not selected on (it would run away, pulled by
+    /// particles whose radius ratio is still wrong) while a common scale of
+    /// radii and D stays invisible to W, as it physically is: only V may
+    /// observe that scale, or a gyro pinning W biases the radii. The Kalman
+    /// filters keep the full model. 0 = off.
     pub observability_turn_rate: f64,
     /// Kalman baselines: σ of the parameter random walk per step (m).
     pub kalman_param_sigma: f64,

@@ -295,7 +295,8 @@ impl ParticleFilter {
             sr,
             sd,
             obs,
-            dbar: self.belief.mean[2],
+            ratio: self.belief.mean[2]
+                / (self.belief.mean[0] + self.belief.mean[1]).max(MIN_LENGTH),
             kv,
             zv: u.zv,
             kw,

@@ -1,9 +1,11 @@
 //! `odocal experiment NAME`: the seed papers' tables and figures regenerated
 //! on our own data, each written as `NAME.md`, `NAME.json` and `NAME.png`.
 //! Seed 000: Monte Carlo over synthetic wheelchair runs (`resampling`,
-//! `montecarlo`, `changing`); the literature comparison (`literature`); seed
+//! `montecarlo`, `changing`) and over simulated scans matched by ICP
+//! (`montecarlo-scans`); the literature comparison (`literature`); seed
 //! 001/002 and UMBmark (`square`, `umbmark`, `heading-pf`, `tachometer`).
 
+use super::scan_montecarlo::{scan_montecarlo, ScanMonteCarloParams};
 use super::PipelineError;
 use crate::calib::experiments::{
     montecarlo, table1_configs, table2_configs, MonteCarloParams, MonteCarloTable,
@@ -23,9 +25,10 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// Experiment names `odocal experiment` knows.
-pub const EXPERIMENTS: [&str; 8] = [
+pub const EXPERIMENTS: [&str; 9] = [
     "resampling",
     "montecarlo",
+    "montecarlo-scans",
     "changing",
     "literature",
     "square",
@@ -46,6 +49,8 @@ pub struct ExperimentSettings {
     pub umbmark: UmbmarkParams,
     /// `heading-pf` (its `trials` is replaced by `--runs`, its `seed` by `--seed`).
     pub heading_pf: PfExperimentParams,
+    /// `montecarlo-scans`.
+    pub scans: ScanMonteCarloParams,
 }
 
 impl ExperimentSettings {
@@ -76,6 +81,8 @@ pub struct ExperimentInputs<'a> {
     pub settings: &'a ExperimentSettings,
     /// Folder with the seed tables (`--tables`), for square, heading-pf, tachometer.
     pub tables: Option<&'a Path>,
+    /// Scan matching settings (`--config`'s `[icp]`), for montecarlo-scans.
+    pub icp: &'a crate::icp::IcpParams,
 }
 
 /// An experiment's outputs: the markdown written to `NAME.md`, the text the
@@ -154,6 +161,10 @@ fn monte_carlo(
             table2_configs(base),
             "Seed 000 Table II: Adaptive-PF against the baselines",
         ),
+        "montecarlo-scans" => (
+            table2_configs(base),
+            "Seed 000 Table II end to end: simulated LMS111 scans, ICP, calibrators",
+        ),
         _ => {
             // A new user boards at 55 s (seed 000, Fig. 6b); runs long enough to re-converge.
             mc.synth.duration = mc.synth.duration.max(110.0);
@@ -168,7 +179,12 @@ fn monte_carlo(
             )
         }
     };
-    let table: MonteCarloTable = montecarlo(&mc, &configs);
+    let table: MonteCarloTable = if name == "montecarlo-scans" {
+        let scans = &inp.settings.scans;
+        scan_montecarlo(inp.runs, inp.seed, scans, inp.robot, inp.icp, &configs)?
+    } else {
+        montecarlo(&mc, &configs)
+    };
     let cats: Vec<String> = table.rows.iter().map(|r| r.label.clone()).collect();
     let one = |f: &dyn Fn(&crate::calib::experiments::TableRow) -> f64| {
         vec![table.rows.iter().map(f).collect::<Vec<_>>()]

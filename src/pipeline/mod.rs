@@ -11,6 +11,7 @@ pub mod experiment;
 pub mod icp;
 pub mod record;
 pub mod record_stream;
+pub mod scan_montecarlo;
 pub mod simulate;
 
 pub use config::{load_robot, Config};

@@ -1,0 +1,100 @@
+//! The calibrators fed as on a real chair: simulated LMS111 scans matched by
+//! ICP, quantised encoders and the gyro, against the simulator's known radii
+//! and wheel base.
+
+use odocal::calib::{self, experiments::table2_configs, CalibParams, Method};
+use odocal::icp::IcpParams;
+use odocal::pipeline::scan_montecarlo::{scan_montecarlo, ScanMonteCarloParams};
+use odocal::robot::RobotConfig;
+use odocal::sim::{self, SimConfig};
+
+#[test]
+fn adaptive_pf_learns_radii_and_wheel_base_from_simulated_scans() {
+    // One run per scenario, 60 s each, true parameters drawn in seed 000's
+    // ranges (radii 0.305–0.335 m, wheel base 0.60–0.70 m).
+    let settings = ScanMonteCarloParams {
+        duration_s: 60.0,
+        ..Default::default()
+    };
+    let configs: Vec<_> = table2_configs(&CalibParams::default())
+        .into_iter()
+        .filter(|(l, _)| l == "adaptive-pf" || l == "dkf")
+        .collect();
+    let robot = RobotConfig::default();
+    let t = scan_montecarlo(5, 1, &settings, &robot, &IcpParams::default(), &configs).unwrap();
+    let (apf, dkf) = (&t.rows[0], &t.rows[1]);
+    assert_eq!(apf.label, "adaptive-pf");
+    let mm = 1e3;
+    for (k, r) in apf.runs.iter().enumerate() {
+        assert!(
+            r.err_r_right * mm < 1.0 && r.err_r_left * mm < 1.0,
+            "run {k}: radius errors {:.2} / {:.2} mm",
+            r.err_r_right * mm,
+            r.err_r_left * mm
+        );
+        assert!(
+            r.err_wheel_base * mm < 3.0,
+            "run {k}: wheel base error {:.2} mm",
+            r.err_wheel_base * mm
+        );
+        assert!(r.convergence_s.is_some(), "run {k} never converged");
+    }
+    let median = 0.5 * (apf.err_r_right.median + apf.err_r_left.median);
+    assert!(
+        median * mm <= 0.3,
+        "median radius error {:.3} mm",
+        median * mm
+    );
+    assert!(apf.convergence_s.median <= 15.0, "{:?}", apf.convergence_s);
+    let dkf_median = 0.5 * (dkf.err_r_right.median + dkf.err_r_left.median);
+    assert!(median < dkf_median, "{median} vs DKF {dkf_median}");
+}
+
+/// Final (R_R, R_L, D) of `method` on a simulated run, with or without the gyro.
+fn final_params(rec: &odocal::recording::Recording, method: Method, gyro: bool) -> [f64; 3] {
+    let robot = RobotConfig::default();
+    let out = odocal::pipeline::icp::run(rec, &robot, &IcpParams::default()).unwrap();
+    let g = if gyro { &rec.gyro[..] } else { &[] };
+    let steps = calib::steps(&out.observations(), &rec.wheels, g, 0.003);
+    let p = CalibParams {
+        method,
+        ..Default::default()
+    };
+    let mut c = calib::build(&p, robot.diff_drive()).unwrap();
+    let f = calib::run(c.as_mut(), &steps, robot.diff_drive())
+        .summary
+        .final_params;
+    [f.r_right, f.r_left, f.wheel_base]
+}
+
+#[test]
+fn the_gyro_does_not_bias_the_common_scale_of_radii_and_wheel_base() {
+    // A gyro pins W = (R_R·ω_R − R_L·ω_L)/D, which a common scale of radii and
+    // wheel base leaves unchanged: only V (ICP) may decide that scale. With
+    // the gyro and without, the radii must agree and sit on the truth.
+    let cfg = SimConfig {
+        duration_s: 180.0,
+        seed: 7,
+        ..SimConfig::default()
+    };
+    let robot = RobotConfig::default();
+    let (rec, _) = sim::simulate(&cfg, &robot, &[], &mut |_| {}).unwrap();
+    for method in [Method::AdaptivePf, Method::Akf] {
+        let with = final_params(&rec, method, true);
+        let without = final_params(&rec, method, false);
+        for k in 0..2 {
+            let (a, b) = (with[k] - robot.r_right, without[k] - robot.r_right);
+            assert!(
+                a.abs() < 0.4e-3 && (a - b).abs() < 0.3e-3,
+                "{method:?} radius {k}: {:.3} mm with the gyro, {:.3} mm without",
+                a * 1e3,
+                b * 1e3
+            );
+        }
+        assert!(
+            (with[2] - robot.wheel_base).abs() < 3e-3,
+            "{method:?} wheel base {:.2} mm off",
+            (with[2] - robot.wheel_base) * 1e3
+        );
+    }
+}
