@@ -98,3 +98,100 @@ fn the_gyro_does_not_bias_the_common_scale_of_radii_and_wheel_base() {
         );
     }
 }
+
+#[test]
+fn experiment_montecarlo_scans_writes_its_table_and_refuses_bad_settings() {
+    use std::process::Command;
+    let d = crate::support::scratch("experiment_montecarlo_scans");
+    let settings = d.join("short.toml");
+    std::fs::write(
+        &settings,
+        "[scans]\nduration_s = 20.0\nscenarios = [\"square\", \"hall\"]\n",
+    )
+    .unwrap();
+    let out = d.join("out");
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_odocal"))
+            .args(args)
+            .output()
+            .expect("run odocal")
+    };
+    let (st, o) = (settings.to_str().unwrap(), out.to_str().unwrap());
+    let r = run(&[
+        "experiment",
+        "montecarlo-scans",
+        "--runs",
+        "2",
+        "--settings",
+        st,
+        "--out",
+        o,
+        "--json",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    let labels: Vec<&str> = v["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["label"].as_str().unwrap())
+        .collect();
+    assert_eq!(labels, ["adaptive-pf", "pf", "dkf", "akf", "none"]);
+    for row in v["rows"].as_array().unwrap() {
+        let runs = row["runs"].as_array().unwrap();
+        assert_eq!(runs.len(), 2);
+        for m in runs {
+            for key in ["err_r_right", "err_r_left", "err_wheel_base", "rmse_xy"] {
+                assert!(m[key].as_f64().is_some_and(f64::is_finite), "{key}: {m}");
+            }
+        }
+    }
+    for f in [
+        "montecarlo-scans.md",
+        "montecarlo-scans.json",
+        "montecarlo-scans.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    // Same seed, same table.
+    let again = run(&[
+        "experiment",
+        "montecarlo-scans",
+        "--runs",
+        "2",
+        "--settings",
+        st,
+        "--out",
+        o,
+    ]);
+    assert!(again.status.success());
+    let md = std::fs::read_to_string(out.join("montecarlo-scans.md")).unwrap();
+    assert!(md.contains(v["rows"][0]["label"].as_str().unwrap()));
+    let v2: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("montecarlo-scans.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["rows"][0]["err_r_right"], v2["rows"][0]["err_r_right"]);
+    // No scenario, or an unknown one: exit code 2 with the reason.
+    for (text, word) in [
+        ("[scans]\nscenarios = []\n", "scenario"),
+        ("[scans]\nscenarios = [\"moon\"]\n", "moon"),
+    ] {
+        std::fs::write(&settings, text).unwrap();
+        let r = run(&[
+            "experiment",
+            "montecarlo-scans",
+            "--runs",
+            "1",
+            "--settings",
+            st,
+            "--out",
+            o,
+        ]);
+        assert_eq!(r.status.code(), Some(2), "{text}");
+        assert!(
+            String::from_utf8_lossy(&r.stderr).contains(word),
+            "{text}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+    }
+}
