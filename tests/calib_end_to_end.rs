@@ -195,3 +195,50 @@ fn experiment_montecarlo_scans_writes_its_table_and_refuses_bad_settings() {
         );
     }
 }
+
+#[test]
+fn experiment_changing_draws_run_0_over_time_with_the_particle_count() {
+    use odocal::pipeline::experiment::{run, ExperimentInputs, ExperimentSettings};
+    let d = crate::support::scratch("experiment_changing");
+    let (calib, robot, settings) = (
+        CalibParams::default(),
+        RobotConfig::default(),
+        ExperimentSettings::default(),
+    );
+    let inp = ExperimentInputs {
+        runs: 2,
+        seed: 1,
+        calib: &calib,
+        robot: &robot,
+        settings: &settings,
+        tables: None,
+        icp: &IcpParams::default(),
+    };
+    let out = run("changing", &inp, &d).unwrap();
+    for f in [
+        "changing.md",
+        "changing.json",
+        "changing.png",
+        "changing-run0.png",
+    ] {
+        assert!(d.join(f).is_file(), "{f} missing");
+    }
+    // The Adaptive-PF re-opens at the step: more particles after it than before.
+    let line = out
+        .markdown
+        .lines()
+        .find(|l| l.starts_with("Adaptive-PF particles in run 0"))
+        .expect("particle counts reported");
+    let nums: Vec<usize> = line
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    assert!(nums[2] > nums[1], "{line}");
+    let v: serde_json::Value = serde_json::from_str(&out.json).unwrap();
+    let apf = &v["rows"][0];
+    assert_eq!(apf["label"], "adaptive-pf");
+    assert!(
+        apf["err_r_right"]["median"].as_f64().unwrap() < 1e-3,
+        "{apf}"
+    );
+}

@@ -5,6 +5,7 @@
 //! (`montecarlo-scans`); the literature comparison (`literature`); seed
 //! 001/002 and UMBmark (`square`, `umbmark`, `heading-pf`, `tachometer`).
 
+use super::changing_figure::changing_figure;
 use super::scan_montecarlo::{scan_montecarlo, ScanMonteCarloParams};
 use super::PipelineError;
 use crate::calib::experiments::{
@@ -210,9 +211,20 @@ fn monte_carlo(
         None,
     );
     plot::bar_chart(png, &chart).map_err(|e| PipelineError::write(png, e))?;
+    let mut md = table.to_markdown();
+    if name == "changing" {
+        let fig = png.with_file_name("changing-run0.png");
+        md += "\nRun 0 over time (radius estimates against the truth, the Adaptive-PF's particle count): `changing-run0.png`.\n";
+        if let Some(c) = changing_figure(&mc, &configs, &fig)? {
+            md += &format!(
+                "Adaptive-PF particles in run 0: {} before the step, up to {} after it, {} at the end (one particle per 0.01 mm of radius standard deviation, clamped to [adaptive.n_min, adaptive.n_max]; a detected jump restarts from the initial count).\n",
+                c.before, c.peak, c.end
+            );
+        }
+    }
     Ok(ExperimentOutput {
-        markdown: format!("# {title}\n\n{}", table.to_markdown()),
-        summary: table.to_markdown(),
+        markdown: format!("# {title}\n\n{md}"),
+        summary: md,
         json: to_json(&table),
     })
 }

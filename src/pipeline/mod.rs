@@ -2,6 +2,7 @@
 //! write outputs atomically, and return summaries the binary prints.
 
 pub mod calibrate;
+pub mod changing_figure;
 mod config;
 pub mod demo;
 pub mod diagnose;
