@@ -117,17 +117,13 @@ fn experiment_montecarlo_scans_writes_its_table_and_refuses_bad_settings() {
             .expect("run odocal")
     };
     let (st, o) = (settings.to_str().unwrap(), out.to_str().unwrap());
-    let r = run(&[
-        "experiment",
-        "montecarlo-scans",
-        "--runs",
-        "2",
-        "--settings",
-        st,
-        "--out",
-        o,
-        "--json",
-    ]);
+    let two_runs = |extra: &[&str]| {
+        let mut args = vec!["experiment", "montecarlo-scans", "--runs", "2"];
+        args.extend(["--settings", st, "--out", o]);
+        args.extend(extra);
+        run(&args)
+    };
+    let r = two_runs(&["--json"]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
     let labels: Vec<&str> = v["rows"]
@@ -154,16 +150,7 @@ fn experiment_montecarlo_scans_writes_its_table_and_refuses_bad_settings() {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     // Same seed, same table.
-    let again = run(&[
-        "experiment",
-        "montecarlo-scans",
-        "--runs",
-        "2",
-        "--settings",
-        st,
-        "--out",
-        o,
-    ]);
+    let again = two_runs(&[]);
     assert!(again.status.success());
     let md = std::fs::read_to_string(out.join("montecarlo-scans.md")).unwrap();
     assert!(md.contains(v["rows"][0]["label"].as_str().unwrap()));

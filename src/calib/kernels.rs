@@ -445,61 +445,70 @@ pub(crate) fn summarize(a: Summarize<'_>) -> Sums {
 mod tests {
     use super::*;
 
-    /// W of particles on the ray k·(R_R, R_L, D) through the belief, with no
-    /// random walk, for observability `obs`; both the scalar and the
-    /// dispatched (AVX2) pass, which must agree bit for bit.
-    fn w_on_scale_ray(obs: f64) -> Vec<f64> {
-        let (r, l, dd) = (0.32, 0.33, 0.65);
-        let ks = [0.97, 0.98, 0.99, 1.0, 1.01, 1.02, 1.03, 1.04, 1.05];
-        let n = ks.len();
-        let mut out = vec![];
-        for dispatched in [false, true] {
-            let mut rr: Vec<f64> = ks.iter().map(|k| k * r).collect();
-            let mut rl: Vec<f64> = ks.iter().map(|k| k * l).collect();
-            let mut d: Vec<f64> = ks.iter().map(|k| k * dd).collect();
-            let (mut v, mut w, mut lw) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-            let rho = vec![1.0 / n as f64; n];
-            let zero = vec![0.0; n];
-            let a = Predict {
-                rr: &mut rr,
-                rl: &mut rl,
-                d: &mut d,
-                v: &mut v,
-                w: &mut w,
-                lw: &mut lw,
-                rho: &rho,
-                e: [&zero, &zero, &zero],
-                wr: 3.0,
-                wl: 2.5,
-                sr: 0.0,
-                sd: 0.0,
-                obs,
-                ratio: dd / (r + l),
-                kv: 0.0,
-                zv: 0.0,
-                kw: 1.0,
-                zw: 0.1,
-            };
-            if dispatched {
-                predict(a);
-            } else {
-                predict_impl(a);
-            }
-            out.extend(w);
+    /// One noise-free predict pass over particles (R_R, R_L, D) with wheel
+    /// rates 3 and 2.5 rad/s and a W measurement `zw`: (W, log-weights),
+    /// through the scalar pass or the dispatched (AVX2) one.
+    fn pass(
+        p: &[[f64; 3]],
+        obs: f64,
+        ratio: f64,
+        zw: f64,
+        dispatched: bool,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let n = p.len();
+        let (mut rr, mut rl, mut d): (Vec<f64>, Vec<f64>, Vec<f64>) = (
+            p.iter().map(|x| x[0]).collect(),
+            p.iter().map(|x| x[1]).collect(),
+            p.iter().map(|x| x[2]).collect(),
+        );
+        let (mut v, mut w, mut lw) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let rho = vec![1.0 / n as f64; n];
+        let zero = vec![0.0; n];
+        let a = Predict {
+            rr: &mut rr,
+            rl: &mut rl,
+            d: &mut d,
+            v: &mut v,
+            w: &mut w,
+            lw: &mut lw,
+            rho: &rho,
+            e: [&zero, &zero, &zero],
+            wr: 3.0,
+            wl: 2.5,
+            sr: 0.0,
+            sd: 0.0,
+            obs,
+            ratio,
+            kv: 0.0,
+            zv: 0.0,
+            kw: 1.0,
+            zw,
+        };
+        if dispatched {
+            predict(a);
+        } else {
+            predict_impl(a);
         }
-        let (a, b) = out.split_at(n);
-        assert_eq!(a, b, "scalar and dispatched passes differ");
-        a.to_vec()
+        (w, lw)
     }
 
     #[test]
     fn a_common_scale_of_radii_and_wheel_base_never_changes_w() {
-        // The full model (obs = 1) and the straight-run model (obs = 0), and
-        // anything between, predict the same W all along the ray: W cannot
-        // see the scale, whatever D's observability.
-        let expected = (3.0 * 0.32 - 2.5 * 0.33) / 0.65;
+        // Particles on the ray k·(R_R, R_L, D) through the belief: the full
+        // model (obs = 1), the straight-run model (obs = 0) and anything
+        // between predict the same W all along it, in both passes bit for
+        // bit: W cannot see the scale, whatever D's observability.
+        let (r, l, dd) = (0.32, 0.33, 0.65);
+        let ray: Vec<[f64; 3]> = [0.97, 0.98, 0.99, 1.0, 1.01, 1.02, 1.03, 1.04, 1.05]
+            .iter()
+            .map(|k| [k * r, k * l, k * dd])
+            .collect();
+        let expected = (3.0 * r - 2.5 * l) / dd;
         for obs in [0.0, 0.3, 1.0] {
-            for w in w_on_scale_ray(obs) {
+            let (scalar, _) = pass(&ray, obs, dd / (r + l), 0.1, false);
+            let (wide, _) = pass(&ray, obs, dd / (r + l), 0.1, true);
+            assert_eq!(scalar, wide, "scalar and dispatched passes differ");
+            for w in scalar {
                 assert!(
                     (w - expected).abs() < 1e-12,
                     "obs {obs}: W {w} vs {expected}"
@@ -512,40 +521,13 @@ mod tests {
     fn an_unobservable_wheel_base_is_not_selected_on() {
         // Same radii, different D: at obs = 0 every particle predicts the
         // same W (no weight difference from D); at obs = 1 W follows 1/D.
-        let run = |obs: f64| {
-            let n = 4;
-            let (mut rr, mut rl) = (vec![0.32; n], vec![0.33; n]);
-            let mut d = vec![0.6, 0.65, 0.7, 0.75];
-            let (mut v, mut w, mut lw) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-            let rho = vec![0.25; n];
-            let zero = vec![0.0; n];
-            predict(Predict {
-                rr: &mut rr,
-                rl: &mut rl,
-                d: &mut d,
-                v: &mut v,
-                w: &mut w,
-                lw: &mut lw,
-                rho: &rho,
-                e: [&zero, &zero, &zero],
-                wr: 3.0,
-                wl: 2.5,
-                sr: 0.0,
-                sd: 0.0,
-                obs,
-                ratio: 0.65 / 0.65,
-                kv: 0.0,
-                zv: 0.0,
-                kw: 1.0,
-                zw: 0.0,
-            });
-            (w, lw)
-        };
-        let (w0, lw0) = run(0.0);
+        let ds = [0.6, 0.65, 0.7, 0.75];
+        let p: Vec<[f64; 3]> = ds.iter().map(|&d| [0.32, 0.33, d]).collect();
+        let (w0, lw0) = pass(&p, 0.0, 1.0, 0.0, true);
         assert!(w0.iter().all(|&x| x == w0[0]) && lw0.iter().all(|&x| x == lw0[0]));
-        let (w1, _) = run(1.0);
-        for (x, dd) in w1.iter().zip([0.6, 0.65, 0.7, 0.75]) {
-            assert!((x - (3.0 * 0.32 - 2.5 * 0.33) / dd).abs() < 1e-12);
+        let (w1, _) = pass(&p, 1.0, 1.0, 0.0, true);
+        for (x, d) in w1.iter().zip(ds) {
+            assert!((x - (3.0 * 0.32 - 2.5 * 0.33) / d).abs() < 1e-12);
         }
     }
 }
