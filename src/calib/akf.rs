@@ -3,7 +3,7 @@
 //! with the velocity model's noise (`NoiseParams::model_sigma_v`,
 //! `model_sigma_w`, the same the particle filters use) as process noise.
 
-use super::kalman::{model, observability, prior, turn_rate_for_observability};
+use super::kalman::{model, observability, prior, turn_jacobian, turn_rate_for_observability};
 use super::params::CalibParams;
 use super::robust::student_t_weight;
 use super::steps::{usable, CalibStep, Kind};
@@ -55,9 +55,12 @@ impl AugmentedKf {
 
 impl Calibrator for AugmentedKf {
     fn step(&mut self, s: &CalibStep) -> Estimate {
-        // Predict: V, W = f(θ); θ unchanged; F = [[0, J], [0, I]].
+        // Predict: V, W = f(θ); θ unchanged; F = [[0, J], [0, I]], W's row
+        // with D's observability this step (see `kalman::turn_jacobian`).
         let theta = Vector3::new(self.x[2], self.x[3], self.x[4]);
         let ([v, w], [jv, jw]) = model(&theta, s.omega_right, s.omega_left);
+        let obs = observability(turn_rate_for_observability(s, self.floor, w), self.w_obs);
+        let jw = turn_jacobian(&theta, &jw, w, obs);
         let mut f = M5::zeros();
         for j in 0..3 {
             f[(0, 2 + j)] = jv[j];
@@ -66,8 +69,6 @@ impl Calibrator for AugmentedKf {
         }
         self.x[0] = v;
         self.x[1] = w;
-        // D's observability this step (see `NoiseParams::observability_turn_rate`).
-        let obs = observability(turn_rate_for_observability(s, self.floor, w), self.w_obs);
         let mut q = self.q;
         q[4] *= obs * obs;
         self.p = f * self.p * f.transpose() + M5::from_diagonal(&q);

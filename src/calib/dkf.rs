@@ -6,7 +6,7 @@
 //! quantisation, slip), without which the parameter filter would trust each
 //! step's wheel-rate prediction as exact and chase its noise.
 
-use super::kalman::{model, observability, prior, turn_rate_for_observability};
+use super::kalman::{model, observability, prior, turn_jacobian, turn_rate_for_observability};
 use super::params::CalibParams;
 use super::robust::student_t_weight;
 use super::steps::{usable, CalibStep, Kind};
@@ -80,7 +80,10 @@ impl Calibrator for DualKf {
                 continue;
             }
             let (f, j) = model(&self.theta, s.omega_right, s.omega_left);
-            let h = j[k];
+            let h = match k {
+                0 => j[0],
+                _ => turn_jacobian(&self.theta, &j[1], f[1], obs),
+            };
             let ph = self.p_theta * h;
             let meas_var = px[k].max(self.floor * self.floor) + self.model_var[k];
             let sv = h.dot(&ph) + meas_var;

@@ -15,6 +15,24 @@ pub(crate) fn model(theta: &Vector3<f64>, wr: f64, wl: f64) -> ([f64; 2], [Vecto
     ([v, w], [jv, jw])
 }
 
+/// `∂W/∂θ` with D's observability `obs` (see
+/// `NoiseParams::observability_turn_rate`): the wheel base that W sees is
+/// `obs·D + (1 − obs)·(D/(R_R + R_L))·(R_R + R_L)` with the ratio frozen at
+/// θ, so a straight run does not move D (its entry is scaled by `obs`) while
+/// the direction θ itself, a common scale of radii and D, stays invisible
+/// to W at every `obs`, as it physically is.
+pub(crate) fn turn_jacobian(
+    theta: &Vector3<f64>,
+    jw: &Vector3<f64>,
+    w: f64,
+    obs: f64,
+) -> Vector3<f64> {
+    let d = theta[2].max(1e-6);
+    let ratio = d / (theta[0] + theta[1]).max(1e-6);
+    let shift = (1.0 - obs) * ratio * w / d;
+    Vector3::new(jw[0] - shift, jw[1] - shift, jw[2] * obs)
+}
+
 /// Initial belief: centre of the uniform ranges, variance of the uniform
 /// distribution (width²/12).
 pub(crate) fn prior(params: &CalibParams) -> (Vector3<f64>, Matrix3<f64>) {
@@ -57,5 +75,24 @@ pub(crate) fn turn_rate_for_observability(
         s / sw
     } else {
         predicted
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_turn_jacobian_never_sees_a_common_scale_and_scales_d_by_observability() {
+        let theta = Vector3::new(0.321, 0.317, 0.652);
+        let ([_, w], [_, jw]) = model(&theta, 2.9, 2.4);
+        for obs in [0.0, 0.25, 1.0] {
+            let j = turn_jacobian(&theta, &jw, w, obs);
+            // Moving along θ itself (all three scaled together) leaves W alone.
+            assert!(j.dot(&theta).abs() < 1e-12, "obs {obs}: {}", j.dot(&theta));
+            assert!((j[2] - obs * jw[2]).abs() < 1e-15);
+        }
+        // Fully observable: the model's own Jacobian.
+        assert!((turn_jacobian(&theta, &jw, w, 1.0) - jw).norm() < 1e-15);
     }
 }

@@ -135,13 +135,13 @@ pub struct NoiseParams {
     /// Turn rate (rad/s) below which the wheel base is only partly
     /// observable, with `obs = min(1, |W|/observability_turn_rate)`: the
     /// random walk of D is scaled by `obs` (a straight run carries no
-    /// information about D), and the particle filters predict W with the
-    /// wheel base `obs·D + (1 − obs)·(D̄/(R̄_R + R̄_L))·(R_R + R_L)`, so that
-    /// in a straight run D is not selected on (it would run away, pulled by
-    /// particles whose radius ratio is still wrong) while a common scale of
-    /// radii and D stays invisible to W, as it physically is: only V may
-    /// observe that scale, or a gyro pinning W biases the radii. The Kalman
-    /// filters keep the full model. 0 = off.
+    /// information about D), and every filter predicts W with the wheel base
+    /// `obs·D + (1 − obs)·(D̄/(R̄_R + R̄_L))·(R_R + R_L)` (the Kalman filters
+    /// through its Jacobian), so that in a straight run D is not pulled
+    /// along (it would run away, dragged by a radius ratio still being
+    /// learned) while a common scale of radii and D stays invisible to W, as
+    /// it physically is: only V may observe that scale, or a gyro pinning W
+    /// biases the radii. 0 = off.
     pub observability_turn_rate: f64,
     /// Kalman baselines: σ of the parameter random walk per step (m).
     pub kalman_param_sigma: f64,
