@@ -193,7 +193,9 @@ impl ScanMatcher {
         } else {
             None
         };
+        let given = given.filter(|_| source == PriorSource::Substituted);
         if let Some(f) = failure {
+            let prior = self.fallback(&prior, given, dt);
             let m = self.failed(t0, t1, &prior, f);
             let ref_from_cur = self.ref_from_last * prior;
             if usable {
@@ -203,7 +205,6 @@ impl ScanMatcher {
             }
             return Some(m);
         }
-        let given = given.filter(|_| source == PriorSource::Substituted);
         Some(self.match_pair(t0, t1, &prior, source, given))
     }
 
@@ -294,6 +295,7 @@ impl ScanMatcher {
             self.info.rms = u.rms;
         }
         if let Some(f) = failure {
+            let prior = &self.fallback(prior, given, dt);
             let mut m = self.failed(t0, t1, prior, f);
             m.iterations = reg.iterations;
             m.inliers = reg.inliers as u32;
@@ -461,11 +463,10 @@ impl ScanMatcher {
         if !(elapsed > 0.0 && elapsed <= MAX_VELOCITY_AGE && dt > 0.0) || stale {
             return true;
         }
-        let (ds, dth) = geom::arc_of_increment(prior);
-        let standing = ds.abs() < STANDING && dth.abs() < STANDING;
-        if !standing && self.substituted_since.is_none() {
+        if !standing(prior) && self.substituted_since.is_none() {
             return true;
         }
+        let (ds, dth) = geom::arc_of_increment(prior);
         let (cs, cth) = geom::arc_of_increment(&inc);
         // The velocity's own uncertainty (3σ), carried over dt: large where
         // it was measured over a short pair.
@@ -474,6 +475,18 @@ impl ScanMatcher {
         let sr = 3.0 * scale * cov[(2, 2)].max(0.0).sqrt();
         (ds - cs * scale).abs() <= p.max_accel * elapsed * dt + st + p.speed_slack
             && (dth - cth * scale).abs() <= p.max_angular_accel * elapsed * dt + sr + p.turn_slack
+    }
+
+    /// The motion a failed pair is placed by: the prior it was matched from,
+    /// except that a substituted constant-velocity guess gives way to the
+    /// given prior it replaced unless that stood still or is beyond the
+    /// speed limits (no scan evidence either way: the odometry stays the
+    /// better guess).
+    fn fallback(&self, prior: &Pose2, given: Option<Pose2>, dt: f64) -> Pose2 {
+        match given {
+            Some(g) if !standing(&g) && self.within_limits(&g, &Matrix3::zeros(), dt) => g,
+            _ => *prior,
+        }
     }
 
     /// Whether a matched motion is within the robot's speed and turn-rate
@@ -672,6 +685,12 @@ const MAX_SUBSTITUTION: f64 = 2.0;
 fn close(a: &Pose2, b: &Pose2) -> bool {
     let [x, y, t] = geom::xyt(&geom::between(a, b));
     x.hypot(y) < 0.01 && t.abs() < 0.01
+}
+
+/// An increment of a robot standing still (or of a frozen reading).
+fn standing(p: &Pose2) -> bool {
+    let (ds, dth) = geom::arc_of_increment(p);
+    ds.abs() < STANDING && dth.abs() < STANDING
 }
 
 fn pose_finite(p: &Pose2) -> bool {
