@@ -57,16 +57,29 @@ fn icp_relations_intel_beat_csm() {
 }
 
 #[test]
-fn icp_relations_mit_csail_beat_odometry_and_csm_rotation() {
+fn icp_relations_mit_csail_beat_csm_on_all_relations_and_rotation() {
     let Some(s) = icp_relations(
-        "icp_relations_mit_csail_beat_odometry_and_csm_rotation",
+        "icp_relations_mit_csail_beat_csm_on_all_relations_and_rotation",
         "mit-csail",
     ) else {
         return;
     };
     // Raw odometry on mit-csail: local 0.033 ± 0.039 m, all 1.68 ± 5.29 m;
     // CSM: local 0.028 ± 0.029 m, rotation 0.3–0.5° over the logs (0.40° on
-    // intel), all 0.26 ± 0.75 m. Matched here: local translation within 1 mm
-    // of CSM, rotation below it, all between CSM and the odometry.
-    beats("mit-csail", &s, 0.029, 0.40, 0.5);
+    // intel), all 0.26 ± 0.75 m. The odometry freezes for about a second
+    // three times and then jumps; detected, the freezes no longer cost the
+    // long relations their heading (all: 0.35 m before, 0.20 m now). Local
+    // translation stays within 1 mm of CSM (half of the short relations
+    // carry the odometry's own translation, to < 1 mm).
+    beats("mit-csail", &s, 0.029, 0.40, 0.26);
+}
+
+#[test]
+fn icp_relations_aces_beat_csm() {
+    let Some(s) = icp_relations("icp_relations_aces_beat_csm", "aces") else {
+        return;
+    };
+    // Not used for tuning. CSM on aces: local 0.040 ± 0.034 m, all
+    // 0.36 ± 1.44 m; rotation 0.3–0.5° over the logs.
+    beats("aces", &s, 0.040, 0.40, 0.36);
 }

@@ -23,6 +23,7 @@ mod eval_inputs;
 mod eval_relations;
 mod fuzz_regressions;
 mod icp_bad_input;
+mod icp_odometry_faults;
 mod icp_real;
 mod icp_relations;
 mod icp_sim;

@@ -19,6 +19,12 @@ pub enum PriorSource {
     Given,
     /// The previous valid motion's velocity times dt.
     ConstantVelocity,
+    /// The constant-velocity guess in place of a given prior that stood
+    /// still while the robot could not have stopped that fast
+    /// (`max_accel`, `max_angular_accel`), or that then caught up in one
+    /// jump: a frozen odometry. The prior term holds the loose directions at
+    /// it as it would at the given prior.
+    Substituted,
     /// No information: identity.
     #[default]
     None,
@@ -42,6 +48,11 @@ pub struct MatchInfo {
     pub weak_direction: [f64; 3],
     /// Weighted RMS residual along the surface normals (m).
     pub rms: f64,
+    /// Squared Mahalanobis distance between the prior term's centre and the
+    /// scan-only estimate of the first registration (0 without a prior
+    /// term); beyond the χ² 99.9 % quantile the pair was matched again
+    /// without the prior term.
+    pub prior_conflict: f64,
 }
 
 /// Matches each scan against the previous one (or a local map of recent
@@ -59,7 +70,11 @@ pub struct ScanMatcher {
     /// Failed pairs since the last successful match.
     misses: usize,
     last: Option<(f64, usize)>,
-    velocity: Option<(Pose2, f64)>,
+    /// Last valid motion, its duration and end stamp (s).
+    velocity: Option<Velocity>,
+    /// Start stamp (s) of the current run of pairs whose given prior was
+    /// replaced by the constant-velocity guess.
+    substituted_since: Option<f64>,
     keyframes: VecDeque<(Pose2, ScanPoints)>,
     cur: ScanPoints,
     src: Vec<[f64; 2]>,
@@ -99,6 +114,7 @@ impl ScanMatcher {
             misses: 0,
             last: None,
             velocity: None,
+            substituted_since: None,
             keyframes: VecDeque::new(),
             cur: ScanPoints::default(),
             src: Vec::new(),
@@ -138,11 +154,20 @@ impl ScanMatcher {
             return None;
         };
         let dt = t1 - t0;
-        let (prior, source) = match (prior.filter(pose_finite), self.constant_velocity(dt)) {
+        let given = prior.filter(pose_finite);
+        let (prior, source) = match (given, self.constant_velocity(dt)) {
+            (Some(p), Some(cv)) if !self.plausible_change(&p, t1, dt) => {
+                (cv, PriorSource::Substituted)
+            }
             (Some(p), _) => (p, PriorSource::Given),
             (None, Some(cv)) => (cv, PriorSource::ConstantVelocity),
             _ => (Pose2::identity(), PriorSource::None),
         };
+        if source == PriorSource::Substituted {
+            self.substituted_since.get_or_insert(t0);
+        } else if dt > 0.0 {
+            self.substituted_since = None;
+        }
         self.info = MatchInfo {
             prior_source: source,
             ..Default::default()
@@ -168,7 +193,9 @@ impl ScanMatcher {
         } else {
             None
         };
+        let given = given.filter(|_| source == PriorSource::Substituted);
         if let Some(f) = failure {
+            let prior = self.fallback(&prior, given, dt);
             let m = self.failed(t0, t1, &prior, f);
             let ref_from_cur = self.ref_from_last * prior;
             if usable {
@@ -178,10 +205,19 @@ impl ScanMatcher {
             }
             return Some(m);
         }
-        Some(self.match_pair(t0, t1, &prior, source))
+        Some(self.match_pair(t0, t1, &prior, source, given))
     }
 
-    fn match_pair(&mut self, t0: f64, t1: f64, prior: &Pose2, source: PriorSource) -> Motion {
+    /// Matches the prepared scan from `prior`; `given` is the caller's prior
+    /// when `prior` was substituted for it, tried too.
+    fn match_pair(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        prior: &Pose2,
+        source: PriorSource,
+        given: Option<Pose2>,
+    ) -> Motion {
         let p = &self.params;
         self.pre.downsample(
             &self.cur.pts,
@@ -206,11 +242,30 @@ impl ScanMatcher {
         // inliers is kept.
         let possible = self.within_limits(prior, &Matrix3::zeros(), dt);
         let mut best = self.attempt(prior, source);
+        self.info.prior_conflict = best.conflict;
+        // Scans that contradict the prior term (odometry that froze, slipped
+        // or lost the sign of a reversal) beyond `CONFLICT` are matched again
+        // without it, from the same guess: the scans, not the odometry, are
+        // what the motion is measured by.
+        if best.failure.is_none() && best.conflict > CONFLICT {
+            let alt = self.attempt_with(prior, source, false);
+            if alt.failure.is_none() {
+                best = alt;
+            }
+        }
+        // A substituted guess competes with the given prior it replaced: the
+        // acceleration test cannot tell a frozen odometry from a real swerve,
+        // the scans can (the match with more inliers is kept).
+        if let Some(g) = given {
+            let alt = self.attempt(&g, PriorSource::Given);
+            if alt.failure.is_none()
+                && (best.failure.is_some() || alt.reg.inliers > best.reg.inliers)
+            {
+                best = alt;
+            }
+        }
         if source == PriorSource::Given && best.failure.is_some() {
-            let guesses = [
-                self.constant_velocity(dt),
-                self.velocity.map(|(inc, _)| inc),
-            ];
+            let guesses = [self.constant_velocity(dt), self.velocity.map(|v| v.inc)];
             for (k, guess) in guesses.iter().enumerate() {
                 let Some(g) = guess else { continue };
                 if k == 1 && guesses[0].is_some_and(|cv| close(&cv, g)) {
@@ -231,6 +286,7 @@ impl ScanMatcher {
             failure,
             init,
             source,
+            ..
         } = best;
         self.info.prior_source = source;
         if let Some(u) = reg.uncertainty {
@@ -239,6 +295,7 @@ impl ScanMatcher {
             self.info.rms = u.rms;
         }
         if let Some(f) = failure {
+            let prior = &self.fallback(prior, given, dt);
             let mut m = self.failed(t0, t1, prior, f);
             m.iterations = reg.iterations;
             m.inliers = reg.inliers as u32;
@@ -262,7 +319,12 @@ impl ScanMatcher {
         if !bridged {
             self.threshold.update(&geom::between(&init, &motion));
             if time_ok {
-                self.velocity = Some((motion, dt));
+                self.velocity = Some(Velocity {
+                    inc: motion,
+                    dt,
+                    t1,
+                    cov,
+                });
             }
         }
         self.advance(ref_from_cur, u.cov);
@@ -290,6 +352,12 @@ impl ScanMatcher {
     /// `prior` (motion since the last scan), with its quality checks. A
     /// given prior is also a weak prior term (`prior_sigma_*`).
     fn attempt(&mut self, prior: &Pose2, source: PriorSource) -> Attempt {
+        let hold = matches!(source, PriorSource::Given | PriorSource::Substituted);
+        self.attempt_with(prior, source, hold)
+    }
+
+    /// [`attempt`](Self::attempt) with the prior term on (`hold`) or off.
+    fn attempt_with(&mut self, prior: &Pose2, source: PriorSource, hold: bool) -> Attempt {
         let p = &self.params;
         let init = geom::xyt(&(self.ref_from_last * prior));
         let set = RegisterSettings {
@@ -301,7 +369,7 @@ impl ScanMatcher {
             convergence: p.convergence,
             min_correspondences: p.min_correspondences,
             cov_inflation: p.cov_inflation,
-            prior_precision: if source == PriorSource::Given {
+            prior_precision: if hold {
                 let prec = |s: f64| if s > 0.0 { 1.0 / (s * s) } else { 0.0 };
                 let pt = prec(p.prior_sigma_xy);
                 [pt, pt, prec(p.prior_sigma_theta)]
@@ -322,6 +390,9 @@ impl ScanMatcher {
         self.info.reference_points = self.reference.len();
         let ref_from_cur = geom::pose(reg.pose[0], reg.pose[1], reg.pose[2]);
         let motion = geom::between(&self.ref_from_last, &ref_from_cur);
+        let conflict = reg.uncertainty.map_or(0.0, |u| {
+            prior_conflict(&reg.pose, &init, &set.prior_precision, &u.cov)
+        });
         // Only points with a surface of their own can ever be matched
         // (clutter, isolated returns and open ends never are): the inlier
         // fraction counts those.
@@ -349,17 +420,73 @@ impl ScanMatcher {
             failure,
             init: *prior,
             source,
+            conflict,
         }
     }
 
     /// The previous valid motion's velocity carried over `dt` (s), if any.
     fn constant_velocity(&self, dt: f64) -> Option<Pose2> {
-        let (inc, vdt) = self.velocity?;
+        let Velocity { inc, dt: vdt, .. } = self.velocity?;
         if !(dt.is_finite() && dt > 0.0) {
             return None;
         }
         let (ds, dth) = geom::arc_of_increment(&inc);
         Some(geom::arc_increment(ds / vdt, dth / vdt, dt))
+    }
+
+    /// Whether a given prior over the pair ending at `t1` (s, `dt` long) is
+    /// plausible against the last valid motion. Implausible: an odometry
+    /// that stands still (a frozen reading) while the robot was moving faster
+    /// than it could stop in the time since (`max_accel`,
+    /// `max_angular_accel`, plus the slacks); and, after such a freeze, any
+    /// increment beyond that change of speed (the odometry catching up in a
+    /// jump). Only a standing odometry opens such a run: where stamps are
+    /// irregular (bursts), speed changes between pairs say little, and the
+    /// odometry increment stays the better guess. Always plausible without a
+    /// recent velocity, and once `MAX_SUBSTITUTION` s of pairs in a row were
+    /// replaced (the scans, not the odometry, may be what went wrong).
+    fn plausible_change(&self, prior: &Pose2, t1: f64, dt: f64) -> bool {
+        let p = &self.params;
+        let Some(Velocity {
+            inc,
+            dt: vdt,
+            t1: vt1,
+            cov,
+        }) = self.velocity
+        else {
+            return true;
+        };
+        let elapsed = (t1 - 0.5 * dt) - (vt1 - 0.5 * vdt);
+        let stale = self
+            .substituted_since
+            .is_some_and(|s| t1 - s > MAX_SUBSTITUTION);
+        if !(elapsed > 0.0 && elapsed <= MAX_VELOCITY_AGE && dt > 0.0) || stale {
+            return true;
+        }
+        if !standing(prior) && self.substituted_since.is_none() {
+            return true;
+        }
+        let (ds, dth) = geom::arc_of_increment(prior);
+        let (cs, cth) = geom::arc_of_increment(&inc);
+        // The velocity's own uncertainty (3σ), carried over dt: large where
+        // it was measured over a short pair.
+        let scale = dt / vdt;
+        let st = 3.0 * scale * (cov[(0, 0)] + cov[(1, 1)]).max(0.0).sqrt();
+        let sr = 3.0 * scale * cov[(2, 2)].max(0.0).sqrt();
+        (ds - cs * scale).abs() <= p.max_accel * elapsed * dt + st + p.speed_slack
+            && (dth - cth * scale).abs() <= p.max_angular_accel * elapsed * dt + sr + p.turn_slack
+    }
+
+    /// The motion a failed pair is placed by: the prior it was matched from,
+    /// except that a substituted constant-velocity guess gives way to the
+    /// given prior it replaced unless that stood still or is beyond the
+    /// speed limits (no scan evidence either way: the odometry stays the
+    /// better guess).
+    fn fallback(&self, prior: &Pose2, given: Option<Pose2>, dt: f64) -> Pose2 {
+        match given {
+            Some(g) if !standing(&g) && self.within_limits(&g, &Matrix3::zeros(), dt) => g,
+            _ => *prior,
+        }
     }
 
     /// Whether a matched motion is within the robot's speed and turn-rate
@@ -484,6 +611,19 @@ impl ScanMatcher {
     }
 }
 
+/// The last valid motion, as the constant-velocity model's velocity.
+#[derive(Debug, Clone, Copy)]
+struct Velocity {
+    /// The motion (`prev_from_cur`).
+    inc: Pose2,
+    /// Its duration (s).
+    dt: f64,
+    /// Its end stamp (s).
+    t1: f64,
+    /// Its covariance (m², rad²).
+    cov: Matrix3<f64>,
+}
+
 /// One registration and its verdict, before the matcher's state changes.
 struct Attempt {
     reg: Registration,
@@ -493,16 +633,64 @@ struct Attempt {
     /// The initial guess (motion since the last scan) it started from.
     init: Pose2,
     source: PriorSource,
+    /// Squared Mahalanobis distance between the prior term's centre and
+    /// what the scan alone says (see [`prior_conflict`]); 0 without a prior
+    /// term.
+    conflict: f64,
+}
+
+/// Squared Mahalanobis distance (3 dof) between the centre `init` of a prior
+/// term of precision `prec` (diagonal, 1/m², 1/m², 1/rad²) and the scan-only
+/// estimate, given the registration's result `pose` (prior term included) and
+/// the scan-only covariance `cov`, all in the reference frame. At the
+/// optimum of scan + prior, the scan-only optimum is `pose + cov·P·off`
+/// (`off` = `pose − init`, `P` = diag(`prec`)), and its innovation against
+/// the prior, of covariance `cov + P⁻¹`, has the squared distance
+/// `offᵀ P off + (P off)ᵀ cov (P off)` — no inversion of a possibly
+/// infinite prior variance needed.
+fn prior_conflict(pose: &[f64; 3], init: &[f64; 3], prec: &[f64; 3], cov: &Matrix3<f64>) -> f64 {
+    let off = Vector3::new(
+        pose[0] - init[0],
+        pose[1] - init[1],
+        geom::wrap_angle(pose[2] - init[2]),
+    );
+    let poff = Vector3::new(prec[0] * off.x, prec[1] * off.y, prec[2] * off.z);
+    let d2 = off.dot(&poff) + poff.dot(&(cov * poff));
+    if d2.is_finite() {
+        d2
+    } else {
+        0.0
+    }
 }
 
 /// Failed scans in a row after which the local map is given up for a new
 /// one started at the current scan.
 const MAP_PATIENCE: usize = 3;
 
+/// Age (s) beyond which the last valid velocity says nothing about the
+/// plausibility of a given prior.
+const MAX_VELOCITY_AGE: f64 = 1.0;
+/// Squared Mahalanobis distance (3 dof) beyond which the scans contradict the
+/// prior term: the χ² 99.9 % quantile.
+const CONFLICT: f64 = 16.27;
+
+/// Odometry increments below this (m, rad) are a robot standing still (or a
+/// frozen reading).
+const STANDING: f64 = 1e-9;
+/// Longest run (s) of pairs whose given prior is replaced by the
+/// constant-velocity guess; beyond it the given prior is trusted again.
+const MAX_SUBSTITUTION: f64 = 2.0;
+
 /// Two guesses close enough (1 cm, 0.5°) to converge alike.
 fn close(a: &Pose2, b: &Pose2) -> bool {
     let [x, y, t] = geom::xyt(&geom::between(a, b));
     x.hypot(y) < 0.01 && t.abs() < 0.01
+}
+
+/// An increment of a robot standing still (or of a frozen reading).
+fn standing(p: &Pose2) -> bool {
+    let (ds, dth) = geom::arc_of_increment(p);
+    ds.abs() < STANDING && dth.abs() < STANDING
 }
 
 fn pose_finite(p: &Pose2) -> bool {
@@ -517,4 +705,33 @@ fn between_jacobians(a: &Pose2, b: &Pose2) -> (Matrix3<f64>, Matrix3<f64>) {
     let jb = Matrix3::new(c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0);
     let ja = Matrix3::new(-c, -s, m.y, s, -c, -m.x, 0.0, 0.0, -1.0);
     (ja, jb)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prior_conflict_is_the_innovation_mahalanobis_distance() {
+        // Scan-only estimate xs with covariance c, prior at init with
+        // precision p: the fused optimum, then the closed form against the
+        // explicit (xs − init)ᵀ (c + P⁻¹)⁻¹ (xs − init).
+        let c = Matrix3::new(4e-4, 1e-4, 0.0, 1e-4, 1e-2, 2e-5, 0.0, 2e-5, 1e-4);
+        let prec = [2500.0, 2500.0, 4.0];
+        let pm = Matrix3::from_diagonal(&Vector3::from(prec));
+        let init = Vector3::new(0.1, -0.2, 0.3);
+        let xs = Vector3::new(0.13, -0.05, 0.29);
+        let ci = c.try_inverse().unwrap();
+        let fused = (ci + pm).try_inverse().unwrap() * (ci * xs + pm * init);
+        let got = prior_conflict(&fused.into(), &init.into(), &prec, &c);
+        let d = xs - init;
+        let s = c + pm.try_inverse().unwrap();
+        let want = (d.transpose() * s.try_inverse().unwrap() * d)[(0, 0)];
+        assert!((got - want).abs() < 1e-9 * want, "{got} {want}");
+        // No prior term: no conflict.
+        assert_eq!(
+            prior_conflict(&fused.into(), &init.into(), &[0.0; 3], &c),
+            0.0
+        );
+    }
 }

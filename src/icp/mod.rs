@@ -22,7 +22,12 @@
 //! - `matcher`: the streaming [`ScanMatcher`] with prior selection, retries
 //!   of failed matches from the constant-velocity guess, failure flags, and
 //!   a local map kept across a few failed scans; `run`: whole recordings and
-//!   [`integrate`].
+//!   [`integrate`]. Two guards against a wrong odometry prior: an odometry
+//!   that stands still while the robot cannot have stopped (a frozen
+//!   reading) is replaced by the constant-velocity guess, also for the jump
+//!   that follows, the scans choosing between the two; and a match whose
+//!   scan-only estimate contradicts the prior term (χ² test on the
+//!   innovation, 99.9 %) is matched again without it.
 //!
 //! Failed pairs (too few points or correspondences, not converged, degenerate,
 //! bad time, inconsistent beams, implausible jump vs the prior, first match

@@ -85,6 +85,14 @@ pub struct IcpParams {
     pub max_speed: f64,
     /// See `max_speed` (rad/s).
     pub max_turn_rate: f64,
+    /// Largest plausible deceleration (m/s²) from the last matched velocity:
+    /// a given prior (odometry increment) that stands still while the robot
+    /// could not have stopped that fast is a frozen odometry, and the
+    /// constant-velocity guess replaces it (also for the jump with which it
+    /// catches up) while the scans agree.
+    pub max_accel: f64,
+    /// Same for the turn rate (rad/s²).
+    pub max_angular_accel: f64,
     /// Slack on `max_speed` × dt beyond 3σ of the match (m).
     pub speed_slack: f64,
     /// Slack on `max_turn_rate` × dt beyond 3σ of the match (rad).
@@ -136,6 +144,8 @@ impl Default for IcpParams {
             prior_sigma_theta: 0.5,
             max_speed: 3.0,
             max_turn_rate: 3.0,
+            max_accel: 1.5,
+            max_angular_accel: 3.0,
             speed_slack: 0.01,
             turn_slack: 0.01,
             local_map: true,
@@ -177,6 +187,8 @@ impl IcpParams {
             ("prior_rot_tol", self.prior_rot_tol),
             ("max_speed", self.max_speed),
             ("max_turn_rate", self.max_turn_rate),
+            ("max_accel", self.max_accel),
+            ("max_angular_accel", self.max_angular_accel),
             ("speed_slack", self.speed_slack),
             ("turn_slack", self.turn_slack),
             ("keyframe_dist", self.keyframe_dist),
