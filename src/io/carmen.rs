@@ -1,6 +1,9 @@
 //! Reads CARMEN logs (`.clf`), the format of the classic SLAM benchmark
 //! datasets: `FLASER`, `ROBOTLASER1` and `ODOM` lines; other lines are skipped.
-//! The stamp of every record is its `ipc_timestamp`.
+//! The stamp of every record is its `ipc_timestamp`. A record must be
+//! complete up to its `logger_timestamp`, so that a line cut inside a number
+//! is never read as a shorter number; a log cut short (its last line without
+//! a newline and incomplete) is read up to its last complete record.
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -52,6 +55,12 @@ pub fn read_carmen_bytes(
     let mut known = 0usize;
     let mut latest_scan = f64::NEG_INFINITY;
     let mut latest_odom = f64::NEG_INFINITY;
+    // The last line, when the log does not end with a newline, may be cut.
+    let cut_tail = if text.ends_with('\n') {
+        usize::MAX
+    } else {
+        text.lines().count().saturating_sub(1)
+    };
     for (i, line) in text.lines().enumerate() {
         let mut tok = line.split_ascii_whitespace();
         let Some(kind) = tok.next() else { continue };
@@ -61,17 +70,21 @@ pub fn read_carmen_bytes(
                 .at(format!("line {}", i + 1))
         };
         let fields: Vec<&str> = tok.collect();
-        let (scan, odom) = match kind {
-            "FLASER" => parse_flaser(&fields).map_err(err)?,
-            "ROBOTLASER1" => {
-                let (scan, odom, laser) = parse_robotlaser(&fields).map_err(err)?;
+        let parsed = match kind {
+            "FLASER" => parse_flaser(&fields),
+            "ROBOTLASER1" => parse_robotlaser(&fields).map(|(scan, odom, laser)| {
                 if rec.base_from_laser.is_none() {
                     rec.base_from_laser = Some(geom::between(&odom.pose, &laser));
                 }
                 (Some(scan), odom)
-            }
-            "ODOM" => (None, parse_odom(&fields).map_err(err)?),
+            }),
+            "ODOM" => parse_odom(&fields).map(|o| (None, o)),
             _ => continue,
+        };
+        let (scan, odom) = match parsed {
+            Ok(p) => p,
+            Err(_) if i == cut_tail => break,
+            Err(m) => return Err(err(m)),
         };
         known += 1;
         if let Some(s) = scan {
@@ -128,6 +141,15 @@ fn stamp(fields: &[&str], i: usize) -> Result<f64, String> {
     Ok(t)
 }
 
+/// Checks that the record goes on past its `ipc_timestamp` at `i` to the
+/// host and a `logger_timestamp` number: the line was not cut.
+fn complete(fields: &[&str], i: usize) -> Result<(), String> {
+    if fields.get(i + 1).is_none() {
+        return Err(format!("line ends before the host name (field {})", i + 3));
+    }
+    num(fields, i + 2, "logger_timestamp").map(|_| ())
+}
+
 fn count(fields: &[&str], i: usize, what: &str) -> Result<usize, String> {
     let v = num(fields, i, what)?;
     if v < 0.0 || v.fract() != 0.0 || v > 1e6 {
@@ -159,6 +181,7 @@ fn parse_flaser(f: &[&str]) -> Result<(Option<LaserScan>, StampedPose), String> 
     let r = ranges(f, 1, n)?;
     let odom = pose_at(f, n + 4, "odometry pose")?;
     let stamp = stamp(f, n + 7)?;
+    complete(f, n + 7)?;
     let scan = LaserScan {
         stamp,
         angle_min: -PI / 2.0,
@@ -199,6 +222,7 @@ fn parse_robotlaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), Strin
     let laser = pose_at(f, p, "laser pose")?;
     let robot = pose_at(f, p + 3, "robot pose")?;
     let stamp = stamp(f, p + 11)?;
+    complete(f, p + 11)?;
     let scan = LaserScan {
         stamp,
         angle_min: start,
@@ -218,6 +242,7 @@ fn parse_robotlaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), Strin
 
 /// `ODOM x y θ tv rv accel ipc_timestamp host logger_timestamp`.
 fn parse_odom(f: &[&str]) -> Result<StampedPose, String> {
+    complete(f, 6)?;
     Ok(StampedPose {
         pose: pose_at(f, 0, "odometry pose")?,
         stamp: stamp(f, 6)?,
@@ -266,6 +291,24 @@ mod tests {
         let e = read("ODOM 1 2 nan 0 0 0 5 h 5\n").unwrap_err();
         assert!(e.message.contains("NaN"), "{e}");
         assert!(read("hello world\n").is_err());
+    }
+
+    #[test]
+    fn a_cut_last_line_is_dropped_and_a_cut_inner_line_refused() {
+        let full = "ODOM 0 0 0 0 0 0 1.25 h 1.3\nODOM 1 0 0 0 0 0 2.125 h 2.2\n";
+        // Cut inside the second ipc_timestamp: "2.1" must not become a stamp.
+        let cut = &full[..full.find("2.125").unwrap() + 3];
+        let r = read(cut).unwrap();
+        assert_eq!(r.odom.len(), 1);
+        assert_eq!(r.odom[0].stamp, 1.25);
+        // Cut after the host: still incomplete.
+        let r = read(&full[..full.rfind(" 2.2").unwrap()]).unwrap();
+        assert_eq!(r.odom.len(), 1);
+        // The same short record inside the log is an error naming its line.
+        let e = read("ODOM 0 0 0 0 0 0 1.25\nODOM 1 0 0 0 0 0 2.125 h 2.2\n").unwrap_err();
+        assert_eq!(e.position.as_deref(), Some("line 1"));
+        // A complete last line without a newline reads in full.
+        assert_eq!(read(full.trim_end()).unwrap().odom.len(), 2);
     }
 
     #[test]
