@@ -130,10 +130,11 @@ impl ChangeDetector {
 
     /// Adds one measurement: innovation `nu` at the mean, Jacobian `j` of the
     /// measured quantity with respect to (R_R, R_L, D), and its precision
-    /// `1/S` (already scaled by any robust weight). The caller scales the D
-    /// entry by D's observability: on a straight run the linearised score
-    /// for D is dominated by the model's curvature (any predicted W is
-    /// "explained" by a larger D), not by evidence.
+    /// `1/S` (already scaled by any robust weight). The caller passes W's
+    /// Jacobian with D's observability (`kalman::turn_jacobian`): on a
+    /// straight run the linearised score for D is dominated by the model's
+    /// curvature (any predicted W is "explained" by a larger D), not by
+    /// evidence.
     pub fn add(&mut self, nu: f64, j: [f64; 3], precision: f64) {
         let j = Vector3::from(j);
         if !(nu.is_finite() && precision.is_finite() && j.iter().all(|x| x.is_finite())) {

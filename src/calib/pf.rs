@@ -216,15 +216,14 @@ impl ParticleFilter {
     fn measurements(&mut self, s: &CalibStep) -> (Update, f64) {
         let (wr, wl) = (s.omega_right, s.omega_left);
         let Belief { mean: m, cov } = self.belief;
-        let d = m[2].max(MIN_LENGTH);
-        let v_hat = 0.5 * (wr * m[0] + wl * m[1]);
-        let w_hat = (wr * m[0] - wl * m[1]) / d;
-        let jv = nalgebra::Vector3::new(0.5 * wr, 0.5 * wl, 0.0);
-        let jw = nalgebra::Vector3::new(wr / d, -wl / d, -w_hat / d);
-        let var_v = jv.dot(&(cov * jv)).max(0.0);
-        let var_w = jw.dot(&(cov * jw)).max(0.0);
+        let theta = nalgebra::Vector3::new(m[0], m[1], m[2]);
+        let ([v_hat, w_hat], [jv, jw]) = super::kalman::model(&theta, wr, wl);
         let w_seen = super::kalman::turn_rate_for_observability(s, self.floor, w_hat);
         let obs = super::kalman::observability(w_seen, self.observability_turn_rate);
+        // W as the predict pass models it (D's entry scaled by `obs`).
+        let jw = super::kalman::turn_jacobian(&theta, &jw, w_hat, obs);
+        let var_v = jv.dot(&(cov * jv)).max(0.0);
+        let var_w = jw.dot(&(cov * jw)).max(0.0);
         if let Some(det) = &mut self.change {
             det.begin_step(s.dt());
         }
@@ -249,7 +248,7 @@ impl ParticleFilter {
                 }
             }
             if let Some(det) = &mut self.change {
-                det.add(nu, [j[0], j[1], j[2] * obs], prec);
+                det.add(nu, [j[0], j[1], j[2]], prec);
             }
         }
         if u.kv > 0.0 {
