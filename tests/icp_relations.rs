@@ -69,9 +69,11 @@ fn icp_relations_mit_csail_beat_csm_on_all_relations_and_rotation() {
     // intel), all 0.26 ± 0.75 m. The odometry freezes for about a second
     // three times and then jumps; detected, the freezes no longer cost the
     // long relations their heading (all: 0.35 m before, 0.20 m now). Local
-    // translation stays within 1 mm of CSM (half of the short relations
-    // carry the odometry's own translation, to < 1 mm).
-    beats("mit-csail", &s, 0.029, 0.40, 0.26);
+    // translation: 0.0282 m with the prior term centred on the odometry,
+    // 0.0274 m centred on its blend with the constant-velocity guess (half
+    // of the short relations carry the odometry's own translation, to
+    // < 1 mm, so the odometry cannot simply be dropped).
+    beats("mit-csail", &s, 0.028, 0.40, 0.26);
 }
 
 #[test]

@@ -316,3 +316,33 @@ fn icp_sim_sweeping_back_laser_square_is_unbiased() {
     assert!((rt - 1.0).abs() <= 0.005, "Σdθ ICP / true = {rt}");
     assert!((1.5..4.5).contains(&nees), "mean NEES {nees}");
 }
+
+#[test]
+fn icp_sim_prior_blend_does_not_follow_a_scaled_odometry() {
+    // Odometry 2 % long: centring the prior term on a blend of odometry and
+    // the constant-velocity guess (learned per run) must not pull the
+    // corridor's loose axis towards it any more than the odometry-centred
+    // term does, and must keep the path length within 0.1 %.
+    let truth = corridor_drive(40.0, 25.0);
+    let scans = lms111_scans(&truth, 5);
+    let odom = biased_odometry(&truth, 6);
+    let len_err = |params: &IcpParams| {
+        let (motions, _) = match_recording(&scans, base_from_laser(), Some(&odom), params).unwrap();
+        integrate(&motions).path_length() / truth.path_length() - 1.0
+    };
+    let blend = len_err(&IcpParams::default());
+    let fixed = len_err(&IcpParams {
+        prior_blend_rate: 0.0,
+        ..Default::default()
+    });
+    eprintln!(
+        "path length error: blended prior {:+.4} %, odometry prior {:+.4} %",
+        100.0 * blend,
+        100.0 * fixed
+    );
+    assert!(blend.abs() < 1e-3, "blended prior: {:.3} %", 100.0 * blend);
+    assert!(
+        blend <= fixed.max(0.0) + 1e-4,
+        "blended {blend} vs odometry-centred {fixed}: pulled towards the long odometry"
+    );
+}

@@ -3,6 +3,7 @@
 
 use super::params::{IcpParams, IcpParamsError};
 use super::preprocess::{Preprocessor, ScanPoints};
+use super::prior_model::PriorModel;
 use super::reference::Reference;
 use super::register::{register, RegisterSettings, Registration, Scratch};
 use super::threshold::AdaptiveThreshold;
@@ -85,6 +86,14 @@ pub struct ScanMatcher {
     own: Reference,
     scratch: Scratch,
     info: MatchInfo,
+    /// Learned errors of the odometry and constant-velocity predictions.
+    model: PriorModel,
+    /// The current pair's given prior and constant-velocity guess, for the
+    /// model.
+    pair_given: Option<Pose2>,
+    pair_cv: Option<Pose2>,
+    /// The current pair's prior-term translation σ (m).
+    pair_sigma: f64,
 }
 
 impl ScanMatcher {
@@ -123,6 +132,10 @@ impl ScanMatcher {
             own: Reference::new(p.normal_window, p.normal_length),
             scratch: Scratch::default(),
             info: MatchInfo::default(),
+            model: PriorModel::default(),
+            pair_given: None,
+            pair_cv: None,
+            pair_sigma: p.prior_sigma_xy,
             params,
         })
     }
@@ -162,6 +175,26 @@ impl ScanMatcher {
             (Some(p), _) => (p, PriorSource::Given),
             (None, Some(cv)) => (cv, PriorSource::ConstantVelocity),
             _ => (Pose2::identity(), PriorSource::None),
+        };
+        // The prior term's centre: the odometry, or its blend with a
+        // constant-velocity guess from a pair the scans fully measured.
+        let cv = self.constant_velocity(dt);
+        self.pair_given = given.filter(|_| source == PriorSource::Given);
+        self.pair_cv = cv;
+        self.pair_sigma = self.params.prior_sigma_xy;
+        let prior = match self.pair_given {
+            Some(g) if self.params.prior_blend_rate > 0.0 => {
+                let p = &self.params;
+                let measured = self
+                    .velocity
+                    .is_some_and(|v| v.cond >= p.prior_blend_conditioning);
+                let [lo, hi] = p.prior_sigma_bounds;
+                let cv = cv.as_ref().filter(|_| measured);
+                let (c, s) = self.model.prior(&g, cv, p.prior_sigma_xy, (lo, hi));
+                self.pair_sigma = s;
+                c
+            }
+            _ => prior,
         };
         if source == PriorSource::Substituted {
             self.substituted_since.get_or_insert(t0);
@@ -318,8 +351,21 @@ impl ScanMatcher {
         let bridged = self.misses > 0;
         if !bridged {
             self.threshold.update(&geom::between(&init, &motion));
+            if time_ok
+                && self.params.prior_blend_rate > 0.0
+                && u.conditioning >= self.params.prior_blend_conditioning
+            {
+                let odo = self.pair_given.filter(|_| source == PriorSource::Given);
+                self.model.record(
+                    &motion,
+                    odo.as_ref(),
+                    self.pair_cv.as_ref(),
+                    self.params.prior_blend_rate,
+                );
+            }
             if time_ok {
                 self.velocity = Some(Velocity {
+                    cond: u.conditioning,
                     inc: motion,
                     dt,
                     t1,
@@ -371,7 +417,11 @@ impl ScanMatcher {
             cov_inflation: p.cov_inflation,
             prior_precision: if hold {
                 let prec = |s: f64| if s > 0.0 { 1.0 / (s * s) } else { 0.0 };
-                let pt = prec(p.prior_sigma_xy);
+                let pt = prec(if source == PriorSource::Given {
+                    self.pair_sigma
+                } else {
+                    p.prior_sigma_xy
+                });
                 [pt, pt, prec(p.prior_sigma_theta)]
             } else {
                 [0.0; 3]
@@ -452,6 +502,7 @@ impl ScanMatcher {
             dt: vdt,
             t1: vt1,
             cov,
+            ..
         }) = self.velocity
         else {
             return true;
@@ -614,6 +665,8 @@ impl ScanMatcher {
 /// The last valid motion, as the constant-velocity model's velocity.
 #[derive(Debug, Clone, Copy)]
 struct Velocity {
+    /// Conditioning of its match (see `MatchInfo::conditioning`).
+    cond: f64,
     /// The motion (`prev_from_cur`).
     inc: Pose2,
     /// Its duration (s).

@@ -17,6 +17,9 @@
 //!   rather than the raw polyline keep the range noise of the reference out
 //!   of the estimate (the zigzag polyline made motions ~2 % short).
 //! - `threshold`: KISS-ICP's adaptive gate from the prior's recent error.
+//! - `prior_model`: the odometry's and the constant-velocity guess's errors
+//!   against the matched motions, learned per recording; the prior term is
+//!   centred on their inverse-variance blend (`prior_blend_rate`).
 //! - `covariance`: Hessian × residual variance × inflation; the choice and the
 //!   inflation are explained there.
 //! - `matcher`: the streaming [`ScanMatcher`] with prior selection, retries
@@ -42,6 +45,7 @@ mod covariance;
 mod matcher;
 mod params;
 mod preprocess;
+mod prior_model;
 mod reference;
 mod register;
 mod run;

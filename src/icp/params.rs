@@ -81,6 +81,21 @@ pub struct IcpParams {
     pub prior_sigma_xy: f64,
     /// Same for the given prior's heading change (rad).
     pub prior_sigma_theta: f64,
+    /// Forgetting rate (per matched pair) of the online error model of the
+    /// odometry and constant-velocity predictions against the matched
+    /// motions. With it the prior term's translation is centred on the
+    /// inverse-variance mean of both predictions instead of on the odometry
+    /// alone, and where it is the odometry alone, its σ is the odometry's
+    /// learned error (within `prior_sigma_bounds`). 0 = centred on the
+    /// odometry with `prior_sigma_xy`.
+    pub prior_blend_rate: f64,
+    /// Smallest conditioning (`MatchInfo::conditioning`) of a pair for it to
+    /// train that error model, and of the pair a constant-velocity guess
+    /// comes from for it to take part: only motions the scans measured in
+    /// every direction say how good a prediction is.
+    pub prior_blend_conditioning: f64,
+    /// Smallest and largest learned translation σ of the prior term (m).
+    pub prior_sigma_bounds: [f64; 2],
     /// Largest plausible speed (m/s) and turn rate (rad/s) of the robot.
     pub max_speed: f64,
     /// See `max_speed` (rad/s).
@@ -142,6 +157,9 @@ impl Default for IcpParams {
             prior_rot_tol: 0.35,
             prior_sigma_xy: 0.02,
             prior_sigma_theta: 0.5,
+            prior_blend_rate: 0.05,
+            prior_blend_conditioning: 0.03,
+            prior_sigma_bounds: [0.005, 0.1],
             max_speed: 3.0,
             max_turn_rate: 3.0,
             max_accel: 1.5,
@@ -207,6 +225,8 @@ impl IcpParams {
             ("prior_rel_tol", self.prior_rel_tol),
             ("prior_sigma_xy", self.prior_sigma_xy),
             ("prior_sigma_theta", self.prior_sigma_theta),
+            ("prior_blend_rate", self.prior_blend_rate),
+            ("prior_blend_conditioning", self.prior_blend_conditioning),
             ("min_inlier_fraction", self.min_inlier_fraction),
         ];
         for (name, v) in nonneg {
@@ -219,6 +239,13 @@ impl IcpParams {
         }
         if self.min_threshold > self.max_threshold {
             return e("min_threshold", "must not exceed max_threshold");
+        }
+        if self.prior_blend_rate > 1.0 {
+            return e("prior_blend_rate", "must be at most 1");
+        }
+        let [lo, hi] = self.prior_sigma_bounds;
+        if !(lo > 0.0 && lo <= hi && hi.is_finite()) {
+            return e("prior_sigma_bounds", "must be positive, finite and ordered");
         }
         if self.min_inlier_fraction > 1.0 {
             return e("min_inlier_fraction", "must be at most 1");
