@@ -10,12 +10,10 @@ use odocal::sim::{self, SimConfig};
 
 #[test]
 fn adaptive_pf_learns_radii_and_wheel_base_from_simulated_scans() {
-    // One run per scenario, 60 s each, true parameters drawn in seed 000's
-    // ranges (radii 0.305–0.335 m, wheel base 0.60–0.70 m).
-    let settings = ScanMonteCarloParams {
-        duration_s: 60.0,
-        ..Default::default()
-    };
+    // One run per scenario, 120 s each as in `experiment montecarlo-scans`,
+    // true parameters drawn in seed 000's ranges (radii 0.305–0.335 m, wheel
+    // base 0.60–0.70 m).
+    let settings = ScanMonteCarloParams::default();
     let configs: Vec<_> = table2_configs(&CalibParams::default())
         .into_iter()
         .filter(|(l, _)| l == "adaptive-pf" || l == "dkf")
