@@ -68,6 +68,23 @@ pub struct Motion {
 }
 
 impl Motion {
+    /// A valid motion over `[t0, t1]` (s) from a base-frame increment, with
+    /// covariance `cov` (m², rad²) and no iteration or inlier counts yet.
+    pub fn from_increment(t0: f64, t1: f64, inc: &crate::geom::Pose2, cov: Matrix3<f64>) -> Self {
+        let [dx, dy, dtheta] = crate::geom::xyt(inc);
+        Self {
+            t0,
+            t1,
+            dx,
+            dy,
+            dtheta,
+            cov,
+            iterations: 0,
+            inliers: 0,
+            failure: None,
+        }
+    }
+
     /// Whether the motion may be used as an observation.
     pub fn is_valid(&self) -> bool {
         self.failure.is_none()

@@ -218,17 +218,11 @@ mod tests {
     use nalgebra::Matrix3;
 
     fn motion(t0: f64, t1: f64, inc: &geom::Pose2, valid: bool) -> Motion {
-        let [dx, dy, dtheta] = geom::xyt(inc);
         Motion {
-            t0,
-            t1,
-            dx,
-            dy,
-            dtheta,
-            cov: Matrix3::identity() * 1e-6,
             iterations: 1,
             inliers: 100,
             failure: (!valid).then_some(crate::motion::PairFailure::NotConverged),
+            ..Motion::from_increment(t0, t1, inc, Matrix3::identity() * 1e-6)
         }
     }
 

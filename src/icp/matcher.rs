@@ -168,7 +168,8 @@ impl ScanMatcher {
         };
         let dt = t1 - t0;
         let given = prior.filter(pose_finite);
-        let (prior, source) = match (given, self.constant_velocity(dt)) {
+        let cv = self.constant_velocity(dt);
+        let (prior, source) = match (given, cv) {
             (Some(p), Some(cv)) if !self.plausible_change(&p, t1, dt) => {
                 (cv, PriorSource::Substituted)
             }
@@ -178,7 +179,6 @@ impl ScanMatcher {
         };
         // The prior term's centre: the odometry, or its blend with a
         // constant-velocity guess from a pair the scans fully measured.
-        let cv = self.constant_velocity(dt);
         self.pair_given = given.filter(|_| source == PriorSource::Given);
         self.pair_cv = cv;
         self.pair_sigma = self.params.prior_sigma_xy;
@@ -355,6 +355,7 @@ impl ScanMatcher {
                 && self.params.prior_blend_rate > 0.0
                 && u.conditioning >= self.params.prior_blend_conditioning
             {
+                // Only when the winning match started from the odometry.
                 let odo = self.pair_given.filter(|_| source == PriorSource::Given);
                 self.model.record(
                     &motion,
@@ -374,14 +375,7 @@ impl ScanMatcher {
             }
         }
         self.advance(ref_from_cur, u.cov);
-        let [dx, dy, dtheta] = geom::xyt(&motion);
         Motion {
-            t0,
-            t1,
-            dx,
-            dy,
-            dtheta,
-            cov,
             iterations: reg.iterations,
             inliers: reg.inliers as u32,
             failure: if !time_ok {
@@ -391,6 +385,7 @@ impl ScanMatcher {
             } else {
                 None
             },
+            ..Motion::from_increment(t0, t1, &motion, cov)
         }
     }
 
@@ -646,18 +641,11 @@ impl ScanMatcher {
     /// A failed pair: the prior as motion, covariance as wide as the gates.
     fn failed(&self, t0: f64, t1: f64, prior: &Pose2, f: PairFailure) -> Motion {
         let p = &self.params;
-        let [dx, dy, dtheta] = geom::xyt(prior);
-        let st = p.prior_trans_tol + p.prior_rel_tol * (dx * dx + dy * dy).sqrt();
+        let st = p.prior_trans_tol + p.prior_rel_tol * prior.translation.vector.norm();
+        let cov = Matrix3::from_diagonal(&Vector3::new(st * st, st * st, p.prior_rot_tol.powi(2)));
         Motion {
-            t0,
-            t1,
-            dx,
-            dy,
-            dtheta,
-            cov: Matrix3::from_diagonal(&Vector3::new(st * st, st * st, p.prior_rot_tol.powi(2))),
-            iterations: 0,
-            inliers: 0,
             failure: Some(f),
+            ..Motion::from_increment(t0, t1, prior, cov)
         }
     }
 }
