@@ -2,8 +2,9 @@
 
 use crate::geom::{self, Pose2};
 
-/// Kinematic parameters: wheel radii (m) and wheel base (m).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Kinematic parameters: wheel radii (m) and wheel base (m); as JSON
+/// `{r_right, r_left, wheel_base}`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DiffDrive {
     /// Right wheel radius (m).
     pub r_right: f64,
