@@ -19,6 +19,7 @@ mod pool;
 mod resample;
 mod robust;
 mod run;
+mod runner;
 mod step_builder;
 mod steps;
 pub mod synth;
@@ -36,7 +37,8 @@ pub use pf::{ParticleFilter, Particles};
 pub use pool::NormalPool;
 pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};
 pub use robust::student_t_weight;
-pub use run::{run, run_observed, CalibSummary, CalibrationRun, HistoryRow, Multipliers, Params3};
+pub use run::{run, run_observed, CalibSummary, CalibrationRun, Multipliers};
+pub use runner::Runner;
 pub use step_builder::StepBuilder;
 pub use steps::{steps, usable, CalibStep, Kind, Measurement, MAX_GAP_STEP, MAX_MEASUREMENTS};
 pub use trigger::Trigger;
@@ -96,6 +98,33 @@ impl Estimate {
             r_left: self.r_left,
             wheel_base: self.wheel_base,
         }
+    }
+
+    /// The standard deviations of the three parameters (m), in the fields of
+    /// the parameters they belong to.
+    pub fn std(&self) -> DiffDrive {
+        DiffDrive {
+            r_right: self.std_r_right,
+            r_left: self.std_r_left,
+            wheel_base: self.std_wheel_base,
+        }
+    }
+
+    /// The calibration history row of this estimate, in the column order of
+    /// the history CSV: `t, r_right, r_left, wheel_base, std_r_right,
+    /// std_r_left, std_wheel_base, particles, process_sigma`.
+    pub fn history_row(&self) -> [f64; 9] {
+        [
+            self.t,
+            self.r_right,
+            self.r_left,
+            self.wheel_base,
+            self.std_r_right,
+            self.std_r_left,
+            self.std_wheel_base,
+            self.particles as f64,
+            self.process_sigma,
+        ]
     }
 }
 

@@ -49,11 +49,13 @@ mod prior_model;
 mod reference;
 mod register;
 mod run;
+mod stream;
 mod threshold;
 
 pub use covariance::MIN_RESIDUAL_STD;
 pub use matcher::{MatchInfo, PriorSource, ScanMatcher};
 pub use params::{IcpParams, IcpParamsError};
 pub use preprocess::{Preprocessor, ScanPoints};
-pub use run::{integrate, match_recording, summarise, IcpStats};
+pub use run::{integrate, match_recording, summarise, IcpStats, Tally};
+pub use stream::{PoseWindow, PriorKind, StreamMatcher};
 pub use threshold::AdaptiveThreshold;

@@ -8,7 +8,7 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
-use super::mcap_read::ReadOptions;
+use super::options::ReadOptions;
 use crate::error::InputError;
 use crate::geom::{self, Pose2};
 use crate::recording::{Recording, StampedPose};

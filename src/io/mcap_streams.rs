@@ -5,11 +5,12 @@
 use std::collections::HashMap;
 
 use super::cdr::CdrError;
-use super::mcap_read::ReadOptions;
+use super::options::ReadOptions;
 use super::ros_msgs::{
     ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, PoseStampedMsg, RosMsg,
     TfMessage, Time,
 };
+use super::ros_schema::short_name;
 use crate::error::InputError;
 use crate::geom::{self, Pose2};
 use crate::recording::{GyroSample, Recording, StampedPose, WheelSample};
@@ -374,22 +375,93 @@ impl<'a> State<'a> {
     }
 }
 
+/// Wheel angles from wheel rates (rad/s) by the trapezoidal rule, one sample
+/// at a time in stamp order, from 0 at the first sample.
+#[derive(Debug, Default)]
+pub(crate) struct RateIntegrator {
+    prev: Option<WheelSample>,
+    left: f64,
+    right: f64,
+}
+
+impl RateIntegrator {
+    /// The angles (rad) at `rate.stamp`; `rate` carries rates in its angle fields.
+    pub(crate) fn angles(&mut self, rate: WheelSample) -> WheelSample {
+        if let Some(p) = self.prev {
+            let dt = rate.stamp - p.stamp;
+            self.left += 0.5 * (p.left + rate.left) * dt;
+            self.right += 0.5 * (p.right + rate.right) * dt;
+        }
+        self.prev = Some(rate);
+        WheelSample {
+            stamp: rate.stamp,
+            left: self.left,
+            right: self.right,
+        }
+    }
+}
+
 /// Turns wheel rates (rad/s, stored in the angle fields) into angles (rad)
 /// from 0 by the trapezoidal rule.
 fn integrate_rates(w: &mut [WheelSample]) {
-    let mut prev: Option<WheelSample> = None;
-    let (mut l, mut r) = (0.0, 0.0);
+    let mut integrator = RateIntegrator::default();
     for s in w.iter_mut() {
-        let rate = *s;
-        if let Some(p) = prev {
-            let dt = rate.stamp - p.stamp;
-            l += 0.5 * (p.left + rate.left) * dt;
-            r += 0.5 * (p.right + rate.right) * dt;
-        }
-        prev = Some(rate);
-        s.left = l;
-        s.right = r;
+        *s = integrator.angles(*s);
     }
+}
+
+/// The roles a channel plays; a configured topic with an unexpected schema is
+/// an error, other topics are ignored.
+pub(crate) fn channel_roles(
+    ch: &mcap::Channel<'_>,
+    opts: &ReadOptions,
+) -> Result<Vec<Role>, String> {
+    let t = &opts.topics;
+    let schema = ch
+        .schema
+        .as_ref()
+        .map(|s| short_name(&s.name))
+        .unwrap_or_default();
+    let mut roles = Vec::new();
+    let mut want = |topic: &str, accepted: &[(&str, Role)]| -> Result<(), String> {
+        if ch.topic != topic {
+            return Ok(());
+        }
+        match accepted.iter().find(|(n, _)| short_name(n) == schema) {
+            Some((_, r)) => {
+                roles.push(*r);
+                Ok(())
+            }
+            None => {
+                let names: Vec<&str> = accepted.iter().map(|(n, _)| *n).collect();
+                Err(format!(
+                    "schema '{}' where {} was expected",
+                    if schema.is_empty() { "(none)" } else { &schema },
+                    names.join(" or ")
+                ))
+            }
+        }
+    };
+    want(&t.scan, &[(LaserScanMsg::TYPE, Role::Scan)])?;
+    want(&t.joint_states, &[(JointStateMsg::TYPE, Role::Joints)])?;
+    want(&t.imu, &[(ImuMsg::TYPE, Role::Imu)])?;
+    want(&t.odom, &[(OdometryMsg::TYPE, Role::Odom)])?;
+    want(
+        &t.reference,
+        &[
+            (OdometryMsg::TYPE, Role::RefOdometry),
+            (PoseStampedMsg::TYPE, Role::RefPose),
+            (PointStampedMsg::TYPE, Role::RefPoint),
+        ],
+    )?;
+    want(&t.tf_static, &[(TfMessage::TYPE, Role::TfStatic)])?;
+    if !roles.is_empty() && ch.message_encoding != "cdr" {
+        return Err(format!(
+            "message encoding '{}' where cdr was expected",
+            ch.message_encoding
+        ));
+    }
+    Ok(roles)
 }
 
 #[cfg(test)]

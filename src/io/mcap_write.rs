@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use super::atomic::write_bytes_atomic;
 use super::cdr::CdrWriter;
 use super::mcap_canon::{canonicalize_summary, canonicalize_summary_tail};
-use super::mcap_read::TopicConfig;
+use super::options::TopicConfig;
 use super::ros_msgs::{
     Header, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, Pose, Quat, RosMsg,
     TfMessage, Time, TransformStamped, Vec3,

@@ -1,5 +1,7 @@
-//! Reading and writing files: recordings (MCAP, CARMEN), trajectories, CSV
-//! outputs. Every write goes through [`atomic`].
+//! Reading and writing files, and nothing else: recordings (MCAP, CARMEN) as
+//! a stream of samples ([`source`]), trajectories, CSV outputs. The format of
+//! an input is decided in [`format::sniff`]. Every write goes through
+//! [`atomic`].
 //!
 //! # Time policy
 //! How the readers turn stamps into the times of a [`Recording`] (seconds as
@@ -38,41 +40,48 @@ pub mod cdr;
 pub mod censi;
 mod columns;
 pub mod csv;
+pub mod format;
 pub mod kitti;
 pub mod mcap_canon;
 mod mcap_guard;
 pub mod mcap_read;
+pub mod mcap_stream;
 mod mcap_streams;
 pub mod mcap_write;
+mod options;
 pub mod relations;
 pub mod ros_msgs;
 pub mod ros_schema;
 pub mod seed_tables;
-pub mod stream;
-pub mod stream_icp;
+pub mod source;
 pub mod stream_out;
-pub mod stream_run;
 pub mod tum;
 
 pub use carmen::read_carmen;
-pub use mcap_read::{read_mcap, read_mcap_bytes, ReadOptions, TopicConfig};
+pub use format::{sniff, Format};
+pub use mcap_read::{read_mcap, read_mcap_bytes};
+pub use mcap_stream::McapStream;
 pub use mcap_write::{
     encode_mcap, write_mcap, write_mcap_streaming, ScanFeed, WriteError, WriteOptions,
 };
+pub use options::{ReadOptions, TopicConfig};
+pub use source::{Item, RecordingSource, SampleSource, StreamInfo};
 
 use crate::error::InputError;
 use crate::recording::Recording;
 use std::path::Path;
 
-/// Reads a recording, MCAP (recognised by its magic bytes) or else a CARMEN
-/// log; the result's streams are sorted by stamp.
+/// Reads a whole recording by its sniffed format ([`sniff`]): a ROS 2 bag,
+/// or a text file read as a CARMEN log; the result's streams are sorted by
+/// stamp. Censi et al.'s tuples are not a recording and are refused.
 pub fn read_recording(path: &Path, opts: &ReadOptions) -> Result<Recording, InputError> {
-    let file = path.display().to_string();
-    let bytes =
-        std::fs::read(path).map_err(|e| InputError::new(&file, format!("cannot read: {e}")))?;
-    if bytes.starts_with(mcap::MAGIC) {
-        mcap_read::read_mcap_bytes(&bytes, &file, opts)
-    } else {
-        carmen::read_carmen_bytes(&bytes, &file, opts)
+    match sniff(path)? {
+        Format::Mcap => read_mcap(path, opts),
+        Format::Text => read_carmen(path, opts),
+        Format::CensiTuples => Err(InputError::new(
+            path.display().to_string(),
+            "Censi et al.'s calibration tuples hold no scans or wheel encoder samples: \
+             only `odocal diagnose --measured` reads them",
+        )),
     }
 }

@@ -1,13 +1,20 @@
 //! `odocal calibrate`: ICP velocity observations (+ gyro) and wheel angles into
 //! a calibrator, then the history CSV, the calibrated trajectory and a summary.
+//! A bag, another recording format, a recording in memory and CSV inputs all
+//! go through the one driver ([`super::drive`]).
 
-use super::PipelineError;
-use crate::calib::{self, CalibParams, CalibrationRun, Ranges};
+use super::drive;
+use super::observe::{NoObserver, Observers, RunObserver};
+use super::outputs::{CalibFiles, Collect};
+use super::recorder::{RecorderOptions, StreamRecorder};
+use super::viewer::{open_logger, Viewer};
+use super::{Common, PipelineError};
+use crate::calib::{self, CalibParams, CalibSummary, CalibrationRun, Ranges};
 use crate::motion::VelocityObs;
 use crate::recording::{GyroSample, WheelSample};
 use crate::robot::RobotConfig;
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// How measurements other than ICP enter the calibration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -55,90 +62,167 @@ pub fn params_for_robot(params: &CalibParams, robot: &RobotConfig) -> CalibParam
     p
 }
 
-/// Runs the configured calibrator over the input.
-pub fn run(
+/// Runs the configured calibrator over given streams (in memory).
+pub fn from_streams(
     input: &CalibInput,
     robot: &RobotConfig,
     params: &CalibParams,
     meas: &MeasurementConfig,
 ) -> Result<CalibrationRun, PipelineError> {
-    run_observed(input, robot, params, meas, &mut |_, _| {})
+    from_streams_observed(input, robot, params, meas, &mut NoObserver)
 }
 
-/// Like [`run`], calling `on_step` after every filter step with the estimate
-/// and, for particle filters, a view of the particle cloud.
-pub fn run_observed(
+/// Like [`from_streams`], the observer seeing every step.
+pub fn from_streams_observed(
     input: &CalibInput,
     robot: &RobotConfig,
     params: &CalibParams,
     meas: &MeasurementConfig,
-    on_step: &mut dyn FnMut(&calib::Estimate, Option<calib::CloudView<'_>>),
+    obs: &mut dyn RunObserver,
 ) -> Result<CalibrationRun, PipelineError> {
     let params = params_for_robot(params, robot);
-    let nominal = robot.diff_drive();
-    let gyro: &[GyroSample] = if meas.use_gyro { &input.gyro } else { &[] };
-    let steps = calib::steps(&input.observations, &input.wheels, gyro, meas.gyro_sigma);
-    if steps.is_empty() {
+    let mut collect = Collect::default();
+    let done = drive::calibrate_streams(
+        &input.wheels,
+        &input.observations,
+        &input.gyro,
+        robot,
+        &params,
+        meas,
+        &mut Observers(vec![&mut collect, obs]),
+    )?;
+    Ok(collect.calibration(done.summary, done.weight_resets))
+}
+
+/// Which calibrator `odocal calibrate` runs and how (each `None` keeps the
+/// configuration file's value).
+#[derive(Debug, Clone, Default)]
+pub struct CalibratorChoice {
+    /// The method.
+    pub method: Option<calib::Method>,
+    /// The resampling scheme.
+    pub resampler: Option<calib::Scheme>,
+    /// When to resample.
+    pub trigger: Option<calib::Trigger>,
+    /// The initial particle count.
+    pub particles: Option<usize>,
+    /// The seed of every random draw.
+    pub seed: Option<u64>,
+}
+
+impl CalibratorChoice {
+    /// `params` with the choices made here.
+    pub fn apply(&self, params: &mut CalibParams) {
+        if let Some(m) = self.method {
+            params.method = m;
+        }
+        if let Some(r) = self.resampler {
+            params.resampler = r;
+        }
+        if let Some(t) = self.trigger {
+            params.trigger = t;
+        }
+        if let Some(n) = self.particles {
+            params.particles = Some(n);
+        }
+        if let Some(s) = self.seed {
+            params.seed = s;
+        }
+    }
+}
+
+/// What `odocal calibrate` reads: a recording (ICP runs inside), or ICP
+/// motions and wheel angles or rates from CSV files.
+#[derive(Debug, Clone)]
+pub enum CalibSource {
+    /// A recording (any format [`crate::io::sniff`] knows).
+    Recording(PathBuf),
+    /// Motions CSV (as `odocal icp --motions` writes) and wheels CSV.
+    Csv {
+        /// The motions.
+        motions: PathBuf,
+        /// Wheel angles `t,left,right` or rates `t0,t1,omega_right,omega_left`.
+        wheels: PathBuf,
+    },
+}
+
+/// What `odocal calibrate` is asked to do.
+#[derive(Debug, Clone)]
+pub struct CalibrateJob {
+    /// The input.
+    pub input: CalibSource,
+    /// The output directory.
+    pub out: PathBuf,
+    /// Overrides of the configured calibrator.
+    pub choice: CalibratorChoice,
+    /// Where to show the run in the Rerun viewer, if anywhere.
+    pub viewer: Option<Viewer>,
+    /// Configuration and robot files.
+    pub common: Common,
+}
+
+/// What `odocal calibrate` gives: the summary, and notes on what the Rerun
+/// recording left out.
+#[derive(Debug, Clone)]
+pub struct CalibrateOutcome {
+    /// design.md's summary (also in `DIR/summary.json`).
+    pub summary: CalibSummary,
+    /// What the recording left out, for the user (empty when nothing).
+    pub notes: Vec<String>,
+}
+
+/// Runs `odocal calibrate`: ICP (for a recording) and the calibrator, the
+/// history, trajectory and summary written into the output directory
+/// atomically, the run recorded for Rerun when asked; `watch` sees the run.
+pub fn run(job: &CalibrateJob, watch: &mut dyn RunObserver) -> Result<CalibrateOutcome, PipelineError> {
+    let (mut cfg, robot) = job.common.load()?;
+    job.choice.apply(&mut cfg.calib);
+    let params = params_for_robot(&cfg.calib, &robot);
+    let mut logger = open_logger(job.viewer.as_ref())?;
+    let mut recorder = logger.as_deref_mut().map(|l| {
+        StreamRecorder::new(l, RecorderOptions::default(), robot.diff_drive(), robot.laser.pose())
+    });
+    let mut quiet = NoObserver;
+    let rec_obs: &mut dyn RunObserver = match recorder.as_mut() {
+        Some(r) => r,
+        None => &mut quiet,
+    };
+    let mut files = CalibFiles::create(&job.out)?;
+    let mut obs = Observers(vec![&mut files, rec_obs, watch]);
+    let summary = match &job.input {
+        CalibSource::Recording(path) => {
+            let read = super::read_options(&cfg, &robot);
+            let mut source = crate::io::source::open(path, &read)?;
+            drive::run_calibration(source.as_mut(), &robot, &cfg.icp, &params, &cfg.measurements, &mut obs)?
+        }
+        CalibSource::Csv { motions, wheels } => {
+            let input = read_csv_input(motions, wheels)?;
+            drive::calibrate_streams(&input.wheels, &input.observations, &input.gyro, &robot, &params, &cfg.measurements, &mut obs)?
+        }
+    }
+    .summary;
+    drop(obs);
+    files.commit(&summary)?;
+    let notes = match recorder {
+        Some(r) => r.finish().map_err(super::viewer::viz_error)?,
+        None => Vec::new(),
+    };
+    Ok(CalibrateOutcome { summary, notes })
+}
+
+/// The calibration input of the CSV files: wheel angles and the motions'
+/// velocity observations; at least two wheel samples.
+fn read_csv_input(motions: &Path, wheels: &Path) -> Result<CalibInput, PipelineError> {
+    let motions = crate::io::csv::read_motions(motions)?;
+    let input = CalibInput {
+        observations: motions.iter().filter_map(VelocityObs::from_motion).collect(),
+        wheels: crate::io::csv::read_wheels(wheels)?,
+        gyro: Vec::new(),
+    };
+    if input.wheels.len() < 2 {
         return Err(PipelineError::BadArgument(
-            "nothing to calibrate: no wheel data overlapping the velocity observations".into(),
+            "the input has no wheel encoder data (JointState) to calibrate".into(),
         ));
     }
-    let mut c =
-        calib::build(&params, nominal).map_err(|e| PipelineError::BadArgument(e.to_string()))?;
-    Ok(calib::run_observed(c.as_mut(), &steps, nominal, on_step))
-}
-
-/// Writes `DIR/calibration.csv`, `DIR/trajectory.tum` and `DIR/summary.json`.
-pub fn write(dir: &Path, run: &CalibrationRun) -> Result<(), PipelineError> {
-    let csv = dir.join("calibration.csv");
-    let rows = run.history.iter().map(|h| {
-        [
-            h.t,
-            h.r_right,
-            h.r_left,
-            h.wheel_base,
-            h.std_r_right,
-            h.std_r_left,
-            h.std_wheel_base,
-            h.particles as f64,
-            h.process_sigma,
-        ]
-    });
-    crate::io::csv::write_history(&csv, rows).map_err(|e| PipelineError::write(&csv, e))?;
-    let tum = dir.join("trajectory.tum");
-    crate::io::tum::write_tum_2d(&tum, &run.trajectory)
-        .map_err(|e| PipelineError::write(&tum, e))?;
-    let js = dir.join("summary.json");
-    let text = serde_json::to_string_pretty(&run.summary).expect("summary serialises");
-    crate::io::atomic::write_bytes_atomic(&js, text.as_bytes())
-        .map_err(|e| PipelineError::write(&js, e))?;
-    Ok(())
-}
-
-/// Streams the MCAP bag at `input` through ICP and the configured calibrator
-/// in flat memory, writing what [`write`] writes into `dir`; same numbers as
-/// [`run`] on the read recording (timings aside). `progress` gets the
-/// fraction of scans read.
-// Each argument is a separate stage input the callers hold apart.
-#[allow(clippy::too_many_arguments)]
-pub fn run_file(
-    input: &Path,
-    read: &crate::io::ReadOptions,
-    robot: &RobotConfig,
-    icp: &crate::icp::IcpParams,
-    params: &CalibParams,
-    meas: &MeasurementConfig,
-    dir: &Path,
-    progress: &mut dyn FnMut(f64),
-    observer: &mut dyn crate::io::stream_run::RunObserver,
-) -> Result<calib::CalibSummary, PipelineError> {
-    let gyro = crate::io::stream_run::GyroUse {
-        use_gyro: meas.use_gyro,
-        gyro_sigma: meas.gyro_sigma,
-    };
-    let params = params_for_robot(params, robot);
-    crate::io::stream_run::calibrate_file(
-        input, read, robot, icp, &params, gyro, dir, progress, observer,
-    )
-    .map_err(super::icp::stream_error)
+    Ok(input)
 }

@@ -3,8 +3,13 @@
 //! report, plots, trajectories and a Rerun recording.
 
 use super::calibrate::{self, CalibInput};
-use super::record::{anchor, in_world, particle_logger, record, RunRecord};
-use super::{icp, Config, PipelineError};
+use super::drive;
+use super::icp::IcpOutput;
+use super::observe::Observers;
+use super::outputs::{CalibFiles, Collect, IcpFiles};
+use super::recorder::{anchor, in_world, RecorderOptions, StreamRecorder};
+use super::viewer::{open_logger, Viewer};
+use super::{Common, Config, PipelineError};
 use crate::calib::{self, CalibrationRun, Method};
 use crate::eval::{self, Alignment, EvalOptions, Trajectory3, TrajectoryMetrics};
 use crate::geom::Pose2;
@@ -14,9 +19,12 @@ use crate::sim::Truth;
 use crate::traj::Trajectory;
 use crate::viz::plot::{self, LineChart, PathSeries, Series, TrajectoryPlot};
 use crate::viz::report::{num, Report};
-use crate::viz::{Logger, TrajectoryKind};
+use crate::error::InputError;
+use crate::io::RecordingSource;
+use crate::viz::{Logger, NullLogger, TrajectoryKind};
+use nalgebra::Point2;
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Methods the demo runs, the proposed one first.
 pub const DEMO_METHODS: [Method; 5] = [
@@ -120,9 +128,78 @@ fn viz_err(e: crate::viz::VizError) -> PipelineError {
     }
 }
 
-/// Runs the demo into `out` (created), logging to `logger`; `progress`
-/// receives the stage name and the fraction done.
+/// What `odocal demo` is asked to do.
+#[derive(Debug, Clone, Default)]
+pub struct DemoJob {
+    /// The output directory.
+    pub out: PathBuf,
+    /// Another recording instead of the bundled one.
+    pub input: Option<PathBuf>,
+    /// The simulator's truth file of the recording (with the bundled
+    /// recording, its own truth file by default).
+    pub truth: Option<PathBuf>,
+    /// A running or spawned Rerun viewer instead of `OUT/demo.rrd`.
+    pub viewer: Option<Viewer>,
+    /// Configuration and robot files.
+    pub common: Common,
+}
+
+/// The bundled recording `odocal demo` runs on by default.
+pub const DEMO_RECORDING: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scans/wheelchair-corridor.mcap"
+);
+/// Its truth file.
+pub const DEMO_TRUTH: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scans/wheelchair-corridor.truth.json"
+);
+
+/// Runs `odocal demo`: reads the recording (the bundled one by default) and
+/// its truth, runs everything into `job.out` and records it for Rerun
+/// (`OUT/demo.rrd` unless a viewer is named; nothing without the `rerun`
+/// feature). `progress` receives the stage name and the fraction done.
 pub fn run(
+    job: &DemoJob,
+    progress: &mut dyn FnMut(&str, f64),
+) -> Result<DemoSummary, PipelineError> {
+    let (cfg, robot) = job.common.load()?;
+    let (input, truth_path) = match &job.input {
+        Some(p) => (p.clone(), job.truth.clone()),
+        None => (
+            PathBuf::from(DEMO_RECORDING),
+            Some(job.truth.clone().unwrap_or_else(|| PathBuf::from(DEMO_TRUTH))),
+        ),
+    };
+    let truth = truth_path.as_deref().map(load_truth).transpose()?;
+    let rec = super::read_recording(&input, &cfg, &robot)?;
+    std::fs::create_dir_all(&job.out).map_err(|e| PipelineError::write(&job.out, e))?;
+    let viewer = job.viewer.clone().or_else(|| {
+        cfg!(feature = "rerun").then(|| Viewer::File(job.out.join("demo.rrd")))
+    });
+    let mut logger = open_logger(viewer.as_ref())?.unwrap_or_else(|| Box::new(NullLogger));
+    let name = input.display().to_string();
+    let demo = DemoInput {
+        recording: &rec,
+        name: &name,
+        truth: truth.as_ref(),
+        robot: &robot,
+        config: &cfg,
+    };
+    run_on(&demo, &job.out, logger.as_mut(), progress)
+}
+
+/// Reads a simulator truth file.
+pub fn load_truth(path: &Path) -> Result<Truth, PipelineError> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::new(&name, format!("cannot read: {e}")))?;
+    Ok(Truth::from_json(&text).map_err(|e| InputError::new(&name, e.to_string()))?)
+}
+
+/// Runs the demo on a recording in memory into `out` (created), logging to
+/// `logger`; `progress` receives the stage name and the fraction done.
+pub fn run_on(
     input: &DemoInput<'_>,
     out: &Path,
     logger: &mut dyn Logger,
@@ -130,64 +207,126 @@ pub fn run(
 ) -> Result<DemoSummary, PipelineError> {
     let start = std::time::Instant::now();
     let rec = input.recording;
-    let robot = input.robot;
-    let cfg = input.config;
     std::fs::create_dir_all(out).map_err(|e| PipelineError::write(out, e))?;
     let t_start = rec.time_span().map(|s| s.0).unwrap_or(0.0);
-
-    progress("icp", 0.0);
-    let icp_out = icp::run(rec, robot, &cfg.icp)?;
-    icp::write(
-        &icp_out,
-        &out.join("icp.tum"),
-        Some(&out.join("motions.csv")),
-    )?;
-
+    if let Some(t) = input.truth {
+        log_walls(&t.walls, logger)?;
+    }
+    let (icp_out, runs) = calibrate_all(input, out, logger, progress)?;
+    progress("report", 1.0);
     let reference2 =
         (rec.reference.len() >= 2).then(|| eval::trajectory_from_stamped(&rec.reference).0);
     let reference3 = reference2.as_ref().map(Trajectory3::from_2d);
-    let raw = wheel_odometry(&robot.diff_drive(), &rec.wheels, Pose2::identity());
-    crate::io::tum::write_tum_2d(&out.join("raw_odometry.tum"), &raw)
-        .map_err(|e| PipelineError::write(&out.join("raw_odometry.tum"), e))?;
+    let raw = wheel_odometry(&input.robot.diff_drive(), &rec.wheels, Pose2::identity());
+    let raw_path = out.join("raw_odometry.tum");
+    crate::io::tum::write_tum_2d(&raw_path, &raw).map_err(|e| PipelineError::write(&raw_path, e))?;
+    let mut summary = DemoSummary {
+        input: input.name.to_string(),
+        scans: rec.scans.len(),
+        duration_s: rec.time_span().map(|(a, b)| b - a).unwrap_or(0.0),
+        icp: icp_out.stats.clone(),
+        icp_eval: origin_eval(&icp_out.trajectory, reference3.as_ref()),
+        raw_odometry_eval: origin_eval(&raw, reference3.as_ref()),
+        methods: method_results(input, &runs, reference3.as_ref(), t_start),
+        wall_s: 0.0,
+    };
+    plots(input, &icp_out.trajectory, &raw, &runs, reference2.as_ref(), t_start, out)?;
+    summary.wall_s = start.elapsed().as_secs_f64();
+    report(input, &summary, out)?;
+    let js = out.join("summary.json");
+    let text = serde_json::to_string_pretty(&summary).expect("summary serialises");
+    crate::io::atomic::write_bytes_atomic(&js, text.as_bytes())
+        .map_err(|e| PipelineError::write(&js, e))?;
+    Ok(summary)
+}
 
+/// The simulated world's walls `[x0, y0, x1, y1]` (m) as the map entity.
+fn log_walls(walls: &[[f64; 4]], logger: &mut dyn Logger) -> Result<(), PipelineError> {
+    let segs: Vec<[Point2<f64>; 2]> = walls
+        .iter()
+        .map(|w| [Point2::new(w[0], w[1]), Point2::new(w[2], w[3])])
+        .collect();
+    logger.map(&segs).map_err(viz_err)
+}
+
+/// ICP and the proposed filter in one pass through the driver, recorded for
+/// the viewer (scans, ICP, particle clouds, trajectories), then every other
+/// calibrator on the same observations; each method's files in `OUT/METHOD/`,
+/// ICP's in `OUT/icp.tum` and `OUT/motions.csv`.
+fn calibrate_all(
+    input: &DemoInput<'_>,
+    out: &Path,
+    logger: &mut dyn Logger,
+    progress: &mut dyn FnMut(&str, f64),
+) -> Result<(IcpOutput, Vec<(Method, CalibrationRun)>), PipelineError> {
+    let (rec, robot, cfg) = (input.recording, input.robot, input.config);
+    progress("icp", 0.0);
+    let params_for = |m: Method| {
+        let mut p = cfg.calib.clone();
+        p.method = m;
+        calibrate::params_for_robot(&p, robot)
+    };
+    let mut recorder = StreamRecorder::new(
+        logger,
+        RecorderOptions::default(),
+        robot.diff_drive(),
+        robot.laser.pose(),
+    );
+    let mut collect = Collect::default();
+    let mut icp_files = IcpFiles::create(&out.join("icp.tum"), Some(&out.join("motions.csv")))?;
+    let first = DEMO_METHODS[0];
+    let mut files = CalibFiles::create(&out.join(first.as_str()))?;
+    let done = drive::run_calibration(
+        &mut RecordingSource::new(rec),
+        robot,
+        &cfg.icp,
+        &params_for(first),
+        &cfg.measurements,
+        &mut Observers(vec![&mut collect, &mut recorder, &mut icp_files, &mut files]),
+    )?;
+    icp_files.commit()?;
+    files.commit(&done.summary)?;
+    recorder.finish().map_err(viz_err)?;
+    let icp_out = collect.icp(done.icp.stats);
+    let mut runs = vec![(first, collect.calibration(done.summary, done.weight_resets))];
     let cal_input = CalibInput {
         observations: icp_out.observations(),
         wheels: rec.wheels.clone(),
         gyro: rec.gyro.clone(),
     };
-    let mut runs: Vec<(Method, CalibrationRun)> = Vec::new();
-    let scan_stamps: Vec<f64> = rec.scans.iter().map(|s| s.stamp).collect();
-    let mut log_error = None;
-    for (i, m) in DEMO_METHODS.iter().enumerate() {
+    for (i, m) in DEMO_METHODS.iter().enumerate().skip(1) {
         progress(m.as_str(), i as f64 / DEMO_METHODS.len() as f64);
-        let mut params = cfg.calib.clone();
-        params.method = *m;
-        let run = if *m == Method::AdaptivePf {
-            // The proposed filter's particle cloud goes to the viewer at every step.
-            let mut on_step = particle_logger(logger, &scan_stamps, t_start, &mut log_error);
-            calibrate::run_observed(&cal_input, robot, &params, &cfg.measurements, &mut on_step)?
-        } else {
-            calibrate::run(&cal_input, robot, &params, &cfg.measurements)?
-        };
-        calibrate::write(&out.join(m.as_str()), &run)?;
+        let mut files = CalibFiles::create(&out.join(m.as_str()))?;
+        let run = calibrate::from_streams_observed(
+            &cal_input,
+            robot,
+            &params_for(*m),
+            &cfg.measurements,
+            &mut files,
+        )?;
+        files.commit(&run.summary)?;
         runs.push((*m, run));
     }
-    if let Some(e) = log_error {
-        return Err(viz_err(e));
-    }
-    progress("report", 1.0);
+    Ok((icp_out, runs))
+}
 
-    // Figures per method.
-    let methods: Vec<MethodResult> = runs
-        .iter()
+/// Each calibrator's figures: final parameters, errors and convergence
+/// against the truth, and its trajectory against the reference.
+fn method_results(
+    input: &DemoInput<'_>,
+    runs: &[(Method, CalibrationRun)],
+    reference: Option<&Trajectory3>,
+    t_start: f64,
+) -> Vec<MethodResult> {
+    let truth_end = input.truth.and_then(|t| {
+        t.parameters
+            .last()
+            .map(|p| [p.r_right, p.r_left, p.wheel_base])
+    });
+    runs.iter()
         .map(|(m, run)| {
             let f = &run.summary.final_params;
             let final_params = [f.r_right, f.r_left, f.wheel_base];
-            let truth_end = input.truth.and_then(|t| {
-                t.parameters
-                    .last()
-                    .map(|p| [p.r_right, p.r_left, p.wheel_base])
-            });
             MethodResult {
                 method: m.as_str().into(),
                 final_params,
@@ -200,60 +339,17 @@ pub fn run(
                 }),
                 convergence_s: input.truth.and_then(|t| convergence(run, t, t_start)),
                 mean_iteration_ms: run.summary.mean_iteration_ms,
-                eval: origin_eval(&run.trajectory, reference3.as_ref()),
+                eval: origin_eval(&run.trajectory, reference),
             }
         })
-        .collect();
-
-    let summary = DemoSummary {
-        input: input.name.to_string(),
-        scans: rec.scans.len(),
-        duration_s: rec.time_span().map(|(a, b)| b - a).unwrap_or(0.0),
-        icp: icp_out.stats.clone(),
-        icp_eval: origin_eval(&icp_out.trajectory, reference3.as_ref()),
-        raw_odometry_eval: origin_eval(&raw, reference3.as_ref()),
-        methods,
-        wall_s: 0.0,
-    };
-
-    record(
-        &RunRecord {
-            recording: Some(rec),
-            robot,
-            walls: input.truth.map(|t| t.walls.as_slice()),
-            icp: Some(&icp_out),
-            raw: Some(&raw),
-            calibrated: &runs[0].1,
-            reference: reference2.as_ref(),
-            t_start,
-            scan_stamps: &scan_stamps,
-        },
-        logger,
-    )?;
-    plots(
-        input,
-        &icp_out.trajectory,
-        &raw,
-        &runs,
-        reference2.as_ref(),
-        t_start,
-        out,
-    )?;
-    let mut summary = summary;
-    summary.wall_s = start.elapsed().as_secs_f64();
-    report(input, &summary, out)?;
-    let js = out.join("summary.json");
-    let text = serde_json::to_string_pretty(&summary).expect("summary serialises");
-    crate::io::atomic::write_bytes_atomic(&js, text.as_bytes())
-        .map_err(|e| PipelineError::write(&js, e))?;
-    Ok(summary)
+        .collect()
 }
 
 fn series_over_time(
     name: &str,
     run: &CalibrationRun,
     t_start: f64,
-    f: impl Fn(&calib::HistoryRow) -> f64,
+    f: impl Fn(&calib::Estimate) -> f64,
 ) -> Series {
     let pts = run.history.iter().map(|h| [h.t - t_start, f(h)]).collect();
     Series::new(name, pts)

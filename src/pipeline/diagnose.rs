@@ -45,7 +45,7 @@ pub fn run(
         )
         .into());
     };
-    let icp_out = icp::run(rec, robot, &icp_for_diagnosis(icp_params))?;
+    let icp_out = icp::match_recording(rec, robot, &icp_for_diagnosis(icp_params))?;
     let mut measured = Measured::new(rec, &icp_out.motions);
     measured.wheels = wheels;
     // The nominal mount is the one ICP used (the recording's /tf_static

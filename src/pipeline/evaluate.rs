@@ -1,11 +1,11 @@
 //! `odocal eval`: load an estimate and a reference (TUM, KITTI, or a bag's
 //! reference topic) and/or relations, and evaluate.
 
-use super::PipelineError;
+use super::{Common, PipelineError};
 use crate::error::InputError;
 use crate::eval::{self, EvalOptions, EvalReport, Trajectory3};
 use crate::io::{self, ReadOptions};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Loads a trajectory: an MCAP's reference stream (or, without one, its
 /// odometry), a KITTI pose file when `times` is given, else a TUM file.
@@ -19,12 +19,7 @@ pub fn load_trajectory(
         return Ok((io::kitti::read_kitti(path, t)?, false));
     }
     let file = path.display().to_string();
-    let mut head = [0u8; 8];
-    let is_mcap = std::fs::File::open(path)
-        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
-        .map(|_| head.starts_with(mcap::MAGIC))
-        .unwrap_or(false);
-    if !is_mcap {
+    if io::sniff(path)? != io::Format::Mcap {
         return Ok((io::tum::read_tum(path)?, false));
     }
     let rec = io::read_recording(path, read)?;
@@ -48,8 +43,95 @@ pub fn load_trajectory(
     Ok((Trajectory3::from_2d(&traj), position_only))
 }
 
+/// What `odocal eval` is asked to do; every `None` keeps the configured
+/// evaluation setting.
+#[derive(Debug, Clone, Default)]
+pub struct EvalJob {
+    /// The trajectory under test.
+    pub estimate: PathBuf,
+    /// The reference trajectory.
+    pub reference: Option<PathBuf>,
+    /// Kümmerle et al. relations.
+    pub relations: Option<PathBuf>,
+    /// Timestamps of a KITTI estimate.
+    pub estimate_times: Option<PathBuf>,
+    /// Timestamps of a KITTI reference.
+    pub reference_times: Option<PathBuf>,
+    /// Alignment.
+    pub align: Option<eval::Alignment>,
+    /// Largest time difference for association (s).
+    pub t_max_diff: Option<f64>,
+    /// Offset added to the estimate's stamps (s).
+    pub t_offset: Option<f64>,
+    /// Interpolate the reference at the estimate's stamps.
+    pub interpolate: bool,
+    /// The RPE step.
+    pub rpe_delta: Option<f64>,
+    /// The RPE step's unit.
+    pub rpe_unit: Option<eval::DeltaUnit>,
+    /// The PNG to draw (needs a reference).
+    pub plot: Option<PathBuf>,
+    /// Configuration and robot files.
+    pub common: Common,
+}
+
+impl EvalJob {
+    /// The configured options with the job's choices.
+    fn options(&self, mut opts: EvalOptions) -> EvalOptions {
+        if let Some(al) = self.align {
+            opts.align = al;
+        }
+        if let Some(t) = self.t_max_diff {
+            opts.sync.max_diff = t;
+        }
+        if let Some(t) = self.t_offset {
+            opts.sync.offset = t;
+        }
+        opts.sync.interpolate |= self.interpolate;
+        if let Some(d) = self.rpe_delta {
+            opts.rpe_delta = eval::RpeDelta {
+                value: d,
+                unit: self.rpe_unit.unwrap_or(opts.rpe_delta.unit),
+            };
+        } else if let Some(u) = self.rpe_unit {
+            opts.rpe_delta.unit = u;
+        }
+        opts
+    }
+}
+
+/// Runs `odocal eval`: loads the estimate and the reference, evaluates, and
+/// draws the plot when asked.
+pub fn run(job: &EvalJob) -> Result<EvalReport, PipelineError> {
+    if job.reference.is_none() && job.relations.is_none() {
+        return Err(PipelineError::BadArgument(
+            "eval needs --reference, --relations, or both".into(),
+        ));
+    }
+    let (cfg, robot) = job.common.load()?;
+    let mut opts = job.options(cfg.eval.clone());
+    let read = super::read_options(&cfg, &robot);
+    let (est, _) = load_trajectory(&job.estimate, job.estimate_times.as_deref(), &read)?;
+    let reference = match &job.reference {
+        Some(r) => {
+            let (t, position_only) = load_trajectory(r, job.reference_times.as_deref(), &read)?;
+            opts.position_only |= position_only;
+            Some(t)
+        }
+        None => None,
+    };
+    if job.plot.is_some() && reference.is_none() {
+        return Err(PipelineError::BadArgument("--plot needs --reference".into()));
+    }
+    let report = evaluate(&est, reference.as_ref(), job.relations.as_deref(), &opts)?;
+    if let Some(png) = &job.plot {
+        write_plot(png, &report, opts.position_only)?;
+    }
+    Ok(report)
+}
+
 /// Evaluates `estimate` against `reference` and/or `relations`.
-pub fn run(
+pub fn evaluate(
     estimate: &Trajectory3,
     reference: Option<&Trajectory3>,
     relations: Option<&Path>,

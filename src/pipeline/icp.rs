@@ -1,15 +1,19 @@
 //! `odocal icp`: scan matching over a whole recording, with the wheel (or the
-//! recording's own) odometry as the initial guess of every pair.
+//! recording's own) odometry as the initial guess of every pair. Files and
+//! recordings in memory go through the same driver ([`super::drive`]).
 
-use super::PipelineError;
-use crate::eval::trajectory_from_stamped;
+use super::drive::{self, IcpRunSummary};
+use super::observe::{Observers, RunObserver};
+use super::outputs::{Collect, IcpFiles};
+use super::{Common, PipelineError};
 use crate::geom::Pose2;
-use crate::icp::{self, IcpParams, IcpStats};
+use crate::icp::{IcpParams, IcpStats};
+use crate::io::{RecordingSource, SampleSource};
 use crate::motion::{Motion, VelocityObs};
 use crate::recording::Recording;
-use crate::robot::{wheel_odometry, RobotConfig};
+use crate::robot::RobotConfig;
 use crate::traj::Trajectory;
-use std::path::Path;
+use std::path::PathBuf;
 
 /// Motions, their summary and the chained trajectory of one ICP run.
 #[derive(Debug, Clone)]
@@ -37,83 +41,54 @@ pub fn base_from_laser(rec: &Recording, robot: &RobotConfig) -> Pose2 {
     rec.base_from_laser.unwrap_or_else(|| robot.laser.pose())
 }
 
-/// The odometry used as ICP prior: wheel odometry with the nominal model when
-/// the recording has encoders, else the recording's own odometry, else none.
-pub fn odometry_prior(rec: &Recording, robot: &RobotConfig) -> Option<Trajectory> {
-    if rec.wheels.len() >= 2 {
-        return Some(wheel_odometry(
-            &robot.diff_drive(),
-            &rec.wheels,
-            Pose2::identity(),
-        ));
-    }
-    (rec.odom.len() >= 2).then(|| trajectory_from_stamped(&rec.odom).0)
-}
-
-/// Matches every consecutive scan pair of the recording.
-pub fn run(
+/// Matches every consecutive scan pair of a recording in memory.
+pub fn match_recording(
     rec: &Recording,
     robot: &RobotConfig,
     params: &IcpParams,
 ) -> Result<IcpOutput, PipelineError> {
-    if rec.scans.len() < 2 {
-        return Err(crate::error::InputError::new(
-            &rec.source,
-            format!(
-                "{} laser scans: scan matching needs at least 2",
-                rec.scans.len()
-            ),
-        )
-        .into());
-    }
-    let prior = odometry_prior(rec, robot);
-    let (motions, stats) = icp::match_recording(
-        &rec.scans,
-        base_from_laser(rec, robot),
-        prior.as_ref(),
-        params,
-    )
-    .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
-    let trajectory = icp::integrate(&motions);
-    Ok(IcpOutput {
-        motions,
-        stats,
-        trajectory,
-    })
+    let mut collect = Collect::default();
+    let summary = drive::run_icp(&mut RecordingSource::new(rec), robot, params, &mut collect)?;
+    Ok(collect.icp(summary.stats))
 }
 
-/// Writes the trajectory (TUM) and, if asked, the motions CSV, atomically.
-pub fn write(out: &IcpOutput, tum: &Path, motions_csv: Option<&Path>) -> Result<(), PipelineError> {
-    crate::io::tum::write_tum_2d(tum, &out.trajectory).map_err(|e| PipelineError::write(tum, e))?;
-    if let Some(p) = motions_csv {
-        crate::io::csv::write_motions(p, &out.motions).map_err(|e| PipelineError::write(p, e))?;
-    }
-    Ok(())
+/// What `odocal icp` is asked to do.
+#[derive(Debug, Clone, Default)]
+pub struct IcpJob {
+    /// The recording (any format [`crate::io::sniff`] knows).
+    pub input: PathBuf,
+    /// The trajectory output (TUM).
+    pub out: PathBuf,
+    /// The per-pair motions output (CSV), if asked for.
+    pub motions: Option<PathBuf>,
+    /// Configuration and robot files.
+    pub common: Common,
 }
 
-/// Streams the MCAP bag at `input` through ICP in flat memory and writes the
-/// trajectory (TUM) and, if asked, the motions CSV as [`write`] does; same
-/// numbers as [`run`] on the read recording. `progress` gets the fraction
-/// of scans read.
-pub fn run_file(
-    input: &Path,
-    read: &crate::io::ReadOptions,
+/// Runs `odocal icp`: streams the recording through ICP and writes the
+/// trajectory and motions atomically. `watch` sees the run (e.g. progress).
+/// The summary's timing is the matching loop's.
+pub fn run(job: &IcpJob, watch: &mut dyn RunObserver) -> Result<IcpRunSummary, PipelineError> {
+    let (cfg, robot) = job.common.load()?;
+    let read = super::read_options(&cfg, &robot);
+    let mut source = crate::io::source::open(&job.input, &read)?;
+    run_source(source.as_mut(), &robot, &cfg.icp, job, watch)
+}
+
+fn run_source(
+    source: &mut dyn SampleSource,
     robot: &RobotConfig,
     params: &IcpParams,
-    tum: &Path,
-    motions_csv: Option<&Path>,
-    progress: &mut dyn FnMut(f64),
-) -> Result<crate::io::stream_run::IcpRunSummary, PipelineError> {
-    crate::io::stream_run::icp_file(input, read, robot, params, tum, motions_csv, progress)
-        .map_err(stream_error)
-}
-
-/// The pipeline error for a streamed run's failure.
-pub(crate) fn stream_error(e: crate::io::stream_run::StreamError) -> PipelineError {
-    use crate::io::stream_run::StreamError;
-    match e {
-        StreamError::Input(e) => PipelineError::Input(e),
-        StreamError::BadArgument(m) => PipelineError::BadArgument(m),
-        StreamError::Write { path, source } => PipelineError::write(&path, source),
-    }
+    job: &IcpJob,
+    watch: &mut dyn RunObserver,
+) -> Result<IcpRunSummary, PipelineError> {
+    let mut files = IcpFiles::create(&job.out, job.motions.as_deref())?;
+    let summary = drive::run_icp(
+        source,
+        robot,
+        params,
+        &mut Observers(vec![&mut files, watch]),
+    )?;
+    files.commit()?;
+    Ok(summary)
 }

@@ -1,19 +1,66 @@
-//! Wires the stages for the command line: load inputs, run the math modules,
-//! write outputs atomically, and return summaries the binary prints.
+//! Wires the stages for the command line: load inputs, run the math modules
+//! through the one driver ([`drive`]), write outputs atomically, and return
+//! summaries the binary prints. Each command is `pipeline::<command>::run`.
 
 pub mod calibrate;
 pub mod changing_figure;
 mod config;
 pub mod demo;
 pub mod diagnose;
+pub mod drive;
 mod error;
 pub mod evaluate;
 pub mod experiment;
 pub mod icp;
-pub mod record;
-pub mod record_stream;
+pub mod observe;
+pub mod outputs;
+pub mod recorder;
 pub mod scan_montecarlo;
 pub mod simulate;
+pub mod viewer;
 
 pub use config::{load_robot, Config};
 pub use error::PipelineError;
+pub use observe::{NoObserver, Observers, Progress, RunObserver};
+pub use viewer::Viewer;
+
+use crate::io::ReadOptions;
+use crate::recording::Recording;
+use crate::robot::RobotConfig;
+use std::path::{Path, PathBuf};
+
+/// The files every command may be given: stage settings and the nominal robot.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Common {
+    /// Stage settings (TOML); `None`: the defaults.
+    pub config: Option<PathBuf>,
+    /// The nominal robot (TOML); `None`: the wheelchair.
+    pub robot: Option<PathBuf>,
+}
+
+impl Common {
+    /// Loads the configuration and the robot.
+    pub fn load(&self) -> Result<(Config, RobotConfig), PipelineError> {
+        Ok((
+            Config::load(self.config.as_deref())?,
+            load_robot(self.robot.as_deref())?,
+        ))
+    }
+}
+
+/// How recordings are read with these settings: the configured topics and
+/// the robot's wheel joint names.
+pub fn read_options(cfg: &Config, robot: &RobotConfig) -> ReadOptions {
+    let mut read = ReadOptions::for_robot(robot);
+    read.topics = cfg.topics.clone();
+    read
+}
+
+/// Reads a whole recording with these settings.
+pub fn read_recording(
+    path: &Path,
+    cfg: &Config,
+    robot: &RobotConfig,
+) -> Result<Recording, PipelineError> {
+    Ok(crate::io::read_recording(path, &read_options(cfg, robot))?)
+}

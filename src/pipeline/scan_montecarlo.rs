@@ -141,7 +141,7 @@ fn prepare_run(
     let (rec, truth) = sim::simulate(&cfg, &truth_robot, &[], &mut |_| {})
         .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
     // ICP's prior is the wheel odometry of the nominal chair, as on a real one.
-    let out = super::icp::run(&rec, nominal, icp)?;
+    let out = super::icp::match_recording(&rec, nominal, icp)?;
     let steps = calib::steps(
         &out.observations(),
         &rec.wheels,

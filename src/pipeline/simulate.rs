@@ -1,14 +1,15 @@
 //! `odocal simulate`: run the simulator and write the ROS 2 bag (and the truth
 //! JSON, kept apart so tools reading the bag never see the effects).
 
-use super::PipelineError;
+use super::{Common, PipelineError};
 use crate::effects::Effect;
+use crate::error::InputError;
 use crate::io::{self, ScanFeed, TopicConfig, WriteOptions};
 use crate::robot::RobotConfig;
 use crate::scan::LaserScan;
 use crate::sim::{self, LaserSim, SimConfig, Truth};
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// What `odocal simulate --json` prints.
 #[derive(Debug, Clone, Serialize)]
@@ -37,10 +38,74 @@ pub struct SimulateSummary {
     pub effects: Vec<String>,
 }
 
+/// What `odocal simulate` is asked to do.
+#[derive(Debug, Clone, Default)]
+pub struct SimulateJob {
+    /// A built-in scenario's name, or a JSON scenario file.
+    pub scenario: Option<String>,
+    /// The seed of every random process (else the configuration's).
+    pub seed: Option<u64>,
+    /// The length of the run (s) (else the configuration's).
+    pub duration_s: Option<f64>,
+    /// Effect SPECs, `NAME` or `NAME:key=value,...`.
+    pub effects: Vec<String>,
+    /// The bag to write.
+    pub out: PathBuf,
+    /// The truth file to write, if any.
+    pub truth: Option<PathBuf>,
+    /// Configuration and robot files.
+    pub common: Common,
+}
+
+/// Runs `odocal simulate`: the configuration with the job's scenario, seed,
+/// duration and effects, into the bag and truth file.
+pub fn run(job: &SimulateJob, progress: &mut dyn FnMut(f64)) -> Result<SimulateSummary, PipelineError> {
+    let (mut cfg, robot) = job.common.load()?;
+    if let Some(s) = &job.scenario {
+        set_scenario(&mut cfg.sim, s)?;
+    }
+    if let Some(seed) = job.seed {
+        cfg.sim.seed = seed;
+    }
+    if let Some(d) = job.duration_s {
+        cfg.sim.duration_s = d;
+    }
+    let effects = job
+        .effects
+        .iter()
+        .map(|s| Effect::parse(s).map_err(|e| PipelineError::BadArgument(e.to_string())))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (summary, _) = simulate(
+        &cfg.sim,
+        &cfg.topics,
+        &robot,
+        &effects,
+        &job.out,
+        job.truth.as_deref(),
+        progress,
+    )?;
+    Ok(summary)
+}
+
+/// A built-in scenario by name, or a JSON scenario file (a path ending in
+/// `.json` or naming a file).
+fn set_scenario(sim: &mut SimConfig, s: &str) -> Result<(), PipelineError> {
+    let p = Path::new(s);
+    if s.ends_with(".json") || p.is_file() {
+        let text = std::fs::read_to_string(p)
+            .map_err(|e| InputError::new(s, format!("cannot read: {e}")))?;
+        let spec = sim::ScenarioSpec::from_json(&text).map_err(|e| InputError::new(s, e.to_string()))?;
+        sim.scenario.custom = Some(spec);
+    } else {
+        sim.scenario.name = s.to_string();
+    }
+    Ok(())
+}
+
 /// Simulates and writes `out` (MCAP) and optionally `truth_path` (JSON), both
 /// atomically. The scans are cast block by block while the bag is written,
 /// so memory does not grow with the number of scans.
-pub fn run(
+pub fn simulate(
     cfg: &SimConfig,
     topics: &TopicConfig,
     robot: &RobotConfig,

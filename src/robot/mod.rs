@@ -7,4 +7,4 @@ mod odometry;
 
 pub use config::{LaserMount, RobotConfig, RobotConfigError};
 pub use kinematics::DiffDrive;
-pub use odometry::{wheel_odometry, wheel_rates, WheelRate};
+pub use odometry::{wheel_odometry, wheel_rates, WheelIntegrator, WheelRate};

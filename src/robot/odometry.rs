@@ -41,24 +41,55 @@ pub fn wheel_rates(wheels: &[WheelSample]) -> Vec<WheelRate> {
     out
 }
 
+/// Dead reckoning fed one wheel sample at a time: the pose after each sample
+/// whose stamp advances (exact arcs at constant rates between samples).
+#[derive(Debug, Clone)]
+pub struct WheelIntegrator {
+    drive: DiffDrive,
+    pose: Pose2,
+    prev: Option<WheelSample>,
+}
+
+impl WheelIntegrator {
+    /// Starts at `start` with the kinematics `drive`.
+    pub fn new(drive: DiffDrive, start: Pose2) -> Self {
+        Self {
+            drive,
+            pose: start,
+            prev: None,
+        }
+    }
+
+    /// The pose at `s.stamp` (s) after `s`; `None` when its stamp does not
+    /// advance (its motion is then carried by the next sample that does).
+    pub fn push(&mut self, s: &WheelSample) -> Option<(f64, Pose2)> {
+        match self.prev {
+            None => {
+                self.prev = Some(*s);
+                Some((s.stamp, self.pose))
+            }
+            Some(prev) if s.stamp > prev.stamp => {
+                self.pose *= self
+                    .drive
+                    .increment(s.right - prev.right, s.left - prev.left);
+                self.prev = Some(*s);
+                Some((s.stamp, self.pose))
+            }
+            Some(_) => None,
+        }
+    }
+}
+
 /// Integrates wheel angles with the given kinematics into a trajectory starting
 /// at `start` at the first sample's stamp. Samples with non-increasing stamps
 /// are skipped (their motion is carried by the next valid sample).
 pub fn wheel_odometry(k: &DiffDrive, wheels: &[WheelSample], start: Pose2) -> Trajectory {
     let mut traj = Trajectory::with_capacity(wheels.len());
-    let Some(first) = wheels.first() else {
-        return traj;
-    };
-    let mut pose = start;
-    let mut prev = *first;
-    traj.push(first.stamp, pose);
-    for s in &wheels[1..] {
-        if !(s.stamp > prev.stamp) {
-            continue;
+    let mut integrator = WheelIntegrator::new(*k, start);
+    for s in wheels {
+        if let Some((t, p)) = integrator.push(s) {
+            traj.push(t, p);
         }
-        pose *= k.increment(s.right - prev.right, s.left - prev.left);
-        traj.push(s.stamp, pose);
-        prev = *s;
     }
     traj
 }

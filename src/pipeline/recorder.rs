@@ -1,7 +1,8 @@
-//! A streamed calibration into a [`Logger`] as it runs, in memory that does
-//! not grow with the bag: the same entities as [`super::record::record`]
-//! (scans at their ICP pose, ICP quality, estimates, particle clouds, the
-//! four trajectories), with two concessions to long runs, both reported by
+//! A run into a [`Logger`] (design.md's Rerun entities) as it goes, in memory
+//! that does not grow with the recording: scans at their ICP pose, ICP
+//! quality, estimates, particle clouds, the four trajectories (reference, raw
+//! odometry, calibrated, ICP), each put on the reference at its start. It is
+//! an observer of the one driver, with two concessions to long runs, both reported by
 //! [`StreamRecorder::notes`]: trajectories are drawn through at most
 //! [`RecorderOptions::max_polyline`] poses each, and when a run has more
 //! filter steps than [`RecorderOptions::max_clouds`], the particle cloud is
@@ -9,11 +10,10 @@
 
 use std::collections::VecDeque;
 
-use super::record::in_world;
+use super::observe::RunObserver;
 use crate::calib::{CloudView, Estimate};
 use crate::geom::Pose2;
-use crate::io::stream::{Item, StreamInfo};
-use crate::io::stream_run::RunObserver;
+use crate::io::{Item, StreamInfo};
 use crate::motion::Motion;
 use crate::recording::WheelSample;
 use crate::robot::DiffDrive;
@@ -21,6 +21,23 @@ use crate::scan::LaserScan;
 use crate::traj::Trajectory;
 use crate::viz::{CalibEstimate, Logger, Stamp, TrajectoryKind, VizError};
 use nalgebra::Point2;
+
+/// `world_from_estimate` that puts the estimate's first pose on the reference.
+pub fn anchor(est: &Trajectory, reference: Option<&Trajectory>) -> Pose2 {
+    match (est.stamps.first(), est.poses.first(), reference) {
+        (Some(&t0), Some(p0), Some(r)) => r
+            .pose_at(t0)
+            .or_else(|| r.poses.first().copied())
+            .map(|w| w * p0.inverse())
+            .unwrap_or_else(Pose2::identity),
+        _ => Pose2::identity(),
+    }
+}
+
+/// The estimate's poses placed in the world by `world_from_est`.
+pub fn in_world(est: &Trajectory, world_from_est: &Pose2) -> Vec<Pose2> {
+    est.poses.iter().map(|p| world_from_est * p).collect()
+}
 
 /// Limits that keep a long run's recording bounded.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -236,7 +253,7 @@ impl<'a> StreamRecorder<'a> {
         let mut est = Trajectory::default();
         est.push(t0, *p0);
         let reference = (r.len() >= 2).then_some(r);
-        Some(super::record::anchor(&est, reference))
+        Some(anchor(&est, reference))
     }
 
     /// Logs the scans waiting for a pose up to `t` (s), at the ICP pose

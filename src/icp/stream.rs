@@ -1,18 +1,20 @@
 //! Scan matching fed sample by sample: the odometry prior is integrated as
-//! wheel samples arrive, a scan waits until the prior covers its stamp, and
-//! motions leave one by one. Numbers are those of `pipeline::icp::run` on the
-//! whole recording (same operations in the same order).
+//! wheel (or odometry) samples arrive, a scan waits until the prior covers
+//! its stamp, and motions leave one by one. [`super::match_recording`] is this
+//! matcher fed a whole recording, so a bag streamed from disk and the same
+//! data in memory give the same motions.
 
 // `!(x > y)` is deliberate: it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::VecDeque;
 
+use super::matcher::ScanMatcher;
+use super::params::{IcpParams, IcpParamsError};
 use crate::geom::{self, Pose2};
-use crate::icp::{IcpParams, IcpParamsError, IcpStats, ScanMatcher};
 use crate::motion::Motion;
 use crate::recording::{StampedPose, WheelSample};
-use crate::robot::DiffDrive;
+use crate::robot::{DiffDrive, WheelIntegrator};
 use crate::scan::LaserScan;
 use crate::traj::Trajectory;
 
@@ -60,45 +62,8 @@ impl PoseWindow {
     }
 }
 
-/// Wheel odometry integrated sample by sample, as `robot::wheel_odometry` does.
-#[derive(Debug)]
-pub struct WheelIntegrator {
-    drive: DiffDrive,
-    pose: Pose2,
-    prev: Option<WheelSample>,
-}
-
-impl WheelIntegrator {
-    /// Starts at the identity with the given kinematics.
-    pub fn new(drive: DiffDrive) -> Self {
-        Self {
-            drive,
-            pose: Pose2::identity(),
-            prev: None,
-        }
-    }
-
-    /// The pose after `s`, or `None` when its stamp does not advance.
-    pub fn push(&mut self, s: &WheelSample) -> Option<(f64, Pose2)> {
-        match self.prev {
-            None => {
-                self.prev = Some(*s);
-                Some((s.stamp, self.pose))
-            }
-            Some(prev) if s.stamp > prev.stamp => {
-                self.pose *= self
-                    .drive
-                    .increment(s.right - prev.right, s.left - prev.left);
-                self.prev = Some(*s);
-                Some((s.stamp, self.pose))
-            }
-            Some(_) => None,
-        }
-    }
-}
-
-/// Where the ICP prior comes from (chosen from the stream counts, as
-/// `pipeline::icp::odometry_prior` chooses from the recording).
+/// Where the ICP prior comes from: wheel odometry when the recording has
+/// encoders, else the recording's own odometry, else none.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PriorKind {
     /// Wheel odometry with the nominal model.
@@ -109,87 +74,23 @@ pub enum PriorKind {
     None,
 }
 
-/// Counts, iterations and the chained trajectory, kept as motions arrive.
-#[derive(Debug, Default)]
-pub struct IcpTally {
-    pairs: usize,
-    failed: usize,
-    iters: u64,
-    ran: u64,
-    failures: BTreeMap<String, usize>,
-    pose: Pose2,
-    last_t: Option<f64>,
-    path_length: f64,
-    last_xy: Option<nalgebra::Vector2<f64>>,
-}
-
-impl IcpTally {
-    /// Counts a motion; returns the trajectory pose it adds (as
-    /// `icp::integrate` would), the first call also the start pose.
-    pub fn add(&mut self, m: &Motion, out: &mut dyn FnMut(f64, &Pose2)) {
-        self.pairs += 1;
-        if m.iterations > 0 {
-            self.iters += m.iterations as u64;
-            self.ran += 1;
-        }
-        if let Some(f) = m.failure {
-            self.failed += 1;
-            *self.failures.entry(f.as_str().to_string()).or_default() += 1;
-        }
-        if self.last_t.is_none() && self.pairs == 1 {
-            self.pose = Pose2::identity();
-            if m.t0.is_finite() {
-                self.emit(m.t0, Pose2::identity(), out);
-            }
-        }
-        if !(m.t1 > m.t0) {
-            return;
-        }
-        let next = self.pose * geom::pose(m.dx, m.dy, m.dtheta);
-        if m.t1.is_finite() && self.last_t.is_none_or(|l| m.t1 > l) {
-            self.pose = next;
-            self.emit(m.t1, next, out);
-        }
-    }
-
-    fn emit(&mut self, t: f64, p: Pose2, out: &mut dyn FnMut(f64, &Pose2)) {
-        let xy = p.translation.vector;
-        if let Some(prev) = self.last_xy {
-            self.path_length += (xy - prev).norm();
-        }
-        self.last_xy = Some(xy);
-        self.last_t = Some(t);
-        out(t, &p);
-    }
-
-    /// Length (m) of the chained trajectory so far.
-    pub fn path_length(&self) -> f64 {
-        self.path_length
-    }
-
-    /// The summary `icp::summarise` gives for the same motions.
-    pub fn stats(&self, wall_s: f64) -> IcpStats {
-        IcpStats {
-            pairs: self.pairs,
-            failed_pairs: self.failed,
-            mean_iterations: if self.ran > 0 {
-                self.iters as f64 / self.ran as f64
-            } else {
-                0.0
-            },
-            wall_s,
-            pairs_per_s: if wall_s > 0.0 {
-                self.pairs as f64 / wall_s
-            } else {
-                0.0
-            },
-            failures: self.failures.clone(),
+impl PriorKind {
+    /// The prior a recording with these many wheel and odometry samples
+    /// gets: wheel odometry from two wheel samples on, else the recording's
+    /// own odometry from two poses on.
+    pub fn choose(wheel_samples: usize, odom_poses: usize) -> Self {
+        if wheel_samples >= 2 {
+            Self::Wheels
+        } else if odom_poses >= 2 {
+            Self::Odom
+        } else {
+            Self::None
         }
     }
 }
 
-/// Scan matching over streamed samples.
-pub struct StreamIcp {
+/// Scan matching over streamed samples (see the module doc).
+pub struct StreamMatcher {
     matcher: ScanMatcher,
     kind: PriorKind,
     wheels: WheelIntegrator,
@@ -198,7 +99,7 @@ pub struct StreamIcp {
     prev: Option<f64>,
 }
 
-impl StreamIcp {
+impl StreamMatcher {
     /// A matcher for a laser at `base_from_laser`, with the prior `kind`
     /// (wheel odometry uses `nominal`).
     pub fn new(
@@ -214,7 +115,7 @@ impl StreamIcp {
         Ok(Self {
             matcher: ScanMatcher::new(params.clone(), base_from_laser)?,
             kind,
-            wheels: WheelIntegrator::new(nominal),
+            wheels: WheelIntegrator::new(nominal, Pose2::identity()),
             prior,
             pending: VecDeque::new(),
             prev: None,

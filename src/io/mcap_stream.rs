@@ -19,66 +19,10 @@ use std::sync::Arc;
 
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
-use super::mcap_read::{channel_roles, ReadOptions};
-use super::mcap_streams::{Role, State};
+use super::mcap_streams::{channel_roles, RateIntegrator, Role, State};
+use super::options::ReadOptions;
+use super::source::{Item, SampleSource, StreamInfo};
 use crate::error::InputError;
-use crate::geom::Pose2;
-use crate::recording::{GyroSample, StampedPose, WheelSample};
-use crate::scan::LaserScan;
-
-/// One decoded sample of a recording stream.
-#[derive(Debug, Clone)]
-pub enum Item {
-    /// A laser scan.
-    Scan(LaserScan),
-    /// Wheel angles (rad), integrated from rates when the bag has only rates.
-    Wheel(WheelSample),
-    /// A gyro yaw rate (rad/s).
-    Gyro(GyroSample),
-    /// The robot's own odometry pose.
-    Odom(StampedPose),
-    /// A reference pose.
-    Reference(StampedPose),
-}
-
-impl Item {
-    /// Stamp (s).
-    pub fn stamp(&self) -> f64 {
-        match self {
-            Item::Scan(s) => s.stamp,
-            Item::Wheel(w) => w.stamp,
-            Item::Gyro(g) => g.stamp,
-            Item::Odom(p) | Item::Reference(p) => p.stamp,
-        }
-    }
-
-    fn stream(&self) -> usize {
-        match self {
-            Item::Scan(_) => 0,
-            Item::Wheel(_) => 1,
-            Item::Gyro(_) => 2,
-            Item::Odom(_) => 3,
-            Item::Reference(_) => 4,
-        }
-    }
-}
-
-/// What the first pass learns: message counts per stream and the laser mount.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct StreamInfo {
-    /// LaserScan messages.
-    pub scans: usize,
-    /// JointState messages (one wheel sample each).
-    pub wheels: usize,
-    /// Imu messages.
-    pub gyro: usize,
-    /// Odometry messages of the robot's own odometry.
-    pub odom: usize,
-    /// Reference messages.
-    pub reference: usize,
-    /// `base_from_laser` from /tf_static, when the bag states it.
-    pub base_from_laser: Option<Pose2>,
-}
 
 /// Raw message source over one file: channels, roles and per-topic counters.
 struct Messages<'o> {
@@ -274,39 +218,6 @@ fn check_footer(file: &mut File) -> Result<(), String> {
         .map_err(|e| e.to_string())
 }
 
-/// Whether `path` starts with the MCAP magic (else it is read as CARMEN).
-pub fn is_mcap(path: &Path) -> bool {
-    let mut head = [0u8; 8];
-    File::open(path)
-        .and_then(|mut f| f.read_exact(&mut head))
-        .is_ok()
-        && head.starts_with(mcap::MAGIC)
-}
-
-/// Wheel samples from rates: trapezoidal integration in stamp order.
-#[derive(Default)]
-struct RateIntegrator {
-    prev: Option<WheelSample>,
-    left: f64,
-    right: f64,
-}
-
-impl RateIntegrator {
-    fn angles(&mut self, rate: WheelSample) -> WheelSample {
-        if let Some(p) = self.prev {
-            let dt = rate.stamp - p.stamp;
-            self.left += 0.5 * (p.left + rate.left) * dt;
-            self.right += 0.5 * (p.right + rate.right) * dt;
-        }
-        self.prev = Some(rate);
-        WheelSample {
-            stamp: rate.stamp,
-            left: self.left,
-            right: self.right,
-        }
-    }
-}
-
 /// A stream's reorder buffer: sorted by stamp (ties in arrival order).
 #[derive(Default)]
 struct Reorder {
@@ -375,15 +286,10 @@ impl<'o> McapStream<'o> {
         })
     }
 
-    /// What the first pass found.
-    pub fn info(&self) -> &StreamInfo {
-        &self.info
-    }
-
     /// The next item (each stream in stamp order; streams interleaved roughly
     /// by time), `None` at the end. A stream's items are all out once as many
     /// have come as [`StreamInfo`] counts.
-    pub fn next_item(&mut self) -> Result<Option<Item>, InputError> {
+    fn next_decoded(&mut self) -> Result<Option<Item>, InputError> {
         loop {
             if let Some(i) = self.ready.pop_front() {
                 return Ok(Some(i));
@@ -492,11 +398,25 @@ fn first_pass(path: &Path, opts: &ReadOptions) -> Result<StreamInfo, Fail> {
 /// a bad file alike); the streaming error if that reader accepts it.
 fn canonical(path: &Path, opts: &ReadOptions, f: Fail) -> InputError {
     let name = path.display().to_string();
-    match super::read_recording(path, opts) {
+    match super::mcap_read::read_mcap(path, opts) {
         Err(e) => e,
         Ok(_) => match f {
             Fail::Input(e) => e,
             Fail::Mcap(m) => InputError::new(name, format!("corrupt or truncated MCAP: {m}")),
         },
+    }
+}
+
+impl SampleSource for McapStream<'_> {
+    fn name(&self) -> &str {
+        &self.messages.catalog.name
+    }
+
+    fn info(&self) -> &StreamInfo {
+        &self.info
+    }
+
+    fn next_item(&mut self) -> Result<Option<Item>, InputError> {
+        self.next_decoded()
     }
 }

@@ -1,0 +1,96 @@
+//! The one calibration driver: a calibrator fed one aligned step at a time,
+//! giving its estimate and the calibrated odometry as it goes. Batch runs
+//! ([`super::run`]) and streamed bags are this runner fed a list or a stream.
+
+use std::time::Instant;
+
+use super::run::CalibSummary;
+use super::steps::CalibStep;
+use super::{Calibrator, CloudView, Estimate};
+use crate::geom::Pose2;
+use crate::robot::DiffDrive;
+
+/// Drives a calibrator step by step, integrating the calibrated odometry
+/// with the estimate after each step (what an online system knows then).
+pub struct Runner<'c> {
+    cal: &'c mut dyn Calibrator,
+    nominal: DiffDrive,
+    pose: Pose2,
+    /// End (s) of the time already integrated; `None` before the first step.
+    covered: Option<f64>,
+    total_s: f64,
+    steps: usize,
+    resets: usize,
+    last: Option<Estimate>,
+}
+
+impl<'c> Runner<'c> {
+    /// A runner of `cal`; `nominal` is what the summary reports before any step.
+    pub fn new(cal: &'c mut dyn Calibrator, nominal: DiffDrive) -> Self {
+        Self {
+            cal,
+            nominal,
+            pose: Pose2::identity(),
+            covered: None,
+            total_s: 0.0,
+            steps: 0,
+            resets: 0,
+            last: None,
+        }
+    }
+
+    /// Runs one step and returns its estimate; `pose` gets the calibrated
+    /// odometry's new poses (identity at the first step's `t0`, then the pose
+    /// at `t1` of every step that adds time). Only the part of the step not
+    /// already integrated moves the pose, so overlapping steps count once.
+    pub fn step(&mut self, s: &CalibStep, pose: &mut dyn FnMut(f64, &Pose2)) -> Estimate {
+        let covered = *self.covered.get_or_insert_with(|| {
+            pose(s.t0, &Pose2::identity());
+            s.t0
+        });
+        let t = Instant::now();
+        let e = self.cal.step(s);
+        self.total_s += t.elapsed().as_secs_f64();
+        self.resets += e.weights_reset as usize;
+        let dt = s.t1 - s.t0.max(covered);
+        if dt > 0.0 {
+            self.pose *= e.drive().increment(s.omega_right * dt, s.omega_left * dt);
+            pose(s.t1, &self.pose);
+            self.covered = Some(s.t1);
+        }
+        self.steps += 1;
+        self.last = Some(e);
+        e
+    }
+
+    /// The particle cloud after the last step (particle filters only).
+    pub fn cloud(&self) -> Option<CloudView<'_>> {
+        self.cal.cloud()
+    }
+
+    /// Steps run so far.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Steps whose weights all underflowed and were reset.
+    pub fn weight_resets(&self) -> usize {
+        self.resets
+    }
+
+    /// The estimate after the last step.
+    pub fn last(&self) -> Option<&Estimate> {
+        self.last.as_ref()
+    }
+
+    /// The summary after the steps so far (the nominal parameters before any).
+    pub fn summary(&self) -> CalibSummary {
+        CalibSummary::after(
+            self.cal.name(),
+            self.last.as_ref(),
+            self.nominal,
+            self.steps,
+            self.total_s,
+        )
+    }
+}

@@ -1,0 +1,185 @@
+//! The `odocal` command line: each command's arguments become a pipeline
+//! job, whose summary is printed (one JSON object with `--json`).
+
+pub mod args;
+mod print;
+
+use args::{CalibrateArgs, Command, DemoArgs, DiagnoseArgs, EvalArgs, ExperimentArgs, IcpArgs, SimulateArgs};
+use odocal::pipeline::{self, PipelineError, Progress};
+use print::out;
+
+/// Runs one command.
+pub fn run(command: Command) -> anyhow::Result<()> {
+    match command {
+        Command::Simulate(a) => simulate(a),
+        Command::Demo(a) => demo(a),
+        Command::Icp(a) => icp(a),
+        Command::Calibrate(a) => calibrate(a),
+        Command::Eval(a) => eval(a),
+        Command::Diagnose(a) => diagnose(a),
+        Command::Experiment(a) => experiment(a),
+    }
+}
+
+fn bad(msg: impl Into<String>) -> anyhow::Error {
+    PipelineError::BadArgument(msg.into()).into()
+}
+
+fn print_json<T: serde::Serialize>(v: &T) -> anyhow::Result<()> {
+    out!("{}", serde_json::to_string_pretty(v)?);
+    Ok(())
+}
+
+fn progress_bar(what: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new(1000);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template("{msg:>12} [{bar:40}] {percent:>3}% {elapsed}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    pb.set_message(what.to_string());
+    pb
+}
+
+fn simulate(a: SimulateArgs) -> anyhow::Result<()> {
+    let pb = progress_bar("simulate");
+    let summary = pipeline::simulate::run(&a.job(), &mut |f| pb.set_position((f * 1000.0) as u64))?;
+    pb.finish_and_clear();
+    if a.json {
+        return print_json(&summary);
+    }
+    print::simulation(&summary);
+    Ok(())
+}
+
+fn eval(a: EvalArgs) -> anyhow::Result<()> {
+    let report = pipeline::evaluate::run(&a.job())?;
+    if a.json {
+        return print_json(&report);
+    }
+    if let Some(t) = &report.trajectory {
+        print::trajectory_metrics(t);
+    }
+    if let Some(r) = &report.relations {
+        print::relations(r);
+    }
+    Ok(())
+}
+
+fn icp(a: IcpArgs) -> anyhow::Result<()> {
+    let start = std::time::Instant::now();
+    let pb = progress_bar("icp");
+    let run = pipeline::icp::run(&a.job(), &mut Progress::new(|f| pb.set_position((f * 1000.0) as u64)))?;
+    pb.finish_and_clear();
+    let mut stats = run.stats;
+    // Wall time of the whole command (decoding included), as users time it.
+    stats.wall_s = start.elapsed().as_secs_f64();
+    stats.pairs_per_s = stats.pairs as f64 / stats.wall_s.max(1e-9);
+    if a.json {
+        return print_json(&stats);
+    }
+    print::icp(&stats, run.path_length, &a.out);
+    Ok(())
+}
+
+fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
+    let pb = progress_bar("calibrate");
+    let done = pipeline::calibrate::run(&a.job(), &mut Progress::new(|f| pb.set_position((f * 1000.0) as u64)))?;
+    pb.finish_and_clear();
+    for n in &done.notes {
+        eprintln!("note: {n}");
+    }
+    if a.json {
+        return print_json(&done.summary);
+    }
+    print::calibration(&done.summary, &a.out);
+    Ok(())
+}
+
+fn demo(a: DemoArgs) -> anyhow::Result<()> {
+    let pb = progress_bar("demo");
+    let summary = pipeline::demo::run(&a.job(), &mut |stage, f| {
+        pb.set_message(stage.to_string());
+        pb.set_position((f * 1000.0) as u64);
+    })?;
+    pb.finish_and_clear();
+    if a.json {
+        return print_json(&summary);
+    }
+    print::demo(&summary, &a.out, a.connect.is_none() && !a.spawn);
+    Ok(())
+}
+
+fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
+    let (mut cfg, robot) = a.common.files().load()?;
+    if let Some(h) = a.holdout {
+        if !(h > 0.0 && h < 1.0) {
+            return Err(bad(format!(
+                "--holdout must be a fraction in (0, 1), got {h}"
+            )));
+        }
+        cfg.diagnose.holdout = h;
+    }
+    let d = if odocal::io::sniff(&a.measured)? == odocal::io::Format::CensiTuples {
+        let tuples = odocal::io::censi::read(&a.measured).map_err(PipelineError::from)?;
+        pipeline::diagnose::run_tuples(&tuples, &robot, &cfg.diagnose)?
+    } else {
+        let rec = pipeline::read_recording(&a.measured, &cfg, &robot)?;
+        pipeline::diagnose::run(&rec, &robot, &cfg.icp, &cfg.diagnose)?
+    };
+    if let Some(dir) = &a.report {
+        pipeline::diagnose::write_report(dir, &a.measured.display().to_string(), &d)?;
+    }
+    if a.json {
+        return print_json(&d);
+    }
+    out!("verdict: {}", pipeline::diagnose::verdict_word(&d));
+    for c in &d.causes {
+        let params: Vec<String> = c
+            .parameters
+            .iter()
+            .map(|(k, v)| match c.stderr.get(k) {
+                Some(e) => format!("{k} = {v:.6} ± {e:.6}"),
+                None => format!("{k} = {v:.6}"),
+            })
+            .collect();
+        out!(
+            "  {}: {} (ΔBIC {:.1})",
+            c.effect,
+            params.join(", "),
+            c.delta_bic
+        );
+    }
+    out!(
+        "held-out residual RMSE {:.4} -> {:.4} ({:+.1} %)",
+        d.gain.heldout_rmse_before,
+        d.gain.heldout_rmse_after,
+        -100.0 * d.gain.relative
+    );
+    if let Some(dir) = &a.report {
+        out!("report: {}", dir.join("report.md").display());
+    }
+    Ok(())
+}
+
+fn experiment(a: ExperimentArgs) -> anyhow::Result<()> {
+    let (cfg, robot) = a.common.files().load()?;
+    let settings = pipeline::experiment::ExperimentSettings::load(a.settings.as_deref())?;
+    let inputs = pipeline::experiment::ExperimentInputs {
+        runs: a.runs,
+        seed: a.seed,
+        calib: &cfg.calib,
+        robot: &robot,
+        settings: &settings,
+        tables: a.tables.as_deref(),
+        icp: &cfg.icp,
+    };
+    let res = pipeline::experiment::run(&a.name, &inputs, &a.out)?;
+    if a.json {
+        out!("{}", res.json);
+        return Ok(());
+    }
+    out!("{}", res.summary);
+    out!("written to {}", a.out.display());
+    Ok(())
+}

@@ -1,0 +1,172 @@
+//! Human-readable output of each command (stdout, or stderr for the lines
+//! that only say where the outputs went).
+
+use odocal::calib::CalibSummary;
+use odocal::icp::IcpStats;
+use odocal::pipeline::demo::DemoSummary;
+use odocal::pipeline::simulate::SimulateSummary;
+use std::path::Path;
+
+/// Prints a line on stdout; a closed pipe (`odocal ... | head`) is not an error.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+pub(crate) use out;
+
+pub fn relations(r: &odocal::eval::RelationStats) {
+    let line = |name: &str, s: &odocal::eval::RelationSummary| {
+        out!(
+            "relations {name:<6} n={:<5} trans {:.3} ± {:.3} m   rot {:.2} ± {:.2} deg",
+            s.count,
+            s.trans_mean,
+            s.trans_std,
+            s.rot_mean_deg,
+            s.rot_std_deg
+        )
+    };
+    line("all", &r.all);
+    if let Some(l) = &r.local {
+        line("local", l);
+    }
+    if r.skipped > 0 {
+        out!("relations skipped {} (outside the trajectory)", r.skipped);
+    }
+}
+
+fn stats(name: &str, s: Option<&odocal::eval::Stats>) {
+    match s {
+        Some(s) => out!(
+            "{name:<16} rmse {:.4}  mean {:.4}  median {:.4}  std {:.4}  min {:.4}  max {:.4}",
+            s.rmse,
+            s.mean,
+            s.median,
+            s.std,
+            s.min,
+            s.max
+        ),
+        None => out!("{name:<16} n/a (position-only reference)"),
+    }
+}
+
+pub fn trajectory_metrics(t: &odocal::eval::TrajectoryMetrics) {
+    out!("matched poses    {}", t.matched);
+    stats("APE (m)", Some(&t.ape));
+    stats("APE rot (deg)", t.ape_rot_deg.as_ref());
+    stats("RPE (m)", Some(&t.rpe));
+    stats("RPE rot (deg)", t.rpe_rot_deg.as_ref());
+    out!("RMSE x,y (m)     {:.4}", t.rmse_xy);
+    if let Some(r) = t.rmse_theta {
+        out!("RMSE θ (rad)     {r:.4}");
+    }
+    match t.drift_percent {
+        Some(d) => out!("drift            {d:.3} % of {:.1} m", t.path_length),
+        None => out!("drift            n/a (reference does not move)"),
+    }
+    out!("final error (m)  {:.4}", t.final_error);
+}
+
+pub fn calibration(s: &CalibSummary, out: &Path) {
+    eprintln!(
+        "{}: R_R {:.5} ± {:.5} m, R_L {:.5} ± {:.5} m, D {:.5} ± {:.5} m after {} steps ({:.3} ms/step)",
+        s.method,
+        s.final_params.r_right,
+        s.std.r_right,
+        s.final_params.r_left,
+        s.std.r_left,
+        s.final_params.wheel_base,
+        s.std.wheel_base,
+        s.iterations,
+        s.mean_iteration_ms
+    );
+    eprintln!(
+        "diff_drive_controller multipliers: right_wheel_radius {:.5}, left_wheel_radius {:.5}, wheel_separation {:.5}; outputs in {}",
+        s.multipliers.right_wheel_radius,
+        s.multipliers.left_wheel_radius,
+        s.multipliers.wheel_separation,
+        out.display()
+    );
+}
+
+
+/// The demo's summary, and where its report and recording are.
+pub fn demo(summary: &DemoSummary, out: &Path, to_file: bool) {
+    out!(
+        "odocal demo on {} ({} scans, {:.0} s) in {:.1} s",
+        summary.input,
+        summary.scans,
+        summary.duration_s,
+        summary.wall_s
+    );
+    out!(
+        "ICP: {} pairs, {} flagged, {:.1} iterations on average",
+        summary.icp.pairs,
+        summary.icp.failed_pairs,
+        summary.icp.mean_iterations
+    );
+    for m in &summary.methods {
+        let err = m
+            .final_errors
+            .map(|e| {
+                format!(
+                    "  error R_R {:+.2} mm, R_L {:+.2} mm, D {:+.1} mm",
+                    e[0] * 1e3,
+                    e[1] * 1e3,
+                    e[2] * 1e3
+                )
+            })
+            .unwrap_or_default();
+        let ape = m
+            .eval
+            .as_ref()
+            .map(|e| format!("  APE {:.3} m", e.ape.rmse))
+            .unwrap_or_default();
+        out!(
+            "{:<12} R_R {:.5} m  R_L {:.5} m  D {:.4} m{err}{ape}",
+            m.method,
+            m.final_params[0],
+            m.final_params[1],
+            m.final_params[2]
+        );
+    }
+    out!("report: {}", out.join("report.md").display());
+    if cfg!(feature = "rerun") && to_file {
+        out!(
+            "open the recording with: rerun {}",
+            out.join("demo.rrd").display()
+        );
+    }
+}
+
+/// What `odocal simulate` wrote.
+pub fn simulation(summary: &SimulateSummary) {
+    eprintln!(
+        "wrote {} ({} scans, {:.0} s, {:.1} m of {}){}",
+        summary.out,
+        summary.scans,
+        summary.duration_s,
+        summary.path_length_m,
+        summary.scenario,
+        summary
+            .truth
+            .as_deref()
+            .map(|t| format!("; truth in {t}"))
+            .unwrap_or_default()
+    );
+}
+
+/// What `odocal icp` matched and wrote.
+pub fn icp(stats: &IcpStats, path_length: f64, out: &Path) {
+    eprintln!(
+        "{} pairs ({} failed), {:.1} iterations on average, {:.2} s ({:.0} pairs/s); trajectory {:.1} m -> {}",
+        stats.pairs,
+        stats.failed_pairs,
+        stats.mean_iterations,
+        stats.wall_s,
+        stats.pairs_per_s,
+        path_length,
+        out.display()
+    );
+}

@@ -1,0 +1,361 @@
+//! The one driver of a run: samples from a [`SampleSource`] go through the
+//! incremental ICP matcher ([`icp::StreamMatcher`]) and, for a calibration,
+//! the step builder and the calibration [`Runner`]; everything else (files,
+//! Rerun, progress, in-memory results) is a [`RunObserver`]. A bag streamed
+//! from disk and the same recording in memory therefore take the same path
+//! and give the same numbers.
+
+use std::time::Instant;
+
+use super::calibrate::MeasurementConfig;
+use super::observe::RunObserver;
+use super::PipelineError;
+use crate::calib::{self, CalibParams, CalibStep, CalibSummary, Calibrator, Runner, StepBuilder};
+use crate::error::InputError;
+use crate::icp::{self, IcpParams, IcpStats, PriorKind, StreamMatcher, Tally};
+use crate::io::{Item, SampleSource, StreamInfo};
+use crate::motion::{Motion, VelocityObs};
+use crate::recording::{GyroSample, WheelSample};
+use crate::robot::RobotConfig;
+
+/// Summary of the ICP part of a run.
+#[derive(Debug, Clone)]
+pub struct IcpRunSummary {
+    /// Pair counts, iterations, failures; timings of the matching loop.
+    pub stats: IcpStats,
+    /// Length (m) of the chained ICP trajectory.
+    pub path_length: f64,
+}
+
+/// The ICP stage: the matcher fed the scans and the prior's samples, and the
+/// tally that chains the motions into the ICP trajectory.
+struct IcpStage {
+    matcher: StreamMatcher,
+    kind: PriorKind,
+    tally: Tally,
+    wheels_seen: usize,
+    odom_seen: usize,
+    matching_s: f64,
+}
+
+impl IcpStage {
+    /// The stage for a source with `info`; `robot` gives the laser mount when
+    /// the source states none, and the nominal wheel odometry prior.
+    fn new(
+        info: &StreamInfo,
+        source: &str,
+        robot: &RobotConfig,
+        params: &IcpParams,
+    ) -> Result<Self, PipelineError> {
+        if info.scans < 2 {
+            return Err(InputError::new(
+                source,
+                format!("{} laser scans: scan matching needs at least 2", info.scans),
+            )
+            .into());
+        }
+        let kind = PriorKind::choose(info.wheels, info.odom);
+        let base = info.base_from_laser.unwrap_or_else(|| robot.laser.pose());
+        let matcher = StreamMatcher::new(params, base, kind, robot.diff_drive())
+            .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
+        Ok(Self {
+            matcher,
+            kind,
+            tally: Tally::default(),
+            wheels_seen: 0,
+            odom_seen: 0,
+            matching_s: 0.0,
+        })
+    }
+
+    /// Feeds one sample; the motions now final go to the observer and `out`.
+    fn feed(
+        &mut self,
+        item: &Item,
+        info: &StreamInfo,
+        obs: &mut dyn RunObserver,
+        out: &mut dyn FnMut(&Motion),
+    ) {
+        match item {
+            Item::Scan(s) => self.matcher.push_scan(s.clone()),
+            Item::Wheel(w) => {
+                self.matcher.push_wheel(w);
+                self.wheels_seen += 1;
+                if self.kind == PriorKind::Wheels && self.wheels_seen == info.wheels {
+                    self.matcher.end_prior();
+                }
+            }
+            Item::Odom(p) => {
+                self.matcher.push_odom(p);
+                self.odom_seen += 1;
+                if self.kind == PriorKind::Odom && self.odom_seen == info.odom {
+                    self.matcher.end_prior();
+                }
+            }
+            Item::Gyro(_) | Item::Reference(_) => return,
+        }
+        self.poll(obs, out);
+    }
+
+    /// Matches what the prior now covers.
+    fn poll(&mut self, obs: &mut dyn RunObserver, out: &mut dyn FnMut(&Motion)) {
+        let mut done: Vec<Motion> = Vec::new();
+        let t = Instant::now();
+        self.matcher.poll(&mut |m| done.push(m));
+        self.matching_s += t.elapsed().as_secs_f64();
+        for m in &done {
+            self.tally.add(m, &mut |t, p| obs.icp_pose(t, p));
+            obs.motion(m);
+            out(m);
+        }
+    }
+
+    /// The source has ended: every scan left is matched.
+    fn finish(&mut self, obs: &mut dyn RunObserver, out: &mut dyn FnMut(&Motion)) {
+        self.matcher.end_prior();
+        self.poll(obs, out);
+    }
+
+    fn summary(&self) -> IcpRunSummary {
+        IcpRunSummary {
+            stats: self.tally.stats(self.matching_s),
+            path_length: self.tally.path_length(),
+        }
+    }
+}
+
+/// Runs ICP over every scan of `source`; the observer sees every sample,
+/// motion and ICP pose.
+pub fn run_icp(
+    source: &mut dyn SampleSource,
+    robot: &RobotConfig,
+    params: &IcpParams,
+    obs: &mut dyn RunObserver,
+) -> Result<IcpRunSummary, PipelineError> {
+    let info = source.info().clone();
+    obs.start(&info);
+    let mut stage = IcpStage::new(&info, source.name(), robot, params)?;
+    while let Some(item) = source.next_item()? {
+        obs.item(&item);
+        stage.feed(&item, &info, obs, &mut |_| {});
+    }
+    stage.finish(obs, &mut |_| {});
+    Ok(stage.summary())
+}
+
+/// The calibration stage: the step builder aligning wheels, gyro and
+/// velocity observations into filter steps, and the runner over them.
+pub struct CalibStage<'c> {
+    steps: StepBuilder,
+    runner: Runner<'c>,
+}
+
+impl<'c> CalibStage<'c> {
+    /// The stage for `cal`; `nominal` is what the summary reports before any
+    /// step; the gyro is used when `meas` says so and `has_gyro`.
+    pub fn new(
+        cal: &'c mut dyn Calibrator,
+        robot: &RobotConfig,
+        meas: &MeasurementConfig,
+        has_gyro: bool,
+    ) -> Self {
+        Self {
+            steps: StepBuilder::new(meas.use_gyro && has_gyro, meas.gyro_sigma),
+            runner: Runner::new(cal, robot.diff_drive()),
+        }
+    }
+
+    /// A wheel sample (stamp order).
+    pub fn push_wheel(&mut self, w: WheelSample) {
+        self.steps.push_wheel(w);
+    }
+
+    /// No more wheel samples.
+    pub fn end_wheels(&mut self) {
+        self.steps.end_wheels();
+    }
+
+    /// A gyro sample (stamp order).
+    pub fn push_gyro(&mut self, g: GyroSample) {
+        self.steps.push_gyro(g);
+    }
+
+    /// No more gyro samples.
+    pub fn end_gyro(&mut self) {
+        self.steps.end_gyro();
+    }
+
+    /// A motion of ICP: a velocity observation unless the pair failed.
+    pub fn push_motion(&mut self, m: &Motion) {
+        if let Some(o) = VelocityObs::from_motion(m) {
+            self.steps.push_obs(o);
+        }
+    }
+
+    /// A velocity observation (sorted by `t0`).
+    pub fn push_obs(&mut self, o: VelocityObs) {
+        self.steps.push_obs(o);
+    }
+
+    /// Runs every step that is now final (with `all_done`, every step left).
+    pub fn poll(&mut self, all_done: bool, obs: &mut dyn RunObserver) {
+        let runner = &mut self.runner;
+        self.steps
+            .poll(all_done, &mut |s: CalibStep| run_step(runner, &s, obs));
+    }
+
+    /// The summary after the steps so far; an error when there was none.
+    pub fn summary(&self) -> Result<CalibSummary, PipelineError> {
+        if self.runner.steps() == 0 {
+            return Err(PipelineError::BadArgument(
+                "nothing to calibrate: no wheel data overlapping the velocity observations".into(),
+            ));
+        }
+        Ok(self.runner.summary())
+    }
+
+    /// Steps whose weights all underflowed and were reset.
+    pub fn weight_resets(&self) -> usize {
+        self.runner.weight_resets()
+    }
+}
+
+/// One filter step, its estimate and calibrated poses handed to the observer.
+fn run_step(runner: &mut Runner<'_>, s: &CalibStep, obs: &mut dyn RunObserver) {
+    let mut poses: [Option<(f64, crate::geom::Pose2)>; 2] = [None, None];
+    let e = runner.step(s, &mut |t, p| {
+        let slot = if poses[0].is_none() { 0 } else { 1 };
+        poses[slot] = Some((t, *p));
+    });
+    obs.step(&e, runner.cloud());
+    for (t, p) in poses.into_iter().flatten() {
+        obs.calibrated_pose(t, &p);
+    }
+}
+
+/// Counts each stream's samples against the source's totals, to tell the
+/// step builder when the wheel and gyro streams end.
+struct Ends {
+    wheels: usize,
+    gyro: usize,
+}
+
+impl Ends {
+    fn feed(&mut self, item: &Item, info: &StreamInfo, stage: &mut CalibStage<'_>) {
+        match item {
+            Item::Wheel(w) => {
+                stage.push_wheel(*w);
+                self.wheels += 1;
+                if self.wheels == info.wheels {
+                    stage.end_wheels();
+                }
+            }
+            Item::Gyro(g) => {
+                stage.push_gyro(*g);
+                self.gyro += 1;
+                if self.gyro == info.gyro {
+                    stage.end_gyro();
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// What a calibration run gives besides what its observers saw.
+#[derive(Debug, Clone)]
+pub struct CalibRunSummary {
+    /// The calibration summary (design.md's keys).
+    pub summary: CalibSummary,
+    /// The ICP part.
+    pub icp: IcpRunSummary,
+    /// Steps whose weights all underflowed and were reset.
+    pub weight_resets: usize,
+}
+
+/// Runs ICP and the calibrator `calib` names over `source`: each motion
+/// becomes a velocity observation, aligned with the wheels (and gyro) into
+/// filter steps as soon as they are final. `calib` is used as given (see
+/// [`super::calibrate::params_for_robot`]).
+pub fn run_calibration(
+    source: &mut dyn SampleSource,
+    robot: &RobotConfig,
+    icp: &IcpParams,
+    calib: &CalibParams,
+    meas: &MeasurementConfig,
+    obs: &mut dyn RunObserver,
+) -> Result<CalibRunSummary, PipelineError> {
+    let info = source.info().clone();
+    obs.start(&info);
+    let mut icp_stage = IcpStage::new(&info, source.name(), robot, icp)?;
+    if info.wheels < 2 {
+        return Err(PipelineError::BadArgument(
+            "the input has no wheel encoder data (JointState) to calibrate".into(),
+        ));
+    }
+    let mut cal = calib::build(calib, robot.diff_drive())
+        .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
+    let mut stage = CalibStage::new(cal.as_mut(), robot, meas, info.gyro > 0);
+    if info.gyro == 0 {
+        stage.end_gyro();
+    }
+    let mut ends = Ends { wheels: 0, gyro: 0 };
+    while let Some(item) = source.next_item()? {
+        obs.item(&item);
+        ends.feed(&item, &info, &mut stage);
+        icp_stage.feed(&item, &info, obs, &mut |m| stage.push_motion(m));
+        stage.poll(false, obs);
+    }
+    icp_stage.finish(obs, &mut |m| stage.push_motion(m));
+    stage.end_wheels();
+    stage.end_gyro();
+    stage.poll(true, obs);
+    Ok(CalibRunSummary {
+        summary: stage.summary()?,
+        icp: icp_stage.summary(),
+        weight_resets: stage.weight_resets(),
+    })
+}
+
+/// Runs the calibrator `calib` names over given wheel angles, velocity
+/// observations (sorted by `t0`) and gyro rates: the same stage as
+/// [`run_calibration`], fed whole streams. The observer sees the wheel and
+/// gyro samples as items, then the steps.
+pub fn calibrate_streams(
+    wheels: &[WheelSample],
+    observations: &[VelocityObs],
+    gyro: &[GyroSample],
+    robot: &RobotConfig,
+    calib: &CalibParams,
+    meas: &MeasurementConfig,
+    obs: &mut dyn RunObserver,
+) -> Result<CalibRunSummary, PipelineError> {
+    let mut cal = calib::build(calib, robot.diff_drive())
+        .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
+    let mut stage = CalibStage::new(cal.as_mut(), robot, meas, !gyro.is_empty());
+    obs.start(&StreamInfo {
+        wheels: wheels.len(),
+        gyro: gyro.len(),
+        ..StreamInfo::default()
+    });
+    for w in wheels {
+        obs.item(&Item::Wheel(*w));
+        stage.push_wheel(*w);
+    }
+    stage.end_wheels();
+    for g in gyro {
+        obs.item(&Item::Gyro(*g));
+        stage.push_gyro(*g);
+    }
+    stage.end_gyro();
+    observations.iter().for_each(|o| stage.push_obs(*o));
+    stage.poll(true, obs);
+    Ok(CalibRunSummary {
+        summary: stage.summary()?,
+        icp: IcpRunSummary {
+            stats: icp::summarise(&[], 0.0),
+            path_length: 0.0,
+        },
+        weight_resets: stage.weight_resets(),
+    })
+}

@@ -1,0 +1,217 @@
+//! The observers that keep a run's results: the output files, written row by
+//! row as the run goes and committed atomically only when it succeeded
+//! ([`IcpFiles`], [`CalibFiles`]), and the results in memory ([`Collect`]).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::observe::RunObserver;
+use super::PipelineError;
+use crate::calib::{CalibSummary, CalibrationRun, CloudView, Estimate};
+use crate::geom::Pose2;
+use crate::icp::IcpStats;
+use crate::io::stream_out::AtomicWriter;
+use crate::motion::Motion;
+use crate::traj::Trajectory;
+
+/// A text file written line by line, keeping its first write error.
+struct RowFile {
+    out: AtomicWriter,
+    path: PathBuf,
+    error: Option<std::io::Error>,
+}
+
+impl RowFile {
+    /// Starts `path` with the `header` line.
+    fn create(path: &Path, header: &str) -> Result<Self, PipelineError> {
+        let mut out = AtomicWriter::create(path).map_err(|e| PipelineError::write(path, e))?;
+        writeln!(out.writer(), "{header}").map_err(|e| PipelineError::write(path, e))?;
+        Ok(Self {
+            out,
+            path: path.to_path_buf(),
+            error: None,
+        })
+    }
+
+    /// Writes with `f` unless an earlier write failed.
+    fn row(&mut self, f: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>) {
+        if self.error.is_none() {
+            if let Err(e) = f(self.out.writer()) {
+                self.error = Some(e);
+            }
+        }
+    }
+
+    /// Renames the finished file over its path, or reports the first error.
+    fn commit(self) -> Result<(), PipelineError> {
+        if let Some(e) = self.error {
+            return Err(PipelineError::write(&self.path, e));
+        }
+        self.out
+            .commit()
+            .map_err(|e| PipelineError::write(&self.path, e))
+    }
+}
+
+/// A TUM trajectory file written pose by pose; poses whose stamp is not
+/// finite or does not increase are left out, as [`Trajectory::push`] does.
+struct TumFile {
+    file: RowFile,
+    last: Option<f64>,
+}
+
+impl TumFile {
+    fn create(path: &Path) -> Result<Self, PipelineError> {
+        Ok(Self {
+            file: RowFile::create(path, crate::io::tum::TUM_HEADER)?,
+            last: None,
+        })
+    }
+
+    fn pose(&mut self, t: f64, p: &Pose2) {
+        if t.is_finite() && self.last.is_none_or(|l| t > l) {
+            self.last = Some(t);
+            self.file
+                .row(|w| crate::io::tum::write_pose_2d(w, t, p));
+        }
+    }
+}
+
+/// `odocal icp`'s files: the ICP trajectory (TUM) and, if asked, the motions
+/// with covariance and quality (CSV).
+pub struct IcpFiles {
+    trajectory: TumFile,
+    motions: Option<RowFile>,
+}
+
+impl IcpFiles {
+    /// Starts writing `tum` and, if given, `motions_csv`.
+    pub fn create(tum: &Path, motions_csv: Option<&Path>) -> Result<Self, PipelineError> {
+        Ok(Self {
+            trajectory: TumFile::create(tum)?,
+            motions: motions_csv
+                .map(|p| RowFile::create(p, crate::io::csv::MOTIONS_HEADER))
+                .transpose()?,
+        })
+    }
+
+    /// Commits every file of a run that succeeded.
+    pub fn commit(self) -> Result<(), PipelineError> {
+        self.trajectory.file.commit()?;
+        self.motions.map_or(Ok(()), RowFile::commit)
+    }
+}
+
+impl RunObserver for IcpFiles {
+    fn icp_pose(&mut self, t: f64, pose: &Pose2) {
+        self.trajectory.pose(t, pose);
+    }
+
+    fn motion(&mut self, motion: &Motion) {
+        if let Some(f) = self.motions.as_mut() {
+            f.row(|w| crate::io::csv::write_motion_row(w, motion));
+        }
+    }
+}
+
+/// `odocal calibrate`'s files in `DIR`: `calibration.csv` (the estimate after
+/// every step), `trajectory.tum` (the calibrated odometry) and, at commit,
+/// `summary.json`.
+pub struct CalibFiles {
+    dir: PathBuf,
+    history: RowFile,
+    trajectory: TumFile,
+}
+
+impl CalibFiles {
+    /// Starts writing the files of `dir`.
+    pub fn create(dir: &Path) -> Result<Self, PipelineError> {
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            history: RowFile::create(
+                &dir.join("calibration.csv"),
+                crate::io::csv::HISTORY_HEADER,
+            )?,
+            trajectory: TumFile::create(&dir.join("trajectory.tum"))?,
+        })
+    }
+
+    /// Commits the history and trajectory, then writes `summary.json`.
+    pub fn commit(self, summary: &CalibSummary) -> Result<(), PipelineError> {
+        self.history.commit()?;
+        self.trajectory.file.commit()?;
+        let js = self.dir.join("summary.json");
+        let text = serde_json::to_string_pretty(summary).expect("summary serialises");
+        crate::io::atomic::write_bytes_atomic(&js, text.as_bytes())
+            .map_err(|e| PipelineError::write(&js, e))
+    }
+}
+
+impl RunObserver for CalibFiles {
+    fn step(&mut self, e: &Estimate, _cloud: Option<CloudView<'_>>) {
+        let row = e.history_row();
+        self.history
+            .row(|w| crate::io::csv::write_history_row(w, &row));
+    }
+
+    fn calibrated_pose(&mut self, t: f64, pose: &Pose2) {
+        self.trajectory.pose(t, pose);
+    }
+}
+
+/// Keeps a run's results in memory: the motions and ICP trajectory, the
+/// estimate after every filter step and the calibrated trajectory.
+#[derive(Debug, Default)]
+pub struct Collect {
+    /// One motion per consecutive scan pair (base frame).
+    pub motions: Vec<Motion>,
+    /// The motions chained from the identity at the first scan.
+    pub icp_trajectory: Trajectory,
+    /// The estimate after every filter step.
+    pub history: Vec<Estimate>,
+    /// The calibrated odometry.
+    pub calibrated: Trajectory,
+}
+
+impl Collect {
+    /// The calibration run these results make with its `summary`.
+    pub fn calibration(
+        &mut self,
+        summary: CalibSummary,
+        weight_resets: usize,
+    ) -> CalibrationRun {
+        CalibrationRun {
+            summary,
+            history: std::mem::take(&mut self.history),
+            trajectory: std::mem::take(&mut self.calibrated),
+            weight_resets,
+        }
+    }
+
+    /// The ICP output these results make with its `stats`.
+    pub fn icp(&mut self, stats: IcpStats) -> super::icp::IcpOutput {
+        super::icp::IcpOutput {
+            motions: std::mem::take(&mut self.motions),
+            stats,
+            trajectory: std::mem::take(&mut self.icp_trajectory),
+        }
+    }
+}
+
+impl RunObserver for Collect {
+    fn icp_pose(&mut self, t: f64, pose: &Pose2) {
+        self.icp_trajectory.push(t, *pose);
+    }
+
+    fn motion(&mut self, motion: &Motion) {
+        self.motions.push(motion.clone());
+    }
+
+    fn step(&mut self, e: &Estimate, _cloud: Option<CloudView<'_>>) {
+        self.history.push(*e);
+    }
+
+    fn calibrated_pose(&mut self, t: f64, pose: &Pose2) {
+        self.calibrated.push(t, *pose);
+    }
+}
