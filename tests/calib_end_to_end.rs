@@ -51,7 +51,7 @@ fn adaptive_pf_learns_radii_and_wheel_base_from_simulated_scans() {
 /// Final (R_R, R_L, D) of `method` on a simulated run, with or without the gyro.
 fn final_params(rec: &odocal::recording::Recording, method: Method, gyro: bool) -> [f64; 3] {
     let robot = RobotConfig::default();
-    let out = odocal::pipeline::icp::run(rec, &robot, &IcpParams::default()).unwrap();
+    let out = odocal::pipeline::icp::match_recording(rec, &robot, &IcpParams::default()).unwrap();
     let g = if gyro { &rec.gyro[..] } else { &[] };
     let steps = calib::steps(&out.observations(), &rec.wheels, g, 0.003);
     let p = CalibParams {

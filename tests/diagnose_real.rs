@@ -33,7 +33,7 @@ fn motions(rec: &Recording, robot: &RobotConfig, stride: usize) -> Vec<Motion> {
         ..IcpParams::default()
     };
     let icp = pipeline::diagnose::icp_for_diagnosis(&icp);
-    pipeline::icp::run(rec, robot, &icp).unwrap().motions
+    pipeline::icp::match_recording(rec, robot, &icp).unwrap().motions
 }
 
 fn cause<'a>(d: &'a Diagnosis, effect: &str) -> Option<&'a Cause> {

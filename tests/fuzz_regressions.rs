@@ -3,6 +3,7 @@
 //! the same entry point as the fuzz target. Each must now give an error value;
 //! a file named `ok-*` is valid input and must read soundly instead.
 
+use odocal::io::SampleSource;
 use std::path::{Path, PathBuf};
 
 use odocal::effects::Effect;
@@ -69,7 +70,7 @@ fn run(target: &str, data: &[u8]) -> Result<(), String> {
                 data.len()
             ));
             std::fs::write(&file, data).unwrap();
-            let streamed = odocal::io::stream::McapStream::open(&file, &ReadOptions::default())
+            let streamed = odocal::io::McapStream::open(&file, &ReadOptions::default())
                 .and_then(|mut s| {
                     let mut n = 0usize;
                     while s.next_item()?.is_some() {
@@ -176,7 +177,7 @@ fn chunk_header_string_length_is_refused_before_any_allocation() {
     let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fuzz-regressions/mcap_read/string-length-in-chunk-header");
     let whole = odocal::io::read_recording(&file, &ReadOptions::default()).unwrap_err();
-    let streamed = odocal::io::stream::McapStream::open(&file, &ReadOptions::default())
+    let streamed = odocal::io::McapStream::open(&file, &ReadOptions::default())
         .and_then(|mut s| {
             while s.next_item()?.is_some() {}
             Ok(())

@@ -10,7 +10,7 @@ use odocal::eval::{self, RelationStats};
 use odocal::icp::IcpParams;
 use odocal::io::relations::read_relations;
 use odocal::io::{read_recording, ReadOptions};
-use odocal::pipeline::icp::run;
+use odocal::pipeline::icp::match_recording as run;
 use odocal::robot::RobotConfig;
 
 /// Relation figures of one log: default parameters, the recording's own

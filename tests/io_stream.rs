@@ -1,14 +1,17 @@
-//! The streaming path against the in-memory one: the same samples from the
-//! bag reader (also for out-of-order bags and rate-only wheels), and the same
-//! output files from `icp` and `calibrate` on the bundled recording and on
-//! real data.
+//! A bag streamed from disk against the same data in memory: the same samples
+//! from the streaming and the whole-file bag readers (also for out-of-order
+//! bags and rate-only wheels), and the same output files from `icp` and
+//! `calibrate` on the bundled recording and on real data.
 
 use crate::support::{scratch, shared_data};
 use odocal::io::cdr::CdrWriter;
 use odocal::io::ros_msgs::{Header, ImuMsg, JointStateMsg, RosMsg, Time, Vec3};
-use odocal::io::stream::{Item, McapStream};
-use odocal::io::{read_recording, ReadOptions};
-use odocal::pipeline::{self, Config};
+use odocal::calib::{CalibSummary, Method};
+use odocal::io::{read_recording, Item, McapStream, ReadOptions, RecordingSource, SampleSource};
+use odocal::pipeline::calibrate::{CalibSource, CalibrateJob, CalibratorChoice};
+use odocal::pipeline::icp::IcpJob;
+use odocal::pipeline::outputs::{CalibFiles, IcpFiles};
+use odocal::pipeline::{self, drive, Common, Config};
 use odocal::recording::Recording;
 use odocal::robot::RobotConfig;
 use std::collections::BTreeMap;
@@ -236,40 +239,74 @@ fn same_file(a: &Path, b: &Path) {
     assert!(x == y, "{} and {} differ", a.display(), b.display());
 }
 
+/// `odocal calibrate` on a file with `particles` particles and `method`.
+fn calibrate_command(
+    input: &Path,
+    out: &Path,
+    method: Method,
+    particles: Option<usize>,
+    config: Option<&Path>,
+) -> CalibSummary {
+    let job = CalibrateJob {
+        input: CalibSource::Recording(input.to_path_buf()),
+        out: out.to_path_buf(),
+        choice: CalibratorChoice {
+            method: Some(method),
+            particles,
+            ..Default::default()
+        },
+        viewer: None,
+        common: Common {
+            config: config.map(Path::to_path_buf),
+            robot: None,
+        },
+    };
+    pipeline::calibrate::run(&job, &mut pipeline::NoObserver)
+        .unwrap()
+        .summary
+}
+
+/// The same recording in memory through the same driver, written by the
+/// same observers.
+fn icp_in_memory(rec: &Recording, robot: &RobotConfig, cfg: &Config, tum: &Path, csv: &Path) {
+    let mut files = IcpFiles::create(tum, Some(csv)).unwrap();
+    drive::run_icp(&mut RecordingSource::new(rec), robot, &cfg.icp, &mut files).unwrap();
+    files.commit().unwrap();
+}
+
 #[test]
-fn streamed_icp_and_calibration_write_the_same_files_as_the_in_memory_run() {
+fn a_bag_and_the_same_recording_in_memory_give_the_same_files() {
     let (cfg, robot) = config();
     let read = read_opts(&cfg, &robot);
-    let d = scratch("streamed_same_files");
+    let d = scratch("bag_and_memory_same_files");
     let bag = Path::new(BUNDLED);
     let rec = read_recording(bag, &read).unwrap();
-    let whole = pipeline::icp::run(&rec, &robot, &cfg.icp).unwrap();
-    pipeline::icp::write(&whole, &d.join("a.tum"), Some(&d.join("a.csv"))).unwrap();
+    icp_in_memory(&rec, &robot, &cfg, &d.join("a.tum"), &d.join("a.csv"));
     // Progress is the fraction of scans read: rising, ending at 1.
     let mut fractions = Vec::new();
-    let s = pipeline::icp::run_file(
-        bag,
-        &read,
-        &robot,
-        &cfg.icp,
-        &d.join("b.tum"),
-        Some(&d.join("b.csv")),
-        &mut |f| fractions.push(f),
-    )
-    .unwrap();
+    let job = IcpJob {
+        input: bag.to_path_buf(),
+        out: d.join("b.tum"),
+        motions: Some(d.join("b.csv")),
+        common: Common::default(),
+    };
+    let s = pipeline::icp::run(&job, &mut pipeline::Progress::new(|f| fractions.push(f))).unwrap();
     assert_eq!(fractions.len(), rec.scans.len());
     assert!(fractions.windows(2).all(|w| w[1] > w[0]) && fractions.last() == Some(&1.0));
     same_file(&d.join("a.tum"), &d.join("b.tum"));
     same_file(&d.join("a.csv"), &d.join("b.csv"));
+    // The in-memory ICP of the library gives the same motions and trajectory.
+    let whole = pipeline::icp::match_recording(&rec, &robot, &cfg.icp).unwrap();
     assert_eq!(s.stats.pairs, whole.stats.pairs);
-    assert_eq!(s.stats.failed_pairs, whole.stats.failed_pairs);
     assert_eq!(s.stats.failures, whole.stats.failures);
     assert_eq!(s.stats.mean_iterations, whole.stats.mean_iterations);
     assert_eq!(s.path_length, whole.trajectory.path_length());
-    assert_eq!(s.poses, whole.trajectory.len());
+    odocal::io::csv::write_motions(&d.join("c.csv"), &whole.motions).unwrap();
+    same_file(&d.join("b.csv"), &d.join("c.csv"));
     assert!(whole.stats.pairs > 500);
 
-    // The adaptive particle filter (fewer particles to keep the test short).
+    // The adaptive particle filter (fewer particles to keep the test short):
+    // the command on the bag, and the calibrator fed the in-memory motions.
     let mut params = cfg.calib.clone();
     params.particles = Some(300);
     let input = pipeline::calibrate::CalibInput {
@@ -278,27 +315,26 @@ fn streamed_icp_and_calibration_write_the_same_files_as_the_in_memory_run() {
         gyro: rec.gyro.clone(),
     };
     assert!(!input.gyro.is_empty(), "the gyro enters the steps");
-    let mem = pipeline::calibrate::run(&input, &robot, &params, &cfg.measurements).unwrap();
-    let (a, b) = (d.join("cal-a"), d.join("cal-b"));
-    pipeline::calibrate::write(&a, &mem).unwrap();
-    let s = pipeline::calibrate::run_file(
-        bag,
-        &read,
+    let a = d.join("cal-a");
+    let mut files = CalibFiles::create(&a).unwrap();
+    let mem = pipeline::calibrate::from_streams_observed(
+        &input,
         &robot,
-        &cfg.icp,
         &params,
         &cfg.measurements,
-        &b,
-        &mut |_| {},
-        &mut odocal::io::stream_run::NoObserver,
+        &mut files,
     )
     .unwrap();
+    files.commit(&mem.summary).unwrap();
+    let b = d.join("cal-b");
+    let s = calibrate_command(bag, &b, Method::AdaptivePf, Some(300), None);
     same_file(&a.join("calibration.csv"), &b.join("calibration.csv"));
     same_file(&a.join("trajectory.tum"), &b.join("trajectory.tum"));
     let mut expect = mem.summary.clone();
     expect.mean_iteration_ms = s.mean_iteration_ms;
     assert_eq!(s, expect);
     assert!(s.iterations > 500);
+    assert_eq!(mem.history.len(), s.iterations);
 }
 
 /// A short simulated bag (library simulator, written as `odocal simulate` does).
@@ -307,57 +343,51 @@ fn short_bag(d: &Path, seconds: f64) -> PathBuf {
     cfg.sim.duration_s = seconds;
     cfg.sim.scenario.name = "square".into();
     let out = d.join("short.mcap");
-    pipeline::simulate::run(&cfg.sim, &cfg.topics, &robot, &[], &out, None, &mut |_| {}).unwrap();
+    pipeline::simulate::simulate(&cfg.sim, &cfg.topics, &robot, &[], &out, None, &mut |_| {})
+        .unwrap();
     out
 }
 
 #[test]
-fn streamed_kalman_calibration_matches_without_and_with_gyro() {
+fn kalman_calibration_of_a_bag_matches_the_in_memory_run_without_and_with_gyro() {
     let (cfg, robot) = config();
     let read = read_opts(&cfg, &robot);
-    let d = scratch("streamed_kalman_calibration");
+    let d = scratch("bag_kalman_calibration");
     let bag = short_bag(&d, 8.0);
     let rec = read_recording(&bag, &read).unwrap();
-    let whole = pipeline::icp::run(&rec, &robot, &cfg.icp).unwrap();
+    let whole = pipeline::icp::match_recording(&rec, &robot, &cfg.icp).unwrap();
     for (k, use_gyro) in [false, true].into_iter().enumerate() {
-        let mut params = cfg.calib.clone();
-        params.method = odocal::calib::Method::Dkf;
         let meas = pipeline::calibrate::MeasurementConfig {
             use_gyro,
             ..cfg.measurements
         };
+        let mut params = cfg.calib.clone();
+        params.method = Method::Dkf;
         let input = pipeline::calibrate::CalibInput {
             observations: whole.observations(),
             wheels: rec.wheels.clone(),
             gyro: rec.gyro.clone(),
         };
-        let mem = pipeline::calibrate::run(&input, &robot, &params, &meas).unwrap();
-        let (a, b) = (d.join(format!("a{k}")), d.join(format!("b{k}")));
-        pipeline::calibrate::write(&a, &mem).unwrap();
-        let s = pipeline::calibrate::run_file(
-            &bag,
-            &read,
-            &robot,
-            &cfg.icp,
-            &params,
-            &meas,
-            &b,
-            &mut |_| {},
-            &mut odocal::io::stream_run::NoObserver,
-        )
-        .unwrap();
-        same_file(&a.join("calibration.csv"), &b.join("calibration.csv"));
-        same_file(&a.join("trajectory.tum"), &b.join("trajectory.tum"));
+        let mem = pipeline::calibrate::from_streams(&input, &robot, &params, &meas).unwrap();
+        let toml = d.join(format!("gyro{k}.toml"));
+        std::fs::write(&toml, format!("[measurements]\nuse_gyro = {use_gyro}\n")).unwrap();
+        let b = d.join(format!("b{k}"));
+        let s = calibrate_command(&bag, &b, Method::Dkf, None, Some(&toml));
+        let rows = std::fs::read_to_string(b.join("calibration.csv")).unwrap();
+        let mut expect = Vec::new();
+        let last = mem.history.last().unwrap().history_row();
+        odocal::io::csv::write_history_row(&mut expect, &last).unwrap();
+        assert_eq!(rows.lines().last().unwrap(), String::from_utf8(expect).unwrap().trim_end());
         assert_eq!(s.final_params, mem.summary.final_params);
         assert_eq!(s.iterations, mem.summary.iterations);
     }
 }
 
 #[test]
-fn streamed_icp_matches_on_real_bags() {
+fn icp_of_real_bags_matches_the_in_memory_run() {
     let (cfg, _) = config();
-    let d = scratch("streamed_icp_matches_on_real_bags");
-    for (k, (bag, read)) in real_bags("streamed_icp_matches_on_real_bags")
+    let d = scratch("real_bags_icp");
+    for (k, (bag, read)) in real_bags("icp_of_real_bags_matches_the_in_memory_run")
         .into_iter()
         .enumerate()
     {
@@ -367,19 +397,27 @@ fn streamed_icp_matches_on_real_bags() {
             ..RobotConfig::default()
         };
         let rec = read_recording(&bag, &read).unwrap();
-        let whole = pipeline::icp::run(&rec, &robot, &cfg.icp).unwrap();
         let (a, b) = (d.join(format!("a{k}.csv")), d.join(format!("b{k}.csv")));
-        pipeline::icp::write(&whole, &d.join(format!("a{k}.tum")), Some(&a)).unwrap();
-        pipeline::icp::run_file(
-            &bag,
-            &read,
-            &robot,
-            &cfg.icp,
-            &d.join(format!("b{k}.tum")),
-            Some(&b),
-            &mut |_| {},
+        icp_in_memory(&rec, &robot, &cfg, &d.join(format!("a{k}.tum")), &a);
+        let robot_toml = d.join(format!("robot{k}.toml"));
+        std::fs::write(
+            &robot_toml,
+            format!(
+                "left_joint = \"{}\"\nright_joint = \"{}\"\n",
+                read.left_joint, read.right_joint
+            ),
         )
         .unwrap();
+        let job = IcpJob {
+            input: bag.clone(),
+            out: d.join(format!("b{k}.tum")),
+            motions: Some(b.clone()),
+            common: Common {
+                config: None,
+                robot: Some(robot_toml),
+            },
+        };
+        pipeline::icp::run(&job, &mut pipeline::NoObserver).unwrap();
         same_file(&a, &b);
         same_file(&d.join(format!("a{k}.tum")), &d.join(format!("b{k}.tum")));
     }
@@ -397,7 +435,7 @@ fn simulate_writes_scans_as_it_casts_them_with_the_in_memory_bytes() {
     let effects = [odocal::effects::Effect::parse("gyro_bias:bias=0.01").unwrap()];
     let out = d.join("streamed.mcap");
     let mut fractions = Vec::new();
-    let (summary, _) = pipeline::simulate::run(
+    let (summary, _) = pipeline::simulate::simulate(
         &cfg.sim,
         &cfg.topics,
         &robot,

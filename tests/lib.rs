@@ -1,5 +1,6 @@
 //! Integration tests, compiled as one binary.
 
+mod architecture;
 mod calib_censi;
 mod calib_end_to_end;
 mod calib_filters;

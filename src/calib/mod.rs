@@ -37,8 +37,8 @@ pub use pf::{ParticleFilter, Particles};
 pub use pool::NormalPool;
 pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};
 pub use robust::student_t_weight;
-pub use run::{run, run_observed, CalibSummary, CalibrationRun, Multipliers};
-pub use runner::Runner;
+pub use run::{CalibSummary, CalibrationRun, Multipliers};
+pub use runner::{run, run_observed, Runner};
 pub use step_builder::StepBuilder;
 pub use steps::{steps, usable, CalibStep, Kind, Measurement, MAX_GAP_STEP, MAX_MEASUREMENTS};
 pub use trigger::Trigger;
@@ -59,7 +59,10 @@ pub enum CalibError {
 }
 
 /// The calibrator's output after one step: parameter means and standard
-/// deviations (m), the filter's velocities, and bookkeeping.
+/// deviations (m), the filter's velocities, and bookkeeping. It serialises
+/// as a row of the calibration history (design.md's columns, in order:
+/// `t, r_right, r_left, wheel_base, std_r_right, std_r_left,
+/// std_wheel_base, particles, process_sigma`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Estimate {
     /// End of the step (s).
@@ -77,16 +80,20 @@ pub struct Estimate {
     /// σ of the wheel base (m).
     pub std_wheel_base: f64,
     /// Estimated forward velocity over the step (m/s).
+    #[serde(skip)]
     pub v: f64,
     /// Estimated turn rate over the step (rad/s).
+    #[serde(skip)]
     pub w: f64,
     /// Particles used (0 for the Kalman filters and `none`).
     pub particles: usize,
     /// Process noise σ on the parameters used for the next step (m).
     pub process_sigma: f64,
     /// Whether the step resampled.
+    #[serde(skip)]
     pub resampled: bool,
     /// Whether every weight underflowed and the weights were reset.
+    #[serde(skip)]
     pub weights_reset: bool,
 }
 

@@ -1,9 +1,8 @@
-//! A calibrator over a whole list of steps: parameter history, the calibrated
-//! odometry, the summary with the multipliers for ROS `diff_drive_controller`.
+//! What a calibration run gives: the parameter history, the calibrated
+//! odometry, and the summary with the multipliers for ROS
+//! `diff_drive_controller`.
 
-use super::runner::Runner;
-use super::steps::CalibStep;
-use super::{Calibrator, Estimate};
+use super::Estimate;
 use crate::robot::DiffDrive;
 use crate::traj::Trajectory;
 use serde::Serialize;
@@ -97,41 +96,5 @@ impl CalibSummary {
                 wheel_separation: ratio(final_params.wheel_base, nominal.wheel_base),
             },
         }
-    }
-}
-
-/// Runs `cal` over `steps` (a [`Runner`] fed the whole list). Each step's
-/// wheel increment (rate × the part of its interval not already integrated,
-/// so overlapping intervals are not counted twice) is integrated with
-/// `DiffDrive::increment` using the estimate after that step — what an online
-/// system knows at the step's end. With no steps the summary holds the
-/// nominal parameters and 0 iterations.
-pub fn run(cal: &mut dyn Calibrator, steps: &[CalibStep], nominal: DiffDrive) -> CalibrationRun {
-    run_observed(cal, steps, nominal, &mut |_, _| {})
-}
-
-/// Like [`run`], calling `on_step` after every step with the estimate and the
-/// calibrator's particle cloud (if it has one), e.g. to show it in a viewer.
-pub fn run_observed(
-    cal: &mut dyn Calibrator,
-    steps: &[CalibStep],
-    nominal: DiffDrive,
-    on_step: &mut dyn FnMut(&Estimate, Option<super::CloudView<'_>>),
-) -> CalibrationRun {
-    let mut history = Vec::with_capacity(steps.len());
-    let mut trajectory = Trajectory::with_capacity(steps.len() + 1);
-    let mut runner = Runner::new(cal, nominal);
-    for s in steps {
-        let e = runner.step(s, &mut |t, p| {
-            trajectory.push(t, *p);
-        });
-        on_step(&e, runner.cloud());
-        history.push(e);
-    }
-    CalibrationRun {
-        summary: runner.summary(),
-        history,
-        trajectory,
-        weight_resets: runner.weight_resets(),
     }
 }

@@ -1,14 +1,15 @@
 //! The one calibration driver: a calibrator fed one aligned step at a time,
 //! giving its estimate and the calibrated odometry as it goes. Batch runs
-//! ([`super::run`]) and streamed bags are this runner fed a list or a stream.
+//! ([`run`]) and streamed bags are this runner fed a list or a stream.
 
 use std::time::Instant;
 
-use super::run::CalibSummary;
+use super::run::{CalibSummary, CalibrationRun};
 use super::steps::CalibStep;
 use super::{Calibrator, CloudView, Estimate};
 use crate::geom::Pose2;
 use crate::robot::DiffDrive;
+use crate::traj::Trajectory;
 
 /// Drives a calibrator step by step, integrating the calibrated odometry
 /// with the estimate after each step (what an online system knows then).
@@ -92,5 +93,41 @@ impl<'c> Runner<'c> {
             self.steps,
             self.total_s,
         )
+    }
+}
+
+/// Runs `cal` over `steps` (a [`Runner`] fed the whole list). Each step's
+/// wheel increment (rate × the part of its interval not already integrated,
+/// so overlapping intervals are not counted twice) is integrated with
+/// `DiffDrive::increment` using the estimate after that step — what an online
+/// system knows at the step's end. With no steps the summary holds the
+/// nominal parameters and 0 iterations.
+pub fn run(cal: &mut dyn Calibrator, steps: &[CalibStep], nominal: DiffDrive) -> CalibrationRun {
+    run_observed(cal, steps, nominal, &mut |_, _| {})
+}
+
+/// Like [`run`], calling `on_step` after every step with the estimate and the
+/// calibrator's particle cloud (if it has one), e.g. to show it in a viewer.
+pub fn run_observed(
+    cal: &mut dyn Calibrator,
+    steps: &[CalibStep],
+    nominal: DiffDrive,
+    on_step: &mut dyn FnMut(&Estimate, Option<CloudView<'_>>),
+) -> CalibrationRun {
+    let mut history = Vec::with_capacity(steps.len());
+    let mut trajectory = Trajectory::with_capacity(steps.len() + 1);
+    let mut runner = Runner::new(cal, nominal);
+    for s in steps {
+        let e = runner.step(s, &mut |t, p| {
+            trajectory.push(t, *p);
+        });
+        on_step(&e, runner.cloud());
+        history.push(e);
+    }
+    CalibrationRun {
+        summary: runner.summary(),
+        history,
+        trajectory,
+        weight_resets: runner.weight_resets(),
     }
 }

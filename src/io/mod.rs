@@ -85,3 +85,37 @@ pub fn read_recording(path: &Path, opts: &ReadOptions) -> Result<Recording, Inpu
         )),
     }
 }
+
+/// Opens a recording file as a sample source, by its sniffed format: ROS 2
+/// bags stream from disk, CARMEN logs are read whole and then streamed.
+pub fn open<'o>(
+    path: &Path,
+    opts: &'o ReadOptions,
+) -> Result<Box<dyn SampleSource + 'o>, InputError> {
+    match sniff(path)? {
+        Format::Mcap => Ok(Box::new(McapStream::open(path, opts)?)),
+        Format::Text | Format::CensiTuples => Ok(Box::new(RecordingSource::owned(
+            read_recording(path, opts)?,
+        ))),
+    }
+}
+
+/// Reads a whole source into a [`Recording`] (streams sorted by stamp).
+pub fn collect(source: &mut dyn SampleSource) -> Result<Recording, InputError> {
+    let info = source.info().clone();
+    let mut rec = Recording {
+        source: source.name().to_string(),
+        base_from_laser: info.base_from_laser,
+        ..Default::default()
+    };
+    while let Some(item) = source.next_item()? {
+        match item {
+            Item::Scan(s) => rec.scans.push(s),
+            Item::Wheel(w) => rec.wheels.push(w),
+            Item::Gyro(g) => rec.gyro.push(g),
+            Item::Odom(p) => rec.odom.push(p),
+            Item::Reference(p) => rec.reference.push(p),
+        }
+    }
+    Ok(rec)
+}

@@ -1,16 +1,13 @@
 //! Every recording format as one stream of samples: a [`SampleSource`] yields
 //! each stream (scans, wheels, gyro, odometry, reference) in stamp order,
 //! after saying how many samples each stream has and where the laser sits.
-//! ROS 2 bags stream from disk in bounded memory ([`super::mcap_stream`]);
+//! ROS 2 bags stream from disk in bounded memory ([`super::McapStream`]);
 //! a recording already in memory, or a format read whole, is streamed by
 //! [`RecordingSource`]. The stages downstream see only the source, so every
 //! format gets the same streaming pipeline.
 
 use std::borrow::Cow;
-use std::path::Path;
 
-use super::format::{sniff, Format};
-use super::options::ReadOptions;
 use crate::error::InputError;
 use crate::geom::Pose2;
 use crate::recording::{GyroSample, Recording, StampedPose, WheelSample};
@@ -162,38 +159,4 @@ impl SampleSource for RecordingSource<'_> {
             .reduce(|a, b| if b.1 < a.1 { b } else { a });
         Ok(earliest.map(|(k, _)| self.take(k)))
     }
-}
-
-/// Opens a recording file as a sample source, by its sniffed format: ROS 2
-/// bags stream from disk, CARMEN logs are read whole and then streamed.
-pub fn open<'o>(
-    path: &Path,
-    opts: &'o ReadOptions,
-) -> Result<Box<dyn SampleSource + 'o>, InputError> {
-    match sniff(path)? {
-        Format::Mcap => Ok(Box::new(super::mcap_stream::McapStream::open(path, opts)?)),
-        Format::Text | Format::CensiTuples => Ok(Box::new(RecordingSource::owned(
-            super::read_recording(path, opts)?,
-        ))),
-    }
-}
-
-/// Reads a whole source into a [`Recording`] (streams sorted by stamp).
-pub fn collect(source: &mut dyn SampleSource) -> Result<Recording, InputError> {
-    let info = source.info().clone();
-    let mut rec = Recording {
-        source: source.name().to_string(),
-        base_from_laser: info.base_from_laser,
-        ..Default::default()
-    };
-    while let Some(item) = source.next_item()? {
-        match item {
-            Item::Scan(s) => rec.scans.push(s),
-            Item::Wheel(w) => rec.wheels.push(w),
-            Item::Gyro(g) => rec.gyro.push(g),
-            Item::Odom(p) => rec.odom.push(p),
-            Item::Reference(p) => rec.reference.push(p),
-        }
-    }
-    Ok(rec)
 }

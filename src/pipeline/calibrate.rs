@@ -4,6 +4,7 @@
 //! go through the one driver ([`super::drive`]).
 
 use super::drive;
+pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
 use super::outputs::{CalibFiles, Collect};
 use super::recorder::{RecorderOptions, StreamRecorder};
@@ -13,27 +14,7 @@ use crate::calib::{self, CalibParams, CalibSummary, CalibrationRun, Ranges};
 use crate::motion::VelocityObs;
 use crate::recording::{GyroSample, WheelSample};
 use crate::robot::RobotConfig;
-use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-
-/// How measurements other than ICP enter the calibration.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct MeasurementConfig {
-    /// Use the gyro's yaw rate as a W measurement when the recording has one.
-    pub use_gyro: bool,
-    /// σ of one gyro sample (rad/s).
-    pub gyro_sigma: f64,
-}
-
-impl Default for MeasurementConfig {
-    fn default() -> Self {
-        Self {
-            use_gyro: true,
-            gyro_sigma: 0.003,
-        }
-    }
-}
 
 /// What a calibrator is fed: wheel angles, velocity observations, gyro.
 #[derive(Debug, Clone, Default)]
@@ -192,7 +173,7 @@ pub fn run(job: &CalibrateJob, watch: &mut dyn RunObserver) -> Result<CalibrateO
     let summary = match &job.input {
         CalibSource::Recording(path) => {
             let read = super::read_options(&cfg, &robot);
-            let mut source = crate::io::source::open(path, &read)?;
+            let mut source = crate::io::open(path, &read)?;
             drive::run_calibration(source.as_mut(), &robot, &cfg.icp, &params, &cfg.measurements, &mut obs)?
         }
         CalibSource::Csv { motions, wheels } => {

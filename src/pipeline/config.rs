@@ -1,7 +1,7 @@
 //! The configuration file (`--config CFG.toml`) and robot file (`--robot`):
 //! one table per stage, each the stage's own parameter struct with defaults.
 
-use super::calibrate::MeasurementConfig;
+use super::drive::MeasurementConfig;
 use super::PipelineError;
 use crate::calib::CalibParams;
 use crate::diagnose::DiagnoseParams;

@@ -7,7 +7,6 @@
 
 use std::time::Instant;
 
-use super::calibrate::MeasurementConfig;
 use super::observe::RunObserver;
 use super::PipelineError;
 use crate::calib::{self, CalibParams, CalibStep, CalibSummary, Calibrator, Runner, StepBuilder};
@@ -17,6 +16,26 @@ use crate::io::{Item, SampleSource, StreamInfo};
 use crate::motion::{Motion, VelocityObs};
 use crate::recording::{GyroSample, WheelSample};
 use crate::robot::RobotConfig;
+use serde::{Deserialize, Serialize};
+
+/// How measurements other than ICP enter the calibration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MeasurementConfig {
+    /// Use the gyro's yaw rate as a W measurement when the recording has one.
+    pub use_gyro: bool,
+    /// σ of one gyro sample (rad/s).
+    pub gyro_sigma: f64,
+}
+
+impl Default for MeasurementConfig {
+    fn default() -> Self {
+        Self {
+            use_gyro: true,
+            gyro_sigma: 0.003,
+        }
+    }
+}
 
 /// Summary of the ICP part of a run.
 #[derive(Debug, Clone)]

@@ -7,34 +7,13 @@ use super::observe::{Observers, RunObserver};
 use super::outputs::{Collect, IcpFiles};
 use super::{Common, PipelineError};
 use crate::geom::Pose2;
-use crate::icp::{IcpParams, IcpStats};
+use crate::icp::IcpParams;
 use crate::io::{RecordingSource, SampleSource};
-use crate::motion::{Motion, VelocityObs};
 use crate::recording::Recording;
 use crate::robot::RobotConfig;
-use crate::traj::Trajectory;
 use std::path::PathBuf;
 
-/// Motions, their summary and the chained trajectory of one ICP run.
-#[derive(Debug, Clone)]
-pub struct IcpOutput {
-    /// One motion per consecutive scan pair (base frame).
-    pub motions: Vec<Motion>,
-    /// Counts, iterations and timing.
-    pub stats: IcpStats,
-    /// Motions chained from the identity at the first scan.
-    pub trajectory: Trajectory,
-}
-
-impl IcpOutput {
-    /// Velocity observations of the valid pairs (failed pairs give none).
-    pub fn observations(&self) -> Vec<VelocityObs> {
-        self.motions
-            .iter()
-            .filter_map(VelocityObs::from_motion)
-            .collect()
-    }
-}
+pub use super::outputs::IcpOutput;
 
 /// `base_from_laser`: the recording's /tf_static when present, else the robot file's.
 pub fn base_from_laser(rec: &Recording, robot: &RobotConfig) -> Pose2 {
@@ -71,7 +50,7 @@ pub struct IcpJob {
 pub fn run(job: &IcpJob, watch: &mut dyn RunObserver) -> Result<IcpRunSummary, PipelineError> {
     let (cfg, robot) = job.common.load()?;
     let read = super::read_options(&cfg, &robot);
-    let mut source = crate::io::source::open(&job.input, &read)?;
+    let mut source = crate::io::open(&job.input, &read)?;
     run_source(source.as_mut(), &robot, &cfg.icp, job, watch)
 }
 

@@ -11,7 +11,7 @@ use crate::calib::{CalibSummary, CalibrationRun, CloudView, Estimate};
 use crate::geom::Pose2;
 use crate::icp::IcpStats;
 use crate::io::stream_out::AtomicWriter;
-use crate::motion::Motion;
+use crate::motion::{Motion, VelocityObs};
 use crate::traj::Trajectory;
 
 /// A text file written line by line, keeping its first write error.
@@ -159,6 +159,27 @@ impl RunObserver for CalibFiles {
     }
 }
 
+/// Motions, their summary and the chained trajectory of one ICP run.
+#[derive(Debug, Clone)]
+pub struct IcpOutput {
+    /// One motion per consecutive scan pair (base frame).
+    pub motions: Vec<Motion>,
+    /// Counts, iterations and timing.
+    pub stats: IcpStats,
+    /// Motions chained from the identity at the first scan.
+    pub trajectory: Trajectory,
+}
+
+impl IcpOutput {
+    /// Velocity observations of the valid pairs (failed pairs give none).
+    pub fn observations(&self) -> Vec<VelocityObs> {
+        self.motions
+            .iter()
+            .filter_map(VelocityObs::from_motion)
+            .collect()
+    }
+}
+
 /// Keeps a run's results in memory: the motions and ICP trajectory, the
 /// estimate after every filter step and the calibrated trajectory.
 #[derive(Debug, Default)]
@@ -189,8 +210,8 @@ impl Collect {
     }
 
     /// The ICP output these results make with its `stats`.
-    pub fn icp(&mut self, stats: IcpStats) -> super::icp::IcpOutput {
-        super::icp::IcpOutput {
+    pub fn icp(&mut self, stats: IcpStats) -> IcpOutput {
+        IcpOutput {
             motions: std::mem::take(&mut self.motions),
             stats,
             trajectory: std::mem::take(&mut self.icp_trajectory),
