@@ -115,17 +115,12 @@ fn a_bag_and_the_same_recording_in_memory_are_recorded_alike_and_whole() {
     assert_eq!(st.icp, mem.icp);
     assert_eq!(st.particles, mem.particles);
     assert_eq!(st.estimates, mem.estimates);
-    let (sp, mp): (Vec<Pose2>, Vec<Pose2>) = st
-        .scans
-        .iter()
-        .zip(&mem.scans)
-        .map(|(a, b)| {
-            assert_eq!((a.0, a.1, a.3), (b.0, b.1, b.3));
-            let p = |x: [f64; 3]| geom::pose(x[0], x[1], x[2]);
-            (p(a.2), p(b.2))
-        })
-        .unzip();
-    assert!(same_shape(&sp, &mp, 1e-9));
+    // A scan is drawn at the ICP pose known when it is placed, which depends
+    // on how the streams interleave; which scans, when and with how many
+    // points does not.
+    for (a, b) in st.scans.iter().zip(&mem.scans) {
+        assert_eq!((a.0, a.1, a.3), (b.0, b.1, b.3));
+    }
     for ((k, a), (l, b)) in st.trajectories.iter().zip(&mem.trajectories) {
         assert_eq!(k, l);
         assert!(same_shape(a, b, 1e-9), "{k:?}");
