@@ -2,26 +2,27 @@
 //! evaluation against the recording's reference — into a directory with a
 //! report, plots, trajectories and a Rerun recording.
 
-use super::calibrate::{self, CalibInput};
-use super::drive;
-use super::icp::IcpOutput;
-use super::observe::Observers;
-use super::outputs::{CalibFiles, Collect, IcpFiles};
-use super::recorder::{anchor, in_world, RecorderOptions, StreamRecorder};
-use super::viewer::{open_logger, Viewer};
-use super::{Common, Config, PipelineError};
-use crate::calib::{self, CalibrationRun, Method};
+mod figures;
+mod report;
+
+use crate::pipeline::calibrate::{self, CalibInput};
+use crate::pipeline::drive;
+use crate::pipeline::icp::IcpOutput;
+use crate::pipeline::observe::Observers;
+use crate::pipeline::outputs::{CalibFiles, Collect, IcpFiles};
+use crate::pipeline::recorder::{RecorderOptions, StreamRecorder};
+use crate::pipeline::viewer::{open_logger, Viewer};
+use crate::pipeline::{Common, Config, PipelineError};
+use crate::calib::{CalibrationRun, Method};
 use crate::eval::{self, Alignment, EvalOptions, Trajectory3, TrajectoryMetrics};
 use crate::geom::Pose2;
 use crate::recording::Recording;
 use crate::robot::{wheel_odometry, RobotConfig};
 use crate::sim::Truth;
 use crate::traj::Trajectory;
-use crate::viz::plot::{self, LineChart, PathSeries, Series, TrajectoryPlot};
-use crate::viz::report::{num, Report};
 use crate::error::InputError;
 use crate::io::RecordingSource;
-use crate::viz::{Logger, NullLogger, TrajectoryKind};
+use crate::viz::{Logger, NullLogger};
 use nalgebra::Point2;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -114,14 +115,14 @@ fn convergence(run: &CalibrationRun, truth: &Truth, t_start: f64) -> Option<f64>
     settled
 }
 
-fn xy(poses: &[Pose2]) -> Vec<[f64; 2]> {
+pub(super) fn xy(poses: &[Pose2]) -> Vec<[f64; 2]> {
     poses
         .iter()
         .map(|p| [p.translation.x, p.translation.y])
         .collect()
 }
 
-fn viz_err(e: crate::viz::VizError) -> PipelineError {
+pub(super) fn viz_err(e: crate::viz::VizError) -> PipelineError {
     PipelineError::Write {
         path: "visualisation".into(),
         message: e.to_string(),
@@ -172,7 +173,7 @@ pub fn run(
         ),
     };
     let truth = truth_path.as_deref().map(load_truth).transpose()?;
-    let rec = super::read_recording(&input, &cfg, &robot)?;
+    let rec = crate::pipeline::read_recording(&input, &cfg, &robot)?;
     std::fs::create_dir_all(&job.out).map_err(|e| PipelineError::write(&job.out, e))?;
     let viewer = job.viewer.clone().or_else(|| {
         cfg!(feature = "rerun").then(|| Viewer::File(job.out.join("demo.rrd")))
@@ -230,9 +231,9 @@ pub fn run_on(
         methods: method_results(input, &runs, reference3.as_ref(), t_start),
         wall_s: 0.0,
     };
-    plots(input, &icp_out.trajectory, &raw, &runs, reference2.as_ref(), t_start, out)?;
+    figures::plots(input, &icp_out.trajectory, &raw, &runs, reference2.as_ref(), t_start, out)?;
     summary.wall_s = start.elapsed().as_secs_f64();
-    report(input, &summary, out)?;
+    report::report(input, &summary, out)?;
     let js = out.join("summary.json");
     let text = serde_json::to_string_pretty(&summary).expect("summary serialises");
     crate::io::atomic::write_bytes_atomic(&js, text.as_bytes())
@@ -345,273 +346,3 @@ fn method_results(
         .collect()
 }
 
-fn series_over_time(
-    name: &str,
-    run: &CalibrationRun,
-    t_start: f64,
-    f: impl Fn(&calib::Estimate) -> f64,
-) -> Series {
-    let pts = run.history.iter().map(|h| [h.t - t_start, f(h)]).collect();
-    Series::new(name, pts)
-}
-
-const METHOD_COLORS: [[u8; 3]; 5] = [
-    [44, 160, 44],
-    [31, 119, 180],
-    [148, 103, 189],
-    [255, 127, 14],
-    [214, 39, 40],
-];
-
-/// The paper's figures as PNG.
-fn plots(
-    input: &DemoInput<'_>,
-    icp_traj: &Trajectory,
-    raw: &Trajectory,
-    runs: &[(Method, CalibrationRun)],
-    reference: Option<&Trajectory>,
-    t_start: f64,
-    out: &Path,
-) -> Result<(), PipelineError> {
-    // Fig. 6/8: radius evolution against truth.
-    let mut panels: Vec<(String, Vec<Series>)> = vec![
-        ("R_R (m)".into(), Vec::new()),
-        ("R_L (m)".into(), Vec::new()),
-        ("wheel base D (m)".into(), Vec::new()),
-    ];
-    for ((m, run), color) in runs.iter().zip(METHOD_COLORS) {
-        if *m == Method::Pf {
-            continue; // diverges along D; its radii would flatten the scale of the others
-        }
-        panels[0]
-            .1
-            .push(series_over_time(m.as_str(), run, t_start, |h| h.r_right).color(color));
-        panels[1]
-            .1
-            .push(series_over_time(m.as_str(), run, t_start, |h| h.r_left).color(color));
-        panels[2]
-            .1
-            .push(series_over_time(m.as_str(), run, t_start, |h| h.wheel_base).color(color));
-    }
-    if let Some(t) = input.truth {
-        let get = |f: fn(&crate::sim::TrueParameters) -> f64| {
-            t.parameters.iter().map(|p| [p.t, f(p)]).collect::<Vec<_>>()
-        };
-        panels[0].1.push(
-            Series::new("truth", get(|p| p.r_right))
-                .color([0, 0, 0])
-                .dashed(),
-        );
-        panels[1].1.push(
-            Series::new("truth", get(|p| p.r_left))
-                .color([0, 0, 0])
-                .dashed(),
-        );
-        panels[2].1.push(
-            Series::new("truth", get(|p| p.wheel_base))
-                .color([0, 0, 0])
-                .dashed(),
-        );
-    }
-    let mut chart = LineChart::new("Wheel radii and wheel base over time", "time (s)");
-    for (label, s) in panels {
-        chart = chart.panel(label, s);
-    }
-    plot::line_chart(&out.join("radii.png"), &chart).map_err(viz_err)?;
-
-    // Fig. 5: particle count and process noise of the Adaptive-PF.
-    let adaptive = &runs[0].1;
-    let chart = LineChart::new("Adaptive-PF: particle count and process noise", "time (s)")
-        .panel(
-            "particles",
-            vec![series_over_time("particles", adaptive, t_start, |h| {
-                h.particles as f64
-            })],
-        )
-        .panel(
-            "process σ (m)",
-            vec![series_over_time("process sigma", adaptive, t_start, |h| {
-                h.process_sigma
-            })],
-        );
-    plot::line_chart(&out.join("particles.png"), &chart).map_err(viz_err)?;
-
-    // Fig. 7: trajectories against the reference, and position error over time.
-    let mut paths = Vec::new();
-    let mut errors = Vec::new();
-    let mut add = |name: &str, t: &Trajectory, kind: TrajectoryKind| {
-        let w = anchor(t, reference);
-        let poses = in_world(t, &w);
-        if let Some(r) = reference {
-            let e: Vec<[f64; 2]> = t
-                .stamps
-                .iter()
-                .zip(&poses)
-                .filter_map(|(&s, p)| {
-                    r.pose_at(s).map(|q| {
-                        [
-                            s - t_start,
-                            (p.translation.vector - q.translation.vector).norm(),
-                        ]
-                    })
-                })
-                .collect();
-            errors.push(Series::new(name, e).color(kind.color()));
-        }
-        paths.push(PathSeries::new(name, xy(&poses)).color(kind.color()));
-    };
-    add("raw odometry", raw, TrajectoryKind::RawOdometry);
-    add("ICP", icp_traj, TrajectoryKind::Icp);
-    add(
-        "calibrated (adaptive-pf)",
-        &adaptive.trajectory,
-        TrajectoryKind::Calibrated,
-    );
-    if let Some(r) = reference {
-        paths.insert(
-            0,
-            PathSeries::new("reference", xy(&r.poses))
-                .color(TrajectoryKind::Reference.color())
-                .dashed(),
-        );
-    }
-    plot::trajectory_plot(
-        &out.join("trajectories.png"),
-        &TrajectoryPlot::new("Trajectories (start anchored on the reference)", paths),
-    )
-    .map_err(viz_err)?;
-    if !errors.is_empty() {
-        let chart = LineChart::new("Position error against the reference", "time (s)")
-            .panel("position error (m)", errors);
-        plot::line_chart(&out.join("errors.png"), &chart).map_err(viz_err)?;
-    }
-    Ok(())
-}
-
-fn opt(v: Option<f64>, decimals: usize) -> String {
-    v.map(|x| num(x, decimals)).unwrap_or_else(|| "–".into())
-}
-
-fn report(input: &DemoInput<'_>, s: &DemoSummary, out: &Path) -> Result<(), PipelineError> {
-    let mut r = Report::new();
-    r.heading(1, "odocal demo");
-    let mut settings = vec![
-        ("recording".to_string(), s.input.clone()),
-        ("scans".into(), s.scans.to_string()),
-        ("duration".into(), format!("{:.1} s", s.duration_s)),
-        (
-            "nominal robot".into(),
-            format!(
-                "{}: R_R {} m, R_L {} m, D {} m, {} ticks/rev",
-                input.robot.name,
-                input.robot.r_right,
-                input.robot.r_left,
-                input.robot.wheel_base,
-                input.robot.ticks_per_rev
-            ),
-        ),
-        (
-            "calibrator seed".into(),
-            input.config.calib.seed.to_string(),
-        ),
-    ];
-    if let Some(t) = input.truth {
-        settings.push((
-            "scenario".into(),
-            format!("{} (seed {})", t.scenario, t.seed),
-        ));
-        settings.push(("injected effects".into(), t.effect_specs.join("; ")));
-    }
-    r.kv(&settings);
-    r.heading(2, "Calibration");
-    let rows: Vec<Vec<String>> = s
-        .methods
-        .iter()
-        .map(|m| {
-            let e = m.final_errors;
-            vec![
-                m.method.clone(),
-                num(m.final_params[0], 5),
-                num(m.final_params[1], 5),
-                num(m.final_params[2], 4),
-                opt(e.map(|e| e[0] * 1000.0), 2),
-                opt(e.map(|e| e[1] * 1000.0), 2),
-                opt(e.map(|e| e[2] * 1000.0), 2),
-                opt(m.convergence_s, 1),
-                num(m.mean_iteration_ms, 3),
-            ]
-        })
-        .collect();
-    r.table(
-        &[
-            "method",
-            "R_R (m)",
-            "R_L (m)",
-            "D (m)",
-            "err R_R (mm)",
-            "err R_L (mm)",
-            "err D (mm)",
-            "settled within 0.5 % (s)",
-            "ms / step",
-        ],
-        &rows,
-    )
-    .map_err(viz_err)?;
-    r.image(
-        "radii.png",
-        "Radii and wheel base of each method against the truth (seed 000, Fig. 6/8).",
-    );
-    r.image(
-        "particles.png",
-        "Adaptive-PF particle count and process noise (seed 000, Fig. 5).",
-    );
-    r.heading(2, "Odometry against the reference");
-    let mut rows = Vec::new();
-    let mut row = |name: &str, m: &Option<TrajectoryMetrics>| {
-        if let Some(m) = m {
-            rows.push(vec![
-                name.to_string(),
-                num(m.ape.rmse, 3),
-                opt(m.rmse_theta, 4),
-                opt(m.drift_percent, 2),
-                num(m.final_error, 3),
-                num(m.rpe.rmse, 4),
-            ]);
-        }
-    };
-    row("raw odometry (nominal)", &s.raw_odometry_eval);
-    row("ICP", &s.icp_eval);
-    for m in &s.methods {
-        row(&format!("odometry calibrated by {}", m.method), &m.eval);
-    }
-    r.table(
-        &[
-            "trajectory",
-            "APE RMSE (m)",
-            "RMSE θ (rad)",
-            "drift (%)",
-            "final error (m)",
-            "RPE RMSE (m, 1 frame)",
-        ],
-        &rows,
-    )
-    .map_err(viz_err)?;
-    r.paragraph("Every trajectory starts on the reference's pose at its first stamp (origin alignment), as a robot's dead reckoning would.");
-    r.image(
-        "trajectories.png",
-        "Trajectories against the reference (seed 000, Fig. 7).",
-    );
-    r.image("errors.png", "Position error over time.");
-    r.heading(2, "Scan matching and timing");
-    r.kv(&[
-        ("pairs", s.icp.pairs.to_string()),
-        ("failed pairs", s.icp.failed_pairs.to_string()),
-        (
-            "mean ICP iterations",
-            format!("{:.1}", s.icp.mean_iterations),
-        ),
-        ("ICP pairs per second", format!("{:.0}", s.icp.pairs_per_s)),
-        ("whole demo", format!("{:.1} s", s.wall_s)),
-    ]);
-    r.write(&out.join("report.md")).map_err(viz_err)
-}
