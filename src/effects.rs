@@ -1,6 +1,16 @@
 //! Named, parameterised departures of the real robot from its nominal model
 //! (design.md's effect table). The simulator injects them; `diagnose` uses the
 //! same names as candidate causes. A SPEC is `NAME` or `NAME:key=value,...`.
+//!
+//! Each effect is defined here once: its variant of [`Effect`] (the values),
+//! its row of [`EffectKind::params`] (SPEC keys, units, defaults, how the
+//! diagnosis estimates each), and its share of [`Departures`] (what all the
+//! effects amount to at a time, and the laws by which that changes the
+//! robot, forward for the simulator and inverse for the diagnosis).
+
+mod departures;
+
+pub use departures::{invert_gain, Departures, Step};
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -68,18 +78,220 @@ pub enum Effect {
     },
 }
 
+/// The kind of an effect, without its values: one row of the table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EffectKind {
+    /// [`Effect::RadiusScale`].
+    RadiusScale,
+    /// [`Effect::WheelBaseScale`].
+    WheelBaseScale,
+    /// [`Effect::RadiusStep`].
+    RadiusStep,
+    /// [`Effect::RadiusDrift`].
+    RadiusDrift,
+    /// [`Effect::EncoderGain`].
+    EncoderGain,
+    /// [`Effect::Latency`].
+    Latency,
+    /// [`Effect::LaserOffset`].
+    LaserOffset,
+    /// [`Effect::GyroBias`].
+    GyroBias,
+    /// [`Effect::TurnSlip`].
+    TurnSlip,
+}
+
+/// How the diagnosis estimates a parameter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Estimate {
+    /// Fitted by least squares; the value is its finite-difference step
+    /// (in the parameter's unit).
+    Fitted(f64),
+    /// Searched on a grid before the fit and held during it: one degree of
+    /// freedom in the BIC, no standard error.
+    Searched,
+}
+
+/// One parameter of an effect.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Param {
+    /// SPEC key, also the field name in JSON.
+    pub key: &'static str,
+    /// Unit (`1` for relative changes).
+    pub unit: &'static str,
+    /// Default magnitude: typical and clearly visible.
+    pub default: f64,
+    /// Whether a SPEC must give it ≥ 0.
+    pub non_negative: bool,
+    /// How the diagnosis estimates it.
+    pub estimate: Estimate,
+}
+
+impl Param {
+    /// A parameter fitted by least squares with finite-difference `step`.
+    const fn fitted(key: &'static str, unit: &'static str, default: f64, step: f64) -> Self {
+        Self {
+            key,
+            unit,
+            default,
+            non_negative: false,
+            estimate: Estimate::Fitted(step),
+        }
+    }
+
+    /// A parameter the diagnosis searches on a grid.
+    const fn searched(key: &'static str, unit: &'static str, default: f64) -> Self {
+        Self {
+            key,
+            unit,
+            default,
+            non_negative: false,
+            estimate: Estimate::Searched,
+        }
+    }
+
+    /// The same parameter, required to be ≥ 0.
+    const fn non_negative(self) -> Self {
+        Self {
+            non_negative: true,
+            ..self
+        }
+    }
+
+    /// Whether the diagnosis fits it by least squares (a free parameter).
+    pub fn is_free(&self) -> bool {
+        matches!(self.estimate, Estimate::Fitted(_))
+    }
+}
+
+impl EffectKind {
+    /// Every kind, in table order.
+    pub const ALL: [Self; 9] = [
+        Self::RadiusScale,
+        Self::WheelBaseScale,
+        Self::RadiusStep,
+        Self::RadiusDrift,
+        Self::EncoderGain,
+        Self::Latency,
+        Self::LaserOffset,
+        Self::GyroBias,
+        Self::TurnSlip,
+    ];
+
+    /// The table name (SPEC `NAME`, JSON `effect`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::RadiusScale => "radius_scale",
+            Self::WheelBaseScale => "wheel_base_scale",
+            Self::RadiusStep => "radius_step",
+            Self::RadiusDrift => "radius_drift",
+            Self::EncoderGain => "encoder_gain",
+            Self::Latency => "latency",
+            Self::LaserOffset => "laser_offset",
+            Self::GyroBias => "gyro_bias",
+            Self::TurnSlip => "turn_slip",
+        }
+    }
+
+    /// The parameters, in table order (the order of [`Effect::values`]).
+    pub const fn params(self) -> &'static [Param] {
+        match self {
+            Self::RadiusScale => {
+                const {
+                    &[
+                        Param::fitted("right", "1", 0.01, 1e-5),
+                        Param::fitted("left", "1", -0.01, 1e-5),
+                    ]
+                }
+            }
+            Self::WheelBaseScale => const { &[Param::fitted("scale", "1", 0.03, 1e-5)] },
+            Self::RadiusStep => {
+                const {
+                    &[
+                        Param::searched("time", "s", 55.0).non_negative(),
+                        Param::fitted("right", "m", 0.004, 1e-6),
+                        Param::fitted("left", "m", 0.002, 1e-6),
+                    ]
+                }
+            }
+            Self::RadiusDrift => {
+                const {
+                    &[
+                        Param::fitted("right", "m/h", -0.01, 1e-4),
+                        Param::fitted("left", "m/h", -0.005, 1e-4),
+                    ]
+                }
+            }
+            Self::EncoderGain => const { &[Param::fitted("k", "s/rad", 0.02, 1e-5)] },
+            Self::Latency => const { &[Param::fitted("delay", "s", 0.04, 1e-4).non_negative()] },
+            Self::LaserOffset => {
+                const {
+                    &[
+                        Param::fitted("x", "m", 0.05, 1e-5),
+                        Param::fitted("y", "m", 0.02, 1e-5),
+                        Param::fitted("yaw", "rad", 0.02, 1e-5),
+                    ]
+                }
+            }
+            Self::GyroBias => const { &[Param::fitted("bias", "rad/s", 0.005, 1e-6)] },
+            Self::TurnSlip => const { &[Param::fitted("k", "s/rad", 0.1, 1e-5)] },
+        }
+    }
+
+    /// The effect of this kind with `v` in [`Self::params`] order.
+    ///
+    /// # Panics
+    /// If `v` holds fewer values than the kind has parameters.
+    pub fn effect(self, v: &[f64]) -> Effect {
+        match self {
+            Self::RadiusScale => Effect::RadiusScale {
+                right: v[0],
+                left: v[1],
+            },
+            Self::WheelBaseScale => Effect::WheelBaseScale { scale: v[0] },
+            Self::RadiusStep => Effect::RadiusStep {
+                time: v[0],
+                right: v[1],
+                left: v[2],
+            },
+            Self::RadiusDrift => Effect::RadiusDrift {
+                right: v[0],
+                left: v[1],
+            },
+            Self::EncoderGain => Effect::EncoderGain { k: v[0] },
+            Self::Latency => Effect::Latency { delay: v[0] },
+            Self::LaserOffset => Effect::LaserOffset {
+                x: v[0],
+                y: v[1],
+                yaw: v[2],
+            },
+            Self::GyroBias => Effect::GyroBias { bias: v[0] },
+            Self::TurnSlip => Effect::TurnSlip { k: v[0] },
+        }
+    }
+
+    /// The kind of a table name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// The effect of this kind at its default magnitude.
+    pub fn default_effect(self) -> Effect {
+        let v: Vec<f64> = self.params().iter().map(|p| p.default).collect();
+        self.effect(&v)
+    }
+}
+
 /// Every effect name, in table order.
-pub const EFFECT_NAMES: [&str; 9] = [
-    "radius_scale",
-    "wheel_base_scale",
-    "radius_step",
-    "radius_drift",
-    "encoder_gain",
-    "latency",
-    "laser_offset",
-    "gyro_bias",
-    "turn_slip",
-];
+pub const EFFECT_NAMES: [&str; EffectKind::ALL.len()] = {
+    let mut names = [""; EffectKind::ALL.len()];
+    let mut i = 0;
+    while i < names.len() {
+        names[i] = EffectKind::ALL[i].name();
+        i += 1;
+    }
+    names
+};
 
 /// A SPEC that does not parse.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -92,90 +304,50 @@ pub struct EffectSpecError {
 }
 
 impl Effect {
+    /// The kind of this effect.
+    pub fn kind(&self) -> EffectKind {
+        match self {
+            Self::RadiusScale { .. } => EffectKind::RadiusScale,
+            Self::WheelBaseScale { .. } => EffectKind::WheelBaseScale,
+            Self::RadiusStep { .. } => EffectKind::RadiusStep,
+            Self::RadiusDrift { .. } => EffectKind::RadiusDrift,
+            Self::EncoderGain { .. } => EffectKind::EncoderGain,
+            Self::Latency { .. } => EffectKind::Latency,
+            Self::LaserOffset { .. } => EffectKind::LaserOffset,
+            Self::GyroBias { .. } => EffectKind::GyroBias,
+            Self::TurnSlip { .. } => EffectKind::TurnSlip,
+        }
+    }
+
+    /// The parameter values in table order ([`EffectKind::params`]).
+    pub fn values(&self) -> Vec<f64> {
+        match *self {
+            Self::RadiusScale { right, left } => vec![right, left],
+            Self::WheelBaseScale { scale } => vec![scale],
+            Self::RadiusStep { time, right, left } => vec![time, right, left],
+            Self::RadiusDrift { right, left } => vec![right, left],
+            Self::EncoderGain { k } => vec![k],
+            Self::Latency { delay } => vec![delay],
+            Self::LaserOffset { x, y, yaw } => vec![x, y, yaw],
+            Self::GyroBias { bias } => vec![bias],
+            Self::TurnSlip { k } => vec![k],
+        }
+    }
+
     /// The table name of this effect.
     pub fn name(&self) -> &'static str {
-        match self {
-            Self::RadiusScale { .. } => "radius_scale",
-            Self::WheelBaseScale { .. } => "wheel_base_scale",
-            Self::RadiusStep { .. } => "radius_step",
-            Self::RadiusDrift { .. } => "radius_drift",
-            Self::EncoderGain { .. } => "encoder_gain",
-            Self::Latency { .. } => "latency",
-            Self::LaserOffset { .. } => "laser_offset",
-            Self::GyroBias { .. } => "gyro_bias",
-            Self::TurnSlip { .. } => "turn_slip",
-        }
+        self.kind().name()
     }
 
     /// Parameters as (key, value) pairs in table order.
     pub fn params(&self) -> Vec<(&'static str, f64)> {
-        match *self {
-            Self::RadiusScale { right, left } => vec![("right", right), ("left", left)],
-            Self::WheelBaseScale { scale } => vec![("scale", scale)],
-            Self::RadiusStep { time, right, left } => {
-                vec![("time", time), ("right", right), ("left", left)]
-            }
-            Self::RadiusDrift { right, left } => vec![("right", right), ("left", left)],
-            Self::EncoderGain { k } => vec![("k", k)],
-            Self::Latency { delay } => vec![("delay", delay)],
-            Self::LaserOffset { x, y, yaw } => vec![("x", x), ("y", y), ("yaw", yaw)],
-            Self::GyroBias { bias } => vec![("bias", bias)],
-            Self::TurnSlip { k } => vec![("k", k)],
-        }
+        let keys = self.kind().params().iter().map(|p| p.key);
+        keys.zip(self.values()).collect()
     }
 
     /// The effect with its default (typical, clearly visible) magnitude.
     pub fn default_for(name: &str) -> Option<Self> {
-        Some(match name {
-            "radius_scale" => Self::RadiusScale {
-                right: 0.01,
-                left: -0.01,
-            },
-            "wheel_base_scale" => Self::WheelBaseScale { scale: 0.03 },
-            "radius_step" => Self::RadiusStep {
-                time: 55.0,
-                right: 0.004,
-                left: 0.002,
-            },
-            "radius_drift" => Self::RadiusDrift {
-                right: -0.01,
-                left: -0.005,
-            },
-            "encoder_gain" => Self::EncoderGain { k: 0.02 },
-            "latency" => Self::Latency { delay: 0.04 },
-            "laser_offset" => Self::LaserOffset {
-                x: 0.05,
-                y: 0.02,
-                yaw: 0.02,
-            },
-            "gyro_bias" => Self::GyroBias { bias: 0.005 },
-            "turn_slip" => Self::TurnSlip { k: 0.1 },
-            _ => return None,
-        })
-    }
-
-    /// Sets one named parameter; false when the effect has no such key.
-    fn set(&mut self, key: &str, v: f64) -> bool {
-        let slot: &mut f64 = match (self, key) {
-            (Self::RadiusScale { right, .. }, "right") => right,
-            (Self::RadiusScale { left, .. }, "left") => left,
-            (Self::WheelBaseScale { scale }, "scale") => scale,
-            (Self::RadiusStep { time, .. }, "time") => time,
-            (Self::RadiusStep { right, .. }, "right") => right,
-            (Self::RadiusStep { left, .. }, "left") => left,
-            (Self::RadiusDrift { right, .. }, "right") => right,
-            (Self::RadiusDrift { left, .. }, "left") => left,
-            (Self::EncoderGain { k }, "k") => k,
-            (Self::Latency { delay }, "delay") => delay,
-            (Self::LaserOffset { x, .. }, "x") => x,
-            (Self::LaserOffset { y, .. }, "y") => y,
-            (Self::LaserOffset { yaw, .. }, "yaw") => yaw,
-            (Self::GyroBias { bias }, "bias") => bias,
-            (Self::TurnSlip { k }, "k") => k,
-            _ => return false,
-        };
-        *slot = v;
-        true
+        EffectKind::from_name(name).map(EffectKind::default_effect)
     }
 
     /// Parses `NAME` or `NAME:key=value,key=value`; keys not given keep their
@@ -190,39 +362,44 @@ impl Effect {
             Some((n, r)) => (n.trim(), Some(r)),
             None => (spec.trim(), None),
         };
-        let mut e = Self::default_for(name).ok_or_else(|| {
+        let kind = EffectKind::from_name(name).ok_or_else(|| {
             err(format!(
                 "unknown effect '{name}' (known: {})",
                 EFFECT_NAMES.join(", ")
             ))
         })?;
-        if let Some(rest) = rest {
-            for kv in rest.split(',').filter(|s| !s.trim().is_empty()) {
-                let (k, v) = kv
-                    .split_once('=')
-                    .ok_or_else(|| err(format!("expected key=value, got '{kv}'")))?;
-                let v: f64 = v
-                    .trim()
-                    .parse()
-                    .map_err(|_| err(format!("'{}' is not a number", v.trim())))?;
-                if !v.is_finite() {
-                    return Err(err(format!("{} must be finite", k.trim())));
-                }
-                if !e.set(k.trim(), v) {
-                    let keys: Vec<_> = e.params().iter().map(|p| p.0).collect();
-                    return Err(err(format!(
-                        "{name} has no parameter '{}' (parameters: {})",
-                        k.trim(),
-                        keys.join(", ")
-                    )));
-                }
+        let params = kind.params();
+        let mut values: Vec<f64> = params.iter().map(|p| p.default).collect();
+        for kv in rest.into_iter().flat_map(|r| r.split(',')) {
+            if kv.trim().is_empty() {
+                continue;
+            }
+            let (k, v) = kv
+                .split_once('=')
+                .ok_or_else(|| err(format!("expected key=value, got '{kv}'")))?;
+            let v: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| err(format!("'{}' is not a number", v.trim())))?;
+            if !v.is_finite() {
+                return Err(err(format!("{} must be finite", k.trim())));
+            }
+            let Some(i) = params.iter().position(|p| p.key == k.trim()) else {
+                let keys: Vec<_> = params.iter().map(|p| p.key).collect();
+                return Err(err(format!(
+                    "{name} has no parameter '{}' (parameters: {})",
+                    k.trim(),
+                    keys.join(", ")
+                )));
+            };
+            values[i] = v;
+        }
+        for (p, v) in params.iter().zip(&values) {
+            if p.non_negative && *v < 0.0 {
+                return Err(err(format!("{} must be ≥ 0 {}", p.key, p.unit)));
             }
         }
-        match e {
-            Self::Latency { delay } if delay < 0.0 => Err(err("delay must be ≥ 0 s".into())),
-            Self::RadiusStep { time, .. } if time < 0.0 => Err(err("time must be ≥ 0 s".into())),
-            _ => Ok(e),
-        }
+        Ok(kind.effect(&values))
     }
 }
 
@@ -248,6 +425,41 @@ mod tests {
             assert_eq!(e.name(), name);
             assert_eq!(Effect::parse(&e.to_string()).unwrap(), e);
             assert_eq!(Effect::parse(name).unwrap(), e);
+        }
+    }
+
+    #[test]
+    fn the_table_lists_every_kind_once_in_order() {
+        for (i, k) in EffectKind::ALL.into_iter().enumerate() {
+            assert_eq!(k as usize, i);
+            assert_eq!(k.default_effect().kind(), k);
+        }
+    }
+
+    #[test]
+    fn the_table_holds_every_variant_of_effect() {
+        // serde lists every variant it knows when it meets an unknown one.
+        let err = serde_json::from_str::<Effect>(r#"{"effect": "?"}"#).unwrap_err();
+        let msg = err.to_string();
+        let known = msg.split("expected one of ").nth(1).unwrap();
+        let variants: Vec<&str> = known.split('`').skip(1).step_by(2).collect();
+        assert_eq!(variants, EFFECT_NAMES, "{msg}");
+    }
+
+    #[test]
+    fn parameter_keys_name_the_fields_in_value_order() {
+        for k in EffectKind::ALL {
+            let params = k.params();
+            let v: Vec<f64> = (1..=params.len()).map(|i| i as f64).collect();
+            let e = k.effect(&v);
+            assert_eq!(e.values(), v);
+            let json = serde_json::to_value(e).unwrap();
+            let fields = json.as_object().unwrap();
+            assert_eq!(fields.len(), params.len() + 1, "{json}");
+            assert_eq!(fields["effect"], k.name());
+            for (p, x) in params.iter().zip(&v) {
+                assert_eq!(fields[p.key].as_f64(), Some(*x), "{} {}", k.name(), p.key);
+            }
         }
     }
 
@@ -280,5 +492,13 @@ mod tests {
         ] {
             assert!(Effect::parse(bad).is_err(), "{bad} should fail");
         }
+        assert_eq!(
+            Effect::parse("radius_step:time=-1").unwrap_err().message,
+            "time must be ≥ 0 s"
+        );
+        assert_eq!(
+            Effect::parse("latency:delay=-1").unwrap_err().message,
+            "delay must be ≥ 0 s"
+        );
     }
 }

@@ -171,9 +171,9 @@ fn censi_tuples_laser_mount_matches_the_authors_calibration() {
             "{set} yaw {got:?} {want:?}"
         );
         // Turn-rate scale mean(R)/D relative to nominal, both calibrations.
-        let x =
-            odocal::diagnose::model::Extension::from_effects(&odocal::diagnose::fitted_effects(&d));
-        let ours = (1.0 + 0.5 * (x.scale[0] + x.scale[1])) / (1.0 + x.base_scale);
+        let x = odocal::effects::Departures::of(&odocal::diagnose::fitted_effects(&d));
+        let ours =
+            (1.0 + 0.5 * (x.radius_scale[0] + x.radius_scale[1])) / (1.0 + x.wheel_base_scale);
         let theirs = 0.25 * (authors.r_diam + authors.l_diam)
             / authors.axle
             / (robot.r_right / robot.wheel_base);

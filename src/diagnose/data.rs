@@ -1,7 +1,9 @@
 //! Measured streams turned into observation rows: ICP motions as base-frame
 //! velocities with σ, gyro samples averaged over short windows.
 
-use super::model::{Extension, Replay};
+use super::model::Replay;
+use super::stats::robust;
+use crate::effects::Departures;
 use crate::motion::Motion;
 use crate::recording::GyroSample;
 
@@ -162,6 +164,39 @@ pub fn gyro_rows(gyro: &[GyroSample], span: (f64, f64), margin: f64, window: f64
     rows
 }
 
+/// Drops the rows far from the nominal model: a row is an outlier when one
+/// of its normalised residuals lies more than `sigma` robust σ (1.4826·MAD)
+/// from its group's median. Returns how many rows were dropped.
+pub fn drop_outliers(
+    replay: &Replay,
+    icp: &mut Vec<IcpRow>,
+    gyro: &mut Vec<GyroRow>,
+    sigma: f64,
+) -> usize {
+    let before = icp.len() + gyro.len();
+    let all = Part {
+        replay,
+        icp: icp.as_slice(),
+        gyro: gyro.as_slice(),
+    };
+    let mut e: [Vec<f64>; 4] = Default::default();
+    all.normalised(&Departures::default(), &mut e);
+    let rb: Vec<(f64, f64)> = e.iter().map(|v| robust(v)).collect();
+    let bad = |g: usize, v: f64| {
+        let (c, s) = rb[g];
+        s > 0.0 && ((v - c) / s).abs() > sigma
+    };
+    let keep_icp: Vec<bool> = (0..icp.len())
+        .map(|i| !(0..3).any(|g| bad(g, e[g][i])))
+        .collect();
+    let keep_gyro: Vec<bool> = (0..gyro.len()).map(|i| !bad(3, e[3][i])).collect();
+    let mut it = keep_icp.iter();
+    icp.retain(|_| *it.next().unwrap());
+    let mut it = keep_gyro.iter();
+    gyro.retain(|_| *it.next().unwrap());
+    before - icp.len() - gyro.len()
+}
+
 /// Residual groups: ICP forward, ICP lateral, ICP turn rate, gyro.
 pub const GROUPS: [&str; 4] = ["icp_v", "icp_lateral", "icp_w", "gyro"];
 
@@ -184,7 +219,7 @@ impl Part<'_> {
     }
 
     /// Residuals (measured − predicted) divided by the measurement σ, per group.
-    pub fn normalised(&self, x: &Extension, out: &mut [Vec<f64>; 4]) {
+    pub fn normalised(&self, x: &Departures, out: &mut [Vec<f64>; 4]) {
         for o in out.iter_mut() {
             o.clear();
         }
@@ -199,8 +234,23 @@ impl Part<'_> {
         }
     }
 
+    /// Residuals (measured − predicted) in physical units (m/s, rad/s), per group.
+    pub fn physical(&self, x: &Departures) -> [Vec<f64>; 4] {
+        let mut out: [Vec<f64>; 4] = Default::default();
+        for r in self.icp {
+            let p = self.replay.icp(x, r.t0, r.t1);
+            out[0].push(r.z[0] - p.v);
+            out[1].push(r.z[1] - p.l);
+            out[2].push(r.z[2] - p.w);
+        }
+        for g in self.gyro {
+            out[3].push(g.w - self.replay.gyro(x, g.t0, g.t1));
+        }
+        out
+    }
+
     /// Σ of squared normalised residuals per group.
-    pub fn rss(&self, x: &Extension) -> [f64; 4] {
+    pub fn rss(&self, x: &Departures) -> [f64; 4] {
         let mut out: [Vec<f64>; 4] = Default::default();
         self.normalised(x, &mut out);
         let mut s = [0.0; 4];

@@ -3,8 +3,8 @@
 //! scales profiled out, parameter standard errors from (JᵀWJ)⁻¹ and BIC.
 
 use super::data::Part;
-use super::model::{free_params, free_steps, with_free, Extension};
-use crate::effects::Effect;
+use super::free::{dof, free_params, free_steps, with_free};
+use crate::effects::{Departures, Effect};
 use nalgebra::{DMatrix, DVector};
 
 /// A fitted extension on the training part.
@@ -25,15 +25,6 @@ pub struct Fit {
     pub bic: f64,
     /// Whether JᵀWJ was well conditioned (every parameter identifiable).
     pub identifiable: bool,
-}
-
-/// Number of free parameters of a set of effects, counting a radius step's
-/// searched time as one more.
-pub fn dof(effects: &[Effect]) -> usize {
-    effects
-        .iter()
-        .map(|e| free_params(e).len() + matches!(e, Effect::RadiusStep { .. }) as usize)
-        .sum()
 }
 
 /// BIC = Σ_g n_g ln(RSS_g / n_g) + k ln N (Gaussian likelihood with each
@@ -82,7 +73,7 @@ struct Lsq<'a> {
 
 impl Lsq<'_> {
     fn residual(&mut self, theta: &[f64], out: &mut Vec<f64>) {
-        let x = Extension::from_effects(&unpack(self.effects, theta));
+        let x = Departures::of(&unpack(self.effects, theta));
         self.part.normalised(&x, &mut self.buf);
         out.clear();
         for g in 0..4 {
@@ -187,7 +178,7 @@ pub fn fit(
         theta = t;
         jac = j;
         let fitted = unpack(effects, &theta);
-        let rss = part.rss(&Extension::from_effects(&fitted));
+        let rss = part.rss(&Departures::of(&fitted));
         let s = scales(&rss, &counts);
         // Rescale the Jacobian to the new scales instead of recomputing it.
         let mut row = 0;
@@ -203,7 +194,7 @@ pub fn fit(
         l.scale = s;
     }
     let fitted = unpack(effects, &theta);
-    let rss = part.rss(&Extension::from_effects(&fitted));
+    let rss = part.rss(&Departures::of(&fitted));
     let scale = scales(&rss, &counts);
     let p = theta.len();
     let (cov, identifiable) = if p == 0 {

@@ -6,7 +6,8 @@
 //! residuals of ICP velocities and gyro rate ([`data`]); fit every candidate
 //! effect on the training part by weighted Levenberg–Marquardt ([`fit`]);
 //! forward selection by BIC with a margin and a Wald test ([`select`]);
-//! held-out gain and whiteness/trend tests decide the verdict ([`report`]).
+//! held-out gain ([`gain`]) and whiteness/trend tests ([`residuals`]) decide
+//! the verdict ([`run`] drives the steps, [`diagnosis`] holds the result).
 //!
 //! σ handling: each stream's σ (ICP covariance; gyro 1/√samples per window)
 //! sets the relative weights; one scale factor per stream (ICP forward,
@@ -14,18 +15,25 @@
 //! mis-scaled ICP covariance changes neither the estimates nor the BIC.
 
 pub mod data;
+pub mod diagnosis;
 pub mod encoder_table;
 pub mod fit;
+pub mod free;
+pub mod gain;
 pub mod model;
 pub mod odometry;
-pub mod report;
+pub mod residuals;
+pub mod run;
 pub mod select;
+pub mod series;
 pub mod stats;
 pub mod synthetic;
 pub mod trajectory;
 
-pub use report::{Cause, Diagnosis, Gain, ResidualSeries, StreamGain, Verdict};
+pub use diagnosis::{Cause, Diagnosis, Verdict};
+pub use gain::{Gain, StreamGain};
 pub use select::CandidateScore;
+pub use series::ResidualSeries;
 
 use crate::effects::{Effect, EFFECT_NAMES};
 use crate::motion::Motion;
@@ -218,7 +226,7 @@ pub fn diagnose(
     params: &DiagnoseParams,
 ) -> Result<Diagnosis, DiagnoseError> {
     params.validate()?;
-    report::run(robot, measured, params)
+    run::run(robot, measured, params)
 }
 
 /// The fitted extension of a diagnosis as effects (SPEC-printable).

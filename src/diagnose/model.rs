@@ -1,138 +1,10 @@
 //! The extended model: the nominal differential drive plus any set of effects
-//! (design.md's table), replayed on the measured wheel angles to predict what
-//! ICP and the gyro should have seen.
+//! (design.md's table, folded into [`Departures`]), replayed on the measured
+//! wheel angles to predict what ICP and the gyro should have seen.
 
-use crate::effects::Effect;
-use crate::robot::RobotConfig;
-
-/// All effects folded into one set of numbers (zero = nominal).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Extension {
-    /// Relative right/left radius change.
-    pub scale: [f64; 2],
-    /// Relative wheel-base change.
-    pub base_scale: f64,
-    /// Radius step: time (s from the origin), right, left (m).
-    pub step: Option<(f64, f64, f64)>,
-    /// Radius drift right, left (m/h).
-    pub drift: [f64; 2],
-    /// Encoder gain k (s/rad).
-    pub enc_k: f64,
-    /// Encoder latency (s).
-    pub delay: f64,
-    /// Laser mount offset x, y (m), yaw (rad), added to the nominal mount.
-    pub laser: [f64; 3],
-    /// Gyro bias (rad/s).
-    pub gyro_bias: f64,
-    /// Turn slip k (s/rad).
-    pub slip: f64,
-}
-
-impl Extension {
-    /// Folds effects into one extension (parameters of repeated effects add).
-    pub fn from_effects(effects: &[Effect]) -> Self {
-        let mut x = Self::default();
-        for e in effects {
-            match *e {
-                Effect::RadiusScale { right, left } => {
-                    x.scale[0] += right;
-                    x.scale[1] += left;
-                }
-                Effect::WheelBaseScale { scale } => x.base_scale += scale,
-                Effect::RadiusStep { time, right, left } => x.step = Some((time, right, left)),
-                Effect::RadiusDrift { right, left } => {
-                    x.drift[0] += right;
-                    x.drift[1] += left;
-                }
-                Effect::EncoderGain { k } => x.enc_k += k,
-                Effect::Latency { delay } => x.delay += delay,
-                Effect::LaserOffset { x: lx, y, yaw } => {
-                    x.laser[0] += lx;
-                    x.laser[1] += y;
-                    x.laser[2] += yaw;
-                }
-                Effect::GyroBias { bias } => x.gyro_bias += bias,
-                Effect::TurnSlip { k } => x.slip += k,
-            }
-        }
-        x
-    }
-}
-
-/// Free (fitted) parameters of an effect: all but `radius_step`'s time, which
-/// is searched on a grid.
-pub fn free_params(e: &Effect) -> Vec<f64> {
-    match e {
-        Effect::RadiusStep { right, left, .. } => vec![*right, *left],
-        _ => e.params().iter().map(|p| p.1).collect(),
-    }
-}
-
-/// Names of the free parameters, in [`free_params`] order.
-pub fn free_names(e: &Effect) -> Vec<&'static str> {
-    match e {
-        Effect::RadiusStep { .. } => vec!["right", "left"],
-        _ => e.params().iter().map(|p| p.0).collect(),
-    }
-}
-
-/// Finite-difference step of each free parameter (its units).
-pub fn free_steps(e: &Effect) -> Vec<f64> {
-    match e {
-        Effect::RadiusScale { .. } => vec![1e-5, 1e-5],
-        Effect::WheelBaseScale { .. } => vec![1e-5],
-        Effect::RadiusStep { .. } => vec![1e-6, 1e-6],
-        Effect::RadiusDrift { .. } => vec![1e-4, 1e-4],
-        Effect::EncoderGain { .. } => vec![1e-5],
-        Effect::Latency { .. } => vec![1e-4],
-        Effect::LaserOffset { .. } => vec![1e-5, 1e-5, 1e-5],
-        Effect::GyroBias { .. } => vec![1e-6],
-        Effect::TurnSlip { .. } => vec![1e-5],
-    }
-}
-
-/// The effect with its free parameters replaced by `v`.
-pub fn with_free(e: &Effect, v: &[f64]) -> Effect {
-    match *e {
-        Effect::RadiusScale { .. } => Effect::RadiusScale {
-            right: v[0],
-            left: v[1],
-        },
-        Effect::WheelBaseScale { .. } => Effect::WheelBaseScale { scale: v[0] },
-        Effect::RadiusStep { time, .. } => Effect::RadiusStep {
-            time,
-            right: v[0],
-            left: v[1],
-        },
-        Effect::RadiusDrift { .. } => Effect::RadiusDrift {
-            right: v[0],
-            left: v[1],
-        },
-        Effect::EncoderGain { .. } => Effect::EncoderGain { k: v[0] },
-        Effect::Latency { .. } => Effect::Latency { delay: v[0] },
-        Effect::LaserOffset { .. } => Effect::LaserOffset {
-            x: v[0],
-            y: v[1],
-            yaw: v[2],
-        },
-        Effect::GyroBias { .. } => Effect::GyroBias { bias: v[0] },
-        Effect::TurnSlip { .. } => Effect::TurnSlip { k: v[0] },
-    }
-}
-
-/// The effect of a name with every free parameter zero (the nominal model).
-pub fn zero_effect(name: &str) -> Option<Effect> {
-    let e = Effect::default_for(name)?;
-    let n = free_params(&e).len();
-    Some(with_free(&e, &vec![0.0; n]))
-}
-
-/// Solves `x (1 + k |x|) = y` for x with the sign of y (the inverse of the
-/// encoder-gain and turn-slip laws); a k that would make it unsolvable clamps.
-pub fn invert_gain(y: f64, k: f64) -> f64 {
-    let disc = (1.0 + 4.0 * k * y.abs()).max(0.0);
-    2.0 * y / (1.0 + disc.sqrt())
-}
+use crate::effects::Departures;
+use crate::geom;
+use crate::robot::{LaserMount, RobotConfig};
 
 /// SE(2) composition of (x, y, θ) triples (scalar, allocation-free).
 fn compose(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
@@ -203,7 +75,7 @@ fn smooth(ts: &[f64], r: &[f64], l: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Ve
 pub struct Replay {
     r0: [f64; 2],
     base0: f64,
-    mount: [f64; 3],
+    mount: LaserMount,
     /// Time origin of step/drift (s).
     pub origin: f64,
     ts: Vec<f64>,
@@ -258,7 +130,7 @@ impl Replay {
         Self {
             r0: [robot.r_right, robot.r_left],
             base0: robot.wheel_base,
-            mount: [robot.laser.x, robot.laser.y, robot.laser.yaw],
+            mount: robot.laser,
             origin,
             ts,
             right,
@@ -300,47 +172,34 @@ impl Replay {
         )
     }
 
-    /// True body (V, W) over [t0, t1] under the extension, from the measured
+    /// True body (V, W) over [t0, t1] under the departures, from the measured
     /// wheel angles (latency shifts the encoder stream, encoder gain is
     /// inverted on the mean rate, radii at the interval midpoint).
-    pub fn body(&self, x: &Extension, t0: f64, t1: f64) -> (f64, f64) {
+    pub fn body(&self, x: &Departures, t0: f64, t1: f64) -> (f64, f64) {
         let dt = t1 - t0;
-        let (r0, l0) = self.angles_at(t0 + x.delay);
-        let (r1, l1) = self.angles_at(t1 + x.delay);
-        let wr = invert_gain((r1 - r0) / dt, x.enc_k);
-        let wl = invert_gain((l1 - l0) / dt, x.enc_k);
-        let tm = 0.5 * (t0 + t1) - self.origin;
-        let mut rr = self.r0[0] * (1.0 + x.scale[0]) + x.drift[0] * tm / 3600.0;
-        let mut rl = self.r0[1] * (1.0 + x.scale[1]) + x.drift[1] * tm / 3600.0;
-        if let Some((ts, sr, sl)) = x.step {
-            if tm >= ts {
-                rr += sr;
-                rl += sl;
-            }
-        }
+        let (r0, l0) = self.angles_at(x.encoder_stamp(t0));
+        let (r1, l1) = self.angles_at(x.encoder_stamp(t1));
+        let wr = x.wheel_rate((r1 - r0) / dt);
+        let wl = x.wheel_rate((l1 - l0) / dt);
+        let [rr, rl] = x.radii_at(self.r0, 0.5 * (t0 + t1) - self.origin);
         let (vr, vl) = (wr * rr, wl * rl);
         let v = 0.5 * (vr + vl);
-        let w = invert_gain((vr - vl) / (self.base0 * (1.0 + x.base_scale)), x.slip);
+        let w = x.turn_rate(vr - vl, x.wheel_base(self.base0));
         (v, w)
     }
 
     /// What ICP (converted to the base frame with the NOMINAL mount) should
     /// report over [t0, t1]: the true arc, seen through the laser offset.
-    pub fn icp(&self, x: &Extension, t0: f64, t1: f64) -> Predicted {
+    pub fn icp(&self, x: &Departures, t0: f64, t1: f64) -> Predicted {
         let dt = t1 - t0;
         let (v, w) = self.body(x, t0, t1);
-        let dth = w * dt;
-        let ds = v * dt;
-        let (a, b) = if dth.abs() < 1e-6 {
-            (1.0 - dth * dth / 6.0, dth / 2.0 - dth * dth * dth / 24.0)
-        } else {
-            (dth.sin() / dth, (1.0 - dth.cos()) / dth)
-        };
-        let mut m = [ds * a, ds * b, dth];
-        if x.laser != [0.0; 3] {
+        let arc = geom::arc_increment(v, w, dt);
+        let mut m = [arc.translation.x, arc.translation.y, w * dt];
+        if !x.laser_nominal() {
             // measured = l0 · (l⁻¹ o l) · l0⁻¹ = E⁻¹ o E with E = l · l0⁻¹.
-            let l0 = self.mount;
-            let l = [l0[0] + x.laser[0], l0[1] + x.laser[1], l0[2] + x.laser[2]];
+            let triple = |l: &LaserMount| [l.x, l.y, l.yaw];
+            let l0 = triple(&self.mount);
+            let l = triple(&x.laser_mount(&self.mount));
             let e = compose(&l, &inverse(&l0));
             m = compose(&compose(&inverse(&e), &m), &e);
         }
@@ -352,26 +211,15 @@ impl Replay {
     }
 
     /// Mean gyro rate the model predicts over [t0, t1] (rad/s), bias included.
-    pub fn gyro(&self, x: &Extension, t0: f64, t1: f64) -> f64 {
-        self.body(x, t0, t1).1 + x.gyro_bias
+    pub fn gyro(&self, x: &Departures, t0: f64, t1: f64) -> f64 {
+        x.gyro_rate(self.body(x, t0, t1).1)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom;
     use crate::recording::WheelSample;
-
-    #[test]
-    fn invert_gain_inverts_the_gain_law() {
-        for k in [0.0, 0.01, 0.2] {
-            for w in [-3.0, -0.2, 0.0, 0.5, 4.0] {
-                let y: f64 = w * (1.0 + k * f64::abs(w));
-                assert!((invert_gain(y, k) - w).abs() < 1e-12);
-            }
-        }
-    }
 
     #[test]
     fn nominal_replay_reproduces_constant_motion() {
@@ -389,13 +237,13 @@ mod tests {
             })
             .collect();
         let r = Replay::new(&robot, &wheels, 0.0, 0.0);
-        let p = r.icp(&Extension::default(), 0.5, 0.54);
+        let p = r.icp(&Departures::default(), 0.5, 0.54);
         let arc = geom::arc_increment(0.8, 0.3, 0.04);
         assert!((p.v - arc.translation.x / 0.04).abs() < 1e-9);
         assert!((p.w - 0.3).abs() < 1e-9);
         // A pure mount offset with no rotation changes nothing on a straight line.
-        let x = Extension {
-            laser: [0.1, 0.0, 0.0],
+        let x = Departures {
+            laser_offset: [0.1, 0.0, 0.0],
             ..Default::default()
         };
         let straight = Replay::new(
@@ -433,12 +281,12 @@ mod tests {
             })
             .collect();
         let r = Replay::new(&robot, &wheels, 0.0, 0.0);
-        let x = Extension {
-            laser: [0.05, -0.03, 0.04],
+        let x = Departures {
+            laser_offset: [0.05, -0.03, 0.04],
             ..Default::default()
         };
         let (t0, t1) = (0.3, 0.34);
-        let (v, w) = r.body(&Extension::default(), t0, t1);
+        let (v, w) = r.body(&Departures::default(), t0, t1);
         let o = geom::arc_increment(v, w, t1 - t0);
         let m = &robot.laser;
         let l0 = geom::pose(m.x, m.y, m.yaw);

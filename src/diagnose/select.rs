@@ -4,9 +4,9 @@
 
 use super::data::Part;
 use super::fit::{fit, wald, Fit};
-use super::model::{free_params, zero_effect, Extension};
+use super::free::{free_names, free_params, zero_effect};
 use super::stats::chi2_sf;
-use crate::effects::Effect;
+use crate::effects::{Departures, Effect, Step};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -66,19 +66,16 @@ pub struct Selection {
 /// Named parameters of effect `i` of a fit, and their standard errors.
 pub fn named(f: &Fit, i: usize) -> (BTreeMap<String, f64>, BTreeMap<String, f64>) {
     let e = &f.effects[i];
-    let mut p: BTreeMap<String, f64> = e
+    let p = e
         .params()
         .iter()
         .map(|(k, v)| (k.to_string(), *v))
         .collect();
-    let names = super::model::free_names(e);
-    let mut s = BTreeMap::new();
-    for (k, se) in names.iter().zip(&f.stderr[i]) {
-        s.insert(k.to_string(), *se);
-    }
-    if let Effect::RadiusStep { time, .. } = e {
-        p.insert("time".into(), *time);
-    }
+    let s = free_names(e)
+        .iter()
+        .zip(&f.stderr[i])
+        .map(|(k, se)| (k.to_string(), *se))
+        .collect();
     (p, s)
 }
 
@@ -86,18 +83,18 @@ pub fn named(f: &Fit, i: usize) -> (BTreeMap<String, f64>, BTreeMap<String, f64>
 /// the other parameters held, the step sizes are linear, so the RSS drop of
 /// every split time follows from suffix sums of JᵀJ and Jᵀr in one pass.
 pub fn search_step_time(part: Part, current: &Fit, s: &SelectSettings) -> Option<f64> {
-    let x0 = Extension::from_effects(&current.effects);
+    let x0 = Departures::of(&current.effects);
     let mut base: [Vec<f64>; 4] = Default::default();
     part.normalised(&x0, &mut base);
     let h = 1e-4;
     let mut cols: Vec<[Vec<f64>; 4]> = Vec::new();
     for c in 0..2 {
-        let mut x = x0;
-        x.step = Some((
-            f64::NEG_INFINITY,
-            if c == 0 { h } else { 0.0 },
-            if c == 1 { h } else { 0.0 },
-        ));
+        let mut x = x0.clone();
+        x.radius_steps.push(Step {
+            time: f64::NEG_INFINITY,
+            right: if c == 0 { h } else { 0.0 },
+            left: if c == 1 { h } else { 0.0 },
+        });
         let mut r: [Vec<f64>; 4] = Default::default();
         part.normalised(&x, &mut r);
         cols.push(r);
@@ -178,7 +175,7 @@ fn score(round: usize, f: &Fit, base_bic: f64) -> CandidateScore {
 /// while BIC improves by more than the margin and the effect is significant).
 pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
     let counts = part.counts();
-    let rss0 = part.rss(&Extension::default());
+    let rss0 = part.rss(&Departures::default());
     let scale0 = super::fit::scales(&rss0, &counts);
     let nominal = fit(part, &[], scale0, s.max_iter, 1);
     let mut current = nominal.clone();

@@ -1,5 +1,6 @@
 //! Small statistics used by the diagnosis: normal and χ² tail probabilities,
-//! the Ljung–Box whiteness test, a linear trend test and cross-correlation.
+//! the Ljung–Box whiteness test, a linear trend test, cross-correlation and
+//! robust centre and scale.
 
 use serde::Serialize;
 
@@ -154,6 +155,23 @@ pub fn cross_correlation(a: &[f64], b: &[f64], max_lag: usize) -> Vec<(i64, f64)
             (lag, c)
         })
         .collect()
+}
+
+/// Median of `v` (sorted in place; the upper one of an even count; 0 when empty).
+pub fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Robust centre and scale (median, 1.4826·MAD) of a series.
+pub fn robust(v: &[f64]) -> (f64, f64) {
+    let mut a = v.to_vec();
+    let m = median(&mut a);
+    let mut d: Vec<f64> = v.iter().map(|x| (x - m).abs()).collect();
+    (m, 1.4826 * median(&mut d))
 }
 
 /// Mean, RMS, standard deviation and extreme of a series.

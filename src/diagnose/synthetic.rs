@@ -3,8 +3,7 @@
 //! diagnosis is checked (hidden effect → named, estimated, gain > 0).
 //! Not a simulator of scans: ICP is replaced by the true motion plus noise.
 
-use super::model::Extension;
-use crate::effects::Effect;
+use crate::effects::{Departures, Effect};
 use crate::geom::{self, Pose2};
 use crate::motion::Motion;
 use crate::recording::{GyroSample, StampedPose, WheelSample};
@@ -108,120 +107,21 @@ impl Drive {
 pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Synthetic {
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     let drive = Drive::new(&mut rng);
-    let x = Extension::from_effects(&spec.effects);
-    let h = 0.002;
-    let t_first = -1.0;
-    let n = ((spec.duration + 2.0) / h) as usize;
+    let x = Departures::of(&spec.effects);
     let phase = [
         rng.random_range(0.0..std::f64::consts::TAU),
         rng.random_range(0.0..std::f64::consts::TAU),
     ];
-    let (mut pose, mut phi, mut phim) = (Pose2::identity(), [0.0f64; 2], [0.0f64; 2]);
-    let mut poses = Vec::with_capacity(n + 1);
-    let mut meas = Vec::with_capacity(n + 1);
-    poses.push(pose);
-    meas.push(phim);
-    for i in 0..n {
-        let t = t_first + (i as f64 + 0.5) * h;
-        let (v, w) = drive.eval(t);
-        let mut rr = nominal.r_right * (1.0 + x.scale[0]) + x.drift[0] * t / 3600.0;
-        let mut rl = nominal.r_left * (1.0 + x.scale[1]) + x.drift[1] * t / 3600.0;
-        if let Some((ts, sr, sl)) = x.step {
-            if t >= ts {
-                rr += sr;
-                rl += sl;
-            }
-        }
-        rr *= 1.0 + spec.out_of_roundness * (phi[0] + phase[0]).sin();
-        rl *= 1.0 + spec.out_of_roundness * (phi[1] + phase[1]).sin();
-        let d = nominal.wheel_base * (1.0 + x.base_scale) * (1.0 + x.slip * w.abs());
-        let om = [(v + w * d / 2.0) / rr, (v - w * d / 2.0) / rl];
-        for k in 0..2 {
-            phi[k] += om[k] * h;
-            phim[k] += om[k] * (1.0 + x.enc_k * om[k].abs()) * h;
-        }
-        pose *= geom::arc_increment(v, w, h);
-        poses.push(pose);
-        meas.push(phim);
-    }
-    let idx = |t: f64| -> (usize, f64) {
-        let f = ((t - t_first) / h).clamp(0.0, (n - 1) as f64);
-        let i = f.floor() as usize;
-        (i, f - i as f64)
-    };
-    let pose_at = |t: f64| {
-        let (i, s) = idx(t);
-        geom::interpolate(&poses[i], &poses[i + 1], s)
-    };
-    let q = nominal.rad_per_tick();
-    let quant = |a: f64| (a / q).floor() * q;
-    let wheels: Vec<WheelSample> = (0..=(spec.duration * spec.wheel_rate) as usize)
-        .map(|j| {
-            let s = j as f64 / spec.wheel_rate;
-            let (i, f) = idx(s - x.delay);
-            let r = meas[i][0] + f * (meas[i + 1][0] - meas[i][0]);
-            let l = meas[i][1] + f * (meas[i + 1][1] - meas[i][1]);
-            WheelSample {
-                stamp: s,
-                left: quant(l),
-                right: quant(r),
-            }
-        })
-        .collect();
-    let m = &nominal.laser;
-    let l0 = geom::pose(m.x, m.y, m.yaw);
-    let l1 = geom::pose(m.x + x.laser[0], m.y + x.laser[1], m.yaw + x.laser[2]);
-    let e = l1 * l0.inverse();
-    let nd = Normal::new(0.0, 1.0).unwrap();
-    let n_scans = (spec.duration * spec.icp_rate) as usize;
-    let motions: Vec<Motion> = (0..n_scans)
-        .map(|k| {
-            let (t0, t1) = (k as f64 / spec.icp_rate, (k + 1) as f64 / spec.icp_rate);
-            let dt = t1 - t0;
-            let o = pose_at(t0).inverse() * pose_at(t1);
-            let [dx, dy, dth] = geom::xyt(&(e.inverse() * o * e));
-            let f = 1.0 + spec.sigma_jitter * rng.random_range(-1.0..1.0);
-            let (sv, sw) = (spec.sigma_v * f * dt, spec.sigma_w * f * dt);
-            let rep = spec.reported_sigma_factor;
-            Motion {
-                t0,
-                t1,
-                dx: dx + sv * nd.sample(&mut rng),
-                dy: dy + sv * nd.sample(&mut rng),
-                dtheta: dth + sw * nd.sample(&mut rng),
-                cov: Matrix3::from_diagonal(&nalgebra::Vector3::new(
-                    (rep * sv).powi(2),
-                    (rep * sv).powi(2),
-                    (rep * sw).powi(2),
-                )),
-                iterations: 5,
-                inliers: 400,
-                failure: None,
-            }
-        })
-        .collect();
-    let gyro = if spec.gyro_rate > 0.0 {
-        (0..(spec.duration * spec.gyro_rate) as usize)
-            .map(|j| {
-                let s = j as f64 / spec.gyro_rate;
-                // Mean true rate over the sampling period ending at the stamp.
-                let dt = 1.0 / spec.gyro_rate;
-                let dth = geom::heading(&(pose_at(s - dt).inverse() * pose_at(s)));
-                GyroSample {
-                    stamp: s,
-                    wz: dth / dt + x.gyro_bias + spec.gyro_sigma * nd.sample(&mut rng),
-                }
-            })
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let truth = TrueMotion::integrate(nominal, spec, &x, &drive, phase);
+    let wheels = wheel_samples(nominal, spec, &x, &truth);
+    let motions = icp_motions(nominal, spec, &x, &truth, &mut rng);
+    let gyro = gyro_samples(spec, &x, &truth, &mut rng);
     let reference = (0..(spec.duration * 10.0) as usize)
         .map(|j| {
             let s = j as f64 / 10.0;
             StampedPose {
                 stamp: s,
-                pose: pose_at(s),
+                pose: truth.pose_at(s),
                 has_heading: true,
             }
         })
@@ -232,4 +132,167 @@ pub fn synthesize(nominal: &RobotConfig, spec: &SyntheticSpec, seed: u64) -> Syn
         gyro,
         reference,
     }
+}
+
+/// The true motion every `h` s from `t_first` (1 s before the recording to
+/// 1 s after it): body poses and the wheel angles as the encoders read them
+/// (gain included, latency not).
+struct TrueMotion {
+    t_first: f64,
+    h: f64,
+    n: usize,
+    poses: Vec<Pose2>,
+    read: Vec<[f64; 2]>,
+}
+
+impl TrueMotion {
+    /// Integrates the drive on the true robot (radii at each step's middle,
+    /// wheels out of round with phases `phase`).
+    fn integrate(
+        nominal: &RobotConfig,
+        spec: &SyntheticSpec,
+        x: &Departures,
+        drive: &Drive,
+        phase: [f64; 2],
+    ) -> Self {
+        let (t_first, h) = (-1.0, 0.002);
+        let n = ((spec.duration + 2.0) / h) as usize;
+        let (mut pose, mut phi, mut phim) = (Pose2::identity(), [0.0f64; 2], [0.0f64; 2]);
+        let mut poses = Vec::with_capacity(n + 1);
+        let mut read = Vec::with_capacity(n + 1);
+        poses.push(pose);
+        read.push(phim);
+        for i in 0..n {
+            let t = t_first + (i as f64 + 0.5) * h;
+            let (v, w) = drive.eval(t);
+            let [mut rr, mut rl] = x.radii_at([nominal.r_right, nominal.r_left], t);
+            rr *= 1.0 + spec.out_of_roundness * (phi[0] + phase[0]).sin();
+            rl *= 1.0 + spec.out_of_roundness * (phi[1] + phase[1]).sin();
+            let d = x.turning_base(x.wheel_base(nominal.wheel_base), w);
+            let om = [(v + w * d / 2.0) / rr, (v - w * d / 2.0) / rl];
+            for k in 0..2 {
+                phi[k] += om[k] * h;
+                phim[k] += x.encoder_rate(om[k]) * h;
+            }
+            pose *= geom::arc_increment(v, w, h);
+            poses.push(pose);
+            read.push(phim);
+        }
+        Self {
+            t_first,
+            h,
+            n,
+            poses,
+            read,
+        }
+    }
+
+    /// Sample index and fraction towards the next at time `t` (clamped).
+    fn index(&self, t: f64) -> (usize, f64) {
+        let f = ((t - self.t_first) / self.h).clamp(0.0, (self.n - 1) as f64);
+        let i = f.floor() as usize;
+        (i, f - i as f64)
+    }
+
+    /// Body pose at `t`.
+    fn pose_at(&self, t: f64) -> Pose2 {
+        let (i, s) = self.index(t);
+        geom::interpolate(&self.poses[i], &self.poses[i + 1], s)
+    }
+
+    /// Encoder angles (right, left) at true time `t`.
+    fn read_at(&self, t: f64) -> [f64; 2] {
+        let (i, f) = self.index(t);
+        let (a, b) = (self.read[i], self.read[i + 1]);
+        [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
+    }
+}
+
+/// Quantised encoder angles at the wheel rate, stamped late by the latency.
+fn wheel_samples(
+    nominal: &RobotConfig,
+    spec: &SyntheticSpec,
+    x: &Departures,
+    truth: &TrueMotion,
+) -> Vec<WheelSample> {
+    let q = nominal.rad_per_tick();
+    let quant = |a: f64| (a / q).floor() * q;
+    (0..=(spec.duration * spec.wheel_rate) as usize)
+        .map(|j| {
+            let s = j as f64 / spec.wheel_rate;
+            let [r, l] = truth.read_at(x.encoder_taken(s));
+            WheelSample {
+                stamp: s,
+                left: quant(l),
+                right: quant(r),
+            }
+        })
+        .collect()
+}
+
+/// ICP-like motions: the true motion seen through the true laser mount,
+/// converted with the nominal one, plus noise of jittered σ.
+fn icp_motions(
+    nominal: &RobotConfig,
+    spec: &SyntheticSpec,
+    x: &Departures,
+    truth: &TrueMotion,
+    rng: &mut rand::rngs::StdRng,
+) -> Vec<Motion> {
+    let l0 = nominal.laser.pose();
+    let l1 = x.laser_mount(&nominal.laser).pose();
+    let e = l1 * l0.inverse();
+    let nd = Normal::new(0.0, 1.0).unwrap();
+    let n_scans = (spec.duration * spec.icp_rate) as usize;
+    (0..n_scans)
+        .map(|k| {
+            let (t0, t1) = (k as f64 / spec.icp_rate, (k + 1) as f64 / spec.icp_rate);
+            let dt = t1 - t0;
+            let o = truth.pose_at(t0).inverse() * truth.pose_at(t1);
+            let [dx, dy, dth] = geom::xyt(&(e.inverse() * o * e));
+            let f = 1.0 + spec.sigma_jitter * rng.random_range(-1.0..1.0);
+            let (sv, sw) = (spec.sigma_v * f * dt, spec.sigma_w * f * dt);
+            let rep = spec.reported_sigma_factor;
+            Motion {
+                t0,
+                t1,
+                dx: dx + sv * nd.sample(rng),
+                dy: dy + sv * nd.sample(rng),
+                dtheta: dth + sw * nd.sample(rng),
+                cov: Matrix3::from_diagonal(&nalgebra::Vector3::new(
+                    (rep * sv).powi(2),
+                    (rep * sv).powi(2),
+                    (rep * sw).powi(2),
+                )),
+                iterations: 5,
+                inliers: 400,
+                failure: None,
+            }
+        })
+        .collect()
+}
+
+/// Gyro samples (none when the rate is 0): the mean true rate over the
+/// sampling period ending at the stamp, biased, plus white noise.
+fn gyro_samples(
+    spec: &SyntheticSpec,
+    x: &Departures,
+    truth: &TrueMotion,
+    rng: &mut rand::rngs::StdRng,
+) -> Vec<GyroSample> {
+    if spec.gyro_rate.is_nan() || spec.gyro_rate <= 0.0 {
+        return Vec::new();
+    }
+    let nd = Normal::new(0.0, 1.0).unwrap();
+    let dt = 1.0 / spec.gyro_rate;
+    (0..(spec.duration * spec.gyro_rate) as usize)
+        .map(|j| {
+            let s = j as f64 / spec.gyro_rate;
+            let dth = geom::heading(&(truth.pose_at(s - dt).inverse() * truth.pose_at(s)));
+            GyroSample {
+                stamp: s,
+                wz: x.gyro_rate(dth / dt) + spec.gyro_sigma * nd.sample(rng),
+            }
+        })
+        .collect()
 }

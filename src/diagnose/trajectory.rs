@@ -2,7 +2,8 @@
 //! relative motion over consecutive windows (dead reckoning from the wheels)
 //! against the reference's, before and after the extension.
 
-use super::model::{Extension, Replay};
+use super::model::Replay;
+use crate::effects::Departures;
 use crate::geom::{self, Pose2};
 use crate::recording::StampedPose;
 use serde::Serialize;
@@ -28,7 +29,7 @@ pub struct TrajectoryGain {
 }
 
 /// Dead reckoning of the model from t0 to t1 in steps of about `h` s.
-fn relative(replay: &Replay, x: &Extension, t0: f64, t1: f64, h: f64) -> Pose2 {
+fn relative(replay: &Replay, x: &Departures, t0: f64, t1: f64, h: f64) -> Pose2 {
     let n = ((t1 - t0) / h).ceil().max(1.0) as usize;
     let dt = (t1 - t0) / n as f64;
     let mut p = Pose2::identity();
@@ -76,7 +77,7 @@ pub fn aligned_rms(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
 
 /// Dead reckoning of the model from the first to the last reference stamp,
 /// aligned to the reference positions: the held-out ATE (m).
-fn held_out_ate(replay: &Replay, x: &Extension, refs: &[&StampedPose], h: f64) -> f64 {
+fn held_out_ate(replay: &Replay, x: &Departures, refs: &[&StampedPose], h: f64) -> f64 {
     let mut p = Pose2::identity();
     let mut model = Vec::with_capacity(refs.len());
     let mut truth = Vec::with_capacity(refs.len());
@@ -98,8 +99,8 @@ fn held_out_ate(replay: &Replay, x: &Extension, refs: &[&StampedPose], h: f64) -
 pub fn trajectory_gain(
     replay: &Replay,
     reference: &[StampedPose],
-    before: &Extension,
-    after: &Extension,
+    before: &Departures,
+    after: &Departures,
     split: f64,
     window: f64,
 ) -> Option<TrajectoryGain> {
@@ -120,7 +121,7 @@ pub fn trajectory_gain(
         let j = i + off;
         let (a, b) = (refs[i], refs[j]);
         let truth = geom::between(&a.pose, &b.pose);
-        let err = |x: &Extension| {
+        let err = |x: &Departures| {
             let m = relative(replay, x, a.stamp, b.stamp, 0.02);
             if a.has_heading && b.has_heading {
                 (truth.inverse() * m).translation.vector.norm()
@@ -136,7 +137,7 @@ pub fn trajectory_gain(
         i = j;
     }
     let position_only = refs.iter().any(|r| !r.has_heading);
-    let ate = |x: &Extension| {
+    let ate = |x: &Departures| {
         (position_only && refs.len() >= 3).then(|| held_out_ate(replay, x, &refs, 0.02))
     };
     (n >= 2).then(|| TrajectoryGain {

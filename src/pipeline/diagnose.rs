@@ -2,7 +2,7 @@
 //! compare with ICP and the gyro, name what differs, and show it.
 
 use super::{icp, PipelineError};
-use crate::diagnose::{self, DiagnoseParams, Diagnosis, Measured};
+use crate::diagnose::{self, Cause, DiagnoseParams, Diagnosis, Measured, ResidualSeries};
 use crate::recording::Recording;
 use crate::robot::RobotConfig;
 use crate::viz::plot::{self, LineChart, Series};
@@ -128,13 +128,38 @@ fn viz_err(e: crate::viz::VizError) -> PipelineError {
 /// plots before and after the extension (`residuals.png`, `regressors.png`).
 pub fn write_report(dir: &Path, name: &str, d: &Diagnosis) -> Result<(), PipelineError> {
     std::fs::create_dir_all(dir).map_err(|e| PipelineError::write(dir, e))?;
-    let s = &d.series;
-    let before = [161, 161, 161];
-    let after = [31, 119, 180];
+    plot_residuals(&dir.join("residuals.png"), &d.series)?;
+    plot_regressors(&dir.join("regressors.png"), &d.series)?;
+    let mut r = Report::new();
+    r.heading(1, "odocal diagnose");
+    r.kv(&[
+        ("recording", name.to_string()),
+        ("verdict", verdict_word(d)),
+        ("held out from", format!("{:.1} s", d.series.split)),
+    ]);
+    r.heading(2, "Causes");
+    write_causes(&mut r, &d.causes)?;
+    r.heading(2, "Gain on held-out data");
+    write_gain(&mut r, d);
+    r.image("residuals.png", "Residuals before and after the extension.");
+    r.image(
+        "regressors.png",
+        "Nominal-model residuals against the regressors that expose effects.",
+    );
+    r.write(&dir.join("report.md")).map_err(viz_err)
+}
+
+/// Grey: the nominal model's residuals.
+const BEFORE: [u8; 3] = [161, 161, 161];
+/// Blue: the extended model's residuals.
+const AFTER: [u8; 3] = [31, 119, 180];
+
+/// Residuals over time before and after the extension, one panel per stream.
+fn plot_residuals(path: &Path, s: &ResidualSeries) -> Result<(), PipelineError> {
     let panel = |b: &[f64], a: &[f64], t: &[f64]| {
         vec![
-            Series::new("before (nominal model)", pairs(t, b)).color(before),
-            Series::new("after (extended model)", pairs(t, a)).color(after),
+            Series::new("before (nominal model)", pairs(t, b)).color(BEFORE),
+            Series::new("after (extended model)", pairs(t, a)).color(AFTER),
         ]
     };
     let mut chart = LineChart::new(
@@ -155,56 +180,60 @@ pub fn write_report(dir: &Path, name: &str, d: &Diagnosis) -> Result<(), Pipelin
             panel(&s.gyro_before, &s.gyro_after, &s.gyro_t),
         );
     }
-    plot::line_chart(&dir.join("residuals.png"), &chart).map_err(viz_err)?;
+    plot::line_chart(path, &chart).map_err(viz_err)
+}
+
+/// The nominal model's residuals against the regressors that expose effects
+/// (mean per bin).
+fn plot_regressors(path: &Path, s: &ResidualSeries) -> Result<(), PipelineError> {
     let chart = LineChart::new(
         "Nominal-model residuals against the regressors (mean per bin)",
         "regressor",
     )
     .panel(
         "V residual (m/s) vs speed (m/s)",
-        vec![Series::new("V residual", binned(&s.speed, &s.v_before, 24)).color(after)],
+        vec![Series::new("V residual", binned(&s.speed, &s.v_before, 24)).color(AFTER)],
     )
     .panel(
         "W residual (rad/s) vs turn rate (rad/s)",
-        vec![Series::new("W residual", binned(&s.turn_rate, &s.w_before, 24)).color(after)],
+        vec![Series::new("W residual", binned(&s.turn_rate, &s.w_before, 24)).color(AFTER)],
     )
     .panel(
         "W residual (rad/s) vs |V|·|W| (m/s·rad/s)",
-        vec![Series::new("W residual", binned(&s.speed_turn, &s.w_before, 24)).color(after)],
+        vec![Series::new("W residual", binned(&s.speed_turn, &s.w_before, 24)).color(AFTER)],
     );
-    plot::line_chart(&dir.join("regressors.png"), &chart).map_err(viz_err)?;
+    plot::line_chart(path, &chart).map_err(viz_err)
+}
 
-    let mut r = Report::new();
-    r.heading(1, "odocal diagnose");
-    r.kv(&[
-        ("recording", name.to_string()),
-        ("verdict", verdict_word(d)),
-        ("held out from", format!("{:.1} s", s.split)),
-    ]);
-    r.heading(2, "Causes");
-    if d.causes.is_empty() {
+/// The causes as a table (effect, parameters ± standard error, ΔBIC).
+fn write_causes(r: &mut Report, causes: &[Cause]) -> Result<(), PipelineError> {
+    if causes.is_empty() {
         r.paragraph("No effect improves the evidence by the required margin.");
-    } else {
-        let rows: Vec<Vec<String>> = d
-            .causes
-            .iter()
-            .map(|c| {
-                let params = c
-                    .parameters
-                    .iter()
-                    .map(|(k, v)| match c.stderr.get(k) {
-                        Some(e) => format!("{k} = {v:.6} ± {e:.6}"),
-                        None => format!("{k} = {v:.6}"),
-                    })
-                    .collect::<Vec<_>>()
-                    .join(", ");
-                vec![c.effect.clone(), params, num(c.delta_bic, 1)]
-            })
-            .collect();
-        r.table(&["effect", "parameters", "ΔBIC"], &rows)
-            .map_err(viz_err)?;
+        return Ok(());
     }
-    r.heading(2, "Gain on held-out data");
+    let rows: Vec<Vec<String>> = causes
+        .iter()
+        .map(|c| {
+            let params = c
+                .parameters
+                .iter()
+                .map(|(k, v)| match c.stderr.get(k) {
+                    Some(e) => format!("{k} = {v:.6} ± {e:.6}"),
+                    None => format!("{k} = {v:.6}"),
+                })
+                .collect::<Vec<_>>()
+                .join(", ");
+            vec![c.effect.clone(), params, num(c.delta_bic, 1)]
+        })
+        .collect();
+    r.table(&["effect", "parameters", "ΔBIC"], &rows)
+        .map_err(viz_err)?;
+    Ok(())
+}
+
+/// The held-out gain: normalised RMSE, trajectory error against a
+/// reference, and the effects the held-out part did not confirm.
+fn write_gain(r: &mut Report, d: &Diagnosis) {
     r.kv(&[
         ("residual RMSE before", num(d.gain.heldout_rmse_before, 5)),
         ("residual RMSE after", num(d.gain.heldout_rmse_after, 5)),
@@ -240,12 +269,6 @@ pub fn write_report(dir: &Path, name: &str, d: &Diagnosis) -> Result<(), Pipelin
             names.join(", ")
         ));
     }
-    r.image("residuals.png", "Residuals before and after the extension.");
-    r.image(
-        "regressors.png",
-        "Nominal-model residuals against the regressors that expose effects.",
-    );
-    r.write(&dir.join("report.md")).map_err(viz_err)
 }
 
 /// The verdict as design.md spells it (`explained`, `no-discrepancy`, `unexplained`).

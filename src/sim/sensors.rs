@@ -70,7 +70,7 @@ impl WheelTrack {
 }
 
 /// JointState-like wheel samples: whole encoder ticks (as rad), stamped on the
-/// encoder clock, which runs `robot.latency` s behind the laser's.
+/// encoder clock, which runs the `latency` of `robot` behind the laser's.
 pub fn encoder_samples(
     cfg: &EncoderConfig,
     ticks_per_rev: f64,
@@ -86,7 +86,7 @@ pub fn encoder_samples(
     let count = |phi: f64, phase: f64| ((phi + phase) / q).floor() - (phase / q).floor();
     sample_times(cfg.rate_hz, duration, 0.0)
         .map(|t| {
-            let (r, l) = track.at(t - robot.latency);
+            let (r, l) = track.at(robot.departures().encoder_taken(t));
             WheelSample {
                 stamp: t,
                 right: count(r, p_r) * q,
@@ -113,7 +113,7 @@ pub fn gyro_samples(
             let rate = (drive.pose_at(t)[2] - drive.pose_at(t - h)[2]) / h;
             GyroSample {
                 stamp: t,
-                wz: rate + robot.gyro_bias + noise.sample(&mut rng),
+                wz: robot.departures().gyro_rate(rate) + noise.sample(&mut rng),
             }
         })
         .collect()

@@ -1,0 +1,81 @@
+//! The result of a diagnosis: the verdict, the named causes with their
+//! estimates, the held-out gain, the structure tests and the residual series.
+
+use super::fit::Fit;
+use super::gain::Gain;
+use super::select::{named, CandidateScore};
+use super::series::ResidualSeries;
+use super::stats::{SeriesStats, StructureTest};
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// What the diagnosis concludes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Verdict {
+    /// Named causes explain the discrepancy.
+    Explained,
+    /// The nominal model agrees with the measurements within their noise.
+    NoDiscrepancy,
+    /// The residuals hold structure that no candidate explains.
+    Unexplained,
+}
+
+/// One named cause with its estimate (design.md JSON keys).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Cause {
+    /// Effect name (design.md's table).
+    pub effect: String,
+    /// Estimated parameters (units of the effect table).
+    pub parameters: BTreeMap<String, f64>,
+    /// Their standard errors (a radius step's time has none: grid-searched).
+    pub stderr: BTreeMap<String, f64>,
+    /// BIC improvement when the effect entered the model.
+    pub delta_bic: f64,
+}
+
+impl Cause {
+    /// Effect `i` of a fit as a cause that entered with `delta_bic`.
+    pub fn of(f: &Fit, i: usize, delta_bic: f64) -> Self {
+        let (parameters, stderr) = named(f, i);
+        Self {
+            effect: f.effects[i].name().to_string(),
+            parameters,
+            stderr,
+            delta_bic,
+        }
+    }
+}
+
+/// The whole diagnosis.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnosis {
+    /// `explained`, `no-discrepancy` or `unexplained`.
+    pub verdict: Verdict,
+    /// Named causes (empty unless explained), from the final joint fit.
+    pub causes: Vec<Cause>,
+    /// Held-out gain of the extension.
+    pub gain: Gain,
+    /// Whether structure remains after the extension (explained verdicts).
+    pub remaining_structure: bool,
+    /// Effects the training data selected but the held-out part did not
+    /// confirm (the held-out χ² dropped by less than the margin).
+    pub heldout_rejected: Vec<Cause>,
+    /// Every candidate tried in every selection round.
+    pub candidates: Vec<CandidateScore>,
+    /// Structure tests per stream on binned residuals, nominal model.
+    pub structure_before: BTreeMap<String, StructureTest>,
+    /// Same, extended model.
+    pub structure_after: BTreeMap<String, StructureTest>,
+    /// Residual statistics per stream (physical units), nominal model, all rows.
+    pub stats_before: BTreeMap<String, SeriesStats>,
+    /// Same, extended model.
+    pub stats_after: BTreeMap<String, SeriesStats>,
+    /// Noise scale per stream fitted on the training part (σ_actual / σ_given).
+    pub noise_scale: BTreeMap<String, f64>,
+    /// Rows used: training, held-out, rejected as outliers.
+    pub rows: BTreeMap<String, usize>,
+    /// Residual series for plots (not in the JSON summary).
+    #[serde(skip)]
+    pub series: ResidualSeries,
+}
