@@ -200,17 +200,6 @@ pub fn write_wheels(path: &Path, wheels: &[WheelSample]) -> io::Result<()> {
 /// One row of the calibration history (design.md column order).
 pub type HistoryFields = [f64; 9];
 
-/// Writes the calibration history CSV from rows in [`HISTORY_HEADER`] order.
-pub fn write_history(path: &Path, rows: impl IntoIterator<Item = HistoryFields>) -> io::Result<()> {
-    write_atomic(path, |w| {
-        writeln!(w, "{HISTORY_HEADER}")?;
-        for r in rows {
-            write_history_row(w, &r)?;
-        }
-        Ok(())
-    })
-}
-
 /// One line of the calibration history CSV (after [`HISTORY_HEADER`]).
 pub fn write_history_row(w: &mut impl Write, r: &HistoryFields) -> io::Result<()> {
     writeln!(
