@@ -216,7 +216,7 @@ fn intel_odometry_is_diagnosed_against_icp() {
         min_interval: 1.0,
         ..DiagnoseParams::default()
     };
-    let d = pipeline::diagnose::run(&rec, &robot, &IcpParams::default(), &p).unwrap();
+    let d = pipeline::diagnose::run_recording(&rec, &robot, &IcpParams::default(), &p).unwrap();
     show("intel", &d);
     assert_eq!(d.verdict, Verdict::Explained);
     let l = cause(&d, "laser_offset").expect("laser mount named");

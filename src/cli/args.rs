@@ -4,6 +4,7 @@ use clap::{Args, Parser, Subcommand};
 use odocal::eval::{Alignment, DeltaUnit};
 use odocal::pipeline::calibrate::{CalibSource, CalibrateJob, CalibratorChoice};
 use odocal::pipeline::demo::DemoJob;
+use odocal::pipeline::diagnose::DiagnoseJob;
 use odocal::pipeline::evaluate::EvalJob;
 use odocal::pipeline::icp::IcpJob;
 use odocal::pipeline::simulate::SimulateJob;
@@ -367,6 +368,18 @@ impl DemoArgs {
             input: self.input.clone(),
             truth: self.truth.clone(),
             viewer: viewer(None, self.connect.as_ref(), self.spawn),
+            common: self.common.files(),
+        }
+    }
+}
+
+impl DiagnoseArgs {
+    /// The job these arguments ask for.
+    pub fn job(&self) -> DiagnoseJob {
+        DiagnoseJob {
+            measured: self.measured.clone(),
+            holdout: self.holdout,
+            report: self.report.clone(),
             common: self.common.files(),
         }
     }

@@ -5,7 +5,7 @@ pub mod args;
 mod print;
 
 use args::{CalibrateArgs, Command, DemoArgs, DiagnoseArgs, EvalArgs, ExperimentArgs, IcpArgs, SimulateArgs};
-use odocal::pipeline::{self, PipelineError, Progress};
+use odocal::pipeline::{self, Progress};
 use print::out;
 
 /// Runs one command.
@@ -19,10 +19,6 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Diagnose(a) => diagnose(a),
         Command::Experiment(a) => experiment(a),
     }
-}
-
-fn bad(msg: impl Into<String>) -> anyhow::Error {
-    PipelineError::BadArgument(msg.into()).into()
 }
 
 fn print_json<T: serde::Serialize>(v: &T) -> anyhow::Result<()> {
@@ -111,25 +107,7 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
 }
 
 fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
-    let (mut cfg, robot) = a.common.files().load()?;
-    if let Some(h) = a.holdout {
-        if !(h > 0.0 && h < 1.0) {
-            return Err(bad(format!(
-                "--holdout must be a fraction in (0, 1), got {h}"
-            )));
-        }
-        cfg.diagnose.holdout = h;
-    }
-    let d = if odocal::io::sniff(&a.measured)? == odocal::io::Format::CensiTuples {
-        let tuples = odocal::io::censi::read(&a.measured).map_err(PipelineError::from)?;
-        pipeline::diagnose::run_tuples(&tuples, &robot, &cfg.diagnose)?
-    } else {
-        let rec = pipeline::read_recording(&a.measured, &cfg, &robot)?;
-        pipeline::diagnose::run(&rec, &robot, &cfg.icp, &cfg.diagnose)?
-    };
-    if let Some(dir) = &a.report {
-        pipeline::diagnose::write_report(dir, &a.measured.display().to_string(), &d)?;
-    }
+    let d = pipeline::diagnose::run(&a.job())?;
     if a.json {
         return print_json(&d);
     }

@@ -1,13 +1,13 @@
 //! `odocal diagnose`: replay the nominal model on a recording's wheel data,
 //! compare with ICP and the gyro, name what differs, and show it.
 
-use super::{icp, PipelineError};
+use super::{icp, Common, PipelineError};
 use crate::diagnose::{self, Cause, DiagnoseParams, Diagnosis, Measured, ResidualSeries};
 use crate::recording::Recording;
 use crate::robot::RobotConfig;
 use crate::viz::plot::{self, LineChart, Series};
 use crate::viz::report::{num, Report};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The scan matching the diagnosis compares the wheels with: `params`, but
 /// scan to scan. Against a local map each keyframe registration starts from
@@ -21,12 +21,52 @@ pub fn icp_for_diagnosis(params: &crate::icp::IcpParams) -> crate::icp::IcpParam
     }
 }
 
+/// What `odocal diagnose` is asked to do.
+#[derive(Debug, Clone, Default)]
+pub struct DiagnoseJob {
+    /// A recording (any format [`crate::io::sniff`] knows) or Censi et al.'s
+    /// calibration tuples.
+    pub measured: PathBuf,
+    /// The fraction at the end held out to measure the gain (else the
+    /// configuration's).
+    pub holdout: Option<f64>,
+    /// Where to write `report.md` and the residual plots, if anywhere.
+    pub report: Option<PathBuf>,
+    /// Configuration and robot files.
+    pub common: Common,
+}
+
+/// Runs `odocal diagnose`: reads the measurements by their format, diagnoses
+/// them, and writes the report when asked.
+pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
+    let (mut cfg, robot) = job.common.load()?;
+    if let Some(h) = job.holdout {
+        if !(h > 0.0 && h < 1.0) {
+            return Err(PipelineError::BadArgument(format!(
+                "--holdout must be a fraction in (0, 1), got {h}"
+            )));
+        }
+        cfg.diagnose.holdout = h;
+    }
+    let d = if crate::io::sniff(&job.measured)? == crate::io::Format::CensiTuples {
+        let tuples = crate::io::censi::read(&job.measured)?;
+        run_tuples(&tuples, &robot, &cfg.diagnose)?
+    } else {
+        let rec = super::read_recording(&job.measured, &cfg, &robot)?;
+        run_recording(&rec, &robot, &cfg.icp, &cfg.diagnose)?
+    };
+    if let Some(dir) = &job.report {
+        write_report(dir, &job.measured.display().to_string(), &d)?;
+    }
+    Ok(d)
+}
+
 /// Runs ICP on the recording and diagnoses the nominal model against it.
 /// A recording without wheel encoders but with the robot's own integrated
 /// odometry (classic CARMEN logs) is diagnosed through virtual wheel angles
 /// ([`diagnose::odometry::wheels_from_odometry`]): the causes then describe
 /// what that odometry gets wrong against scan matching.
-pub fn run(
+pub fn run_recording(
     rec: &Recording,
     robot: &RobotConfig,
     icp_params: &crate::icp::IcpParams,
