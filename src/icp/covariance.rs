@@ -13,6 +13,7 @@
 //! is noisy too — is corrected by one factor, fitted on simulated runs with
 //! known truth so that the mean NEES over a run is 3 (see `IcpParams::cov_inflation`).
 
+use super::metric::{self, Placement};
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 /// Smallest residual standard deviation trusted (m): noise-free synthetic
@@ -28,8 +29,11 @@ pub struct Correspondence {
     pub q: [f64; 2],
     /// Surface normal at `q`, if known.
     pub normal: Option<[f64; 2]>,
-    /// Robust weight in [0, 1].
-    pub w: f64,
+    /// Point-to-line residual `nᵀ (R p + t − q)` (m) at the pose it was
+    /// associated at.
+    pub residual: f64,
+    /// Robust weight in [0, 1] of that residual.
+    pub weight: f64,
 }
 
 /// Covariance and conditioning of one match.
@@ -46,42 +50,89 @@ pub struct Uncertainty {
     pub rms: f64,
 }
 
+/// Weighted sums over the correspondences at one pose.
+struct Information {
+    /// `Σ w J Jᵀ`.
+    h: Matrix3<f64>,
+    /// `Σ w e²` (m²).
+    ss: f64,
+    /// Residual degrees of freedom, `Σ w` per residual.
+    dof: f64,
+    /// `Σ w`.
+    wsum: f64,
+    /// `Σ w |R p|²` (m²), for the RMS range.
+    r2sum: f64,
+}
+
 /// Estimates the uncertainty of pose `[x, y, θ]` from its correspondences;
 /// `None` when the information matrix is singular or not finite.
 pub fn estimate(corrs: &[Correspondence], pose: [f64; 3], inflation: f64) -> Option<Uncertainty> {
-    let (s, c) = pose[2].sin_cos();
-    let mut h = Matrix3::zeros();
-    let (mut ss, mut dof, mut wsum, mut r2sum) = (0.0, 0.0, 0.0, 0.0);
-    for k in corrs {
-        let rp = [c * k.p[0] - s * k.p[1], s * k.p[0] + c * k.p[1]];
-        let r = [rp[0] + pose[0] - k.q[0], rp[1] + pose[1] - k.q[1]];
-        let dth = [-rp[1], rp[0]];
-        wsum += k.w;
-        r2sum += k.w * (rp[0] * rp[0] + rp[1] * rp[1]);
-        match k.normal {
-            Some(n) => {
-                let j = Vector3::new(n[0], n[1], n[0] * dth[0] + n[1] * dth[1]);
-                h += k.w * j * j.transpose();
-                let e = n[0] * r[0] + n[1] * r[1];
-                ss += k.w * e * e;
-                dof += k.w;
-            }
-            None => {
-                let jx = Vector3::new(1.0, 0.0, dth[0]);
-                let jy = Vector3::new(0.0, 1.0, dth[1]);
-                h += k.w * (jx * jx.transpose() + jy * jy.transpose());
-                ss += k.w * (r[0] * r[0] + r[1] * r[1]);
-                dof += 2.0 * k.w;
-            }
-        }
-    }
+    let Information {
+        h,
+        ss,
+        dof,
+        wsum,
+        r2sum,
+    } = information(corrs, pose);
     if !(dof > 3.0) || !(wsum > 0.0) {
         return None;
     }
     let var = (ss / (dof - 3.0)).max(MIN_RESIDUAL_STD * MIN_RESIDUAL_STD);
     let cov = h.try_inverse()? * (var * inflation);
-    // Conditioning with θ in metres at the RMS range L.
-    let l = (r2sum / wsum).sqrt().max(1e-3);
+    let (conditioning, weak_direction) = conditioning(&h, r2sum / wsum);
+    let u = Uncertainty {
+        cov: (cov + cov.transpose()) * 0.5,
+        conditioning,
+        weak_direction,
+        rms: (ss / dof).sqrt(),
+    };
+    (u.cov.iter().all(|x| x.is_finite()) && u.conditioning.is_finite()).then_some(u)
+}
+
+/// The weighted information at `pose`: per correspondence with a normal the
+/// point-to-line `J` and `e` of `metric` (one degree of freedom), without one
+/// the point-to-point rows `[I | ∂(R p)/∂θ]` and `R p + t − q` (two).
+fn information(corrs: &[Correspondence], pose: [f64; 3]) -> Information {
+    let at = Placement::new(pose);
+    let mut h = Matrix3::zeros();
+    let (mut ss, mut dof, mut wsum, mut r2sum) = (0.0, 0.0, 0.0, 0.0);
+    for k in corrs {
+        let m = at.apply(k.p);
+        let rp = m.rp;
+        wsum += k.weight;
+        r2sum += k.weight * (rp[0] * rp[0] + rp[1] * rp[1]);
+        match k.normal {
+            Some(n) => {
+                let (e, j) = metric::residual_and_jacobian(&m, k.q, n);
+                h += k.weight * j * j.transpose();
+                ss += k.weight * e * e;
+                dof += k.weight;
+            }
+            None => {
+                let r = [m.x[0] - k.q[0], m.x[1] - k.q[1]];
+                let dth = metric::rotation_derivative(rp);
+                let jx = Vector3::new(1.0, 0.0, dth[0]);
+                let jy = Vector3::new(0.0, 1.0, dth[1]);
+                h += k.weight * (jx * jx.transpose() + jy * jy.transpose());
+                ss += k.weight * (r[0] * r[0] + r[1] * r[1]);
+                dof += 2.0 * k.weight;
+            }
+        }
+    }
+    Information {
+        h,
+        ss,
+        dof,
+        wsum,
+        r2sum,
+    }
+}
+
+/// Smallest over largest eigenvalue of the information `h` with θ in metres
+/// at the RMS range `L = √mean_r2` (`D H D`, `D = diag(1, 1, 1/L)`), and the
+/// unit eigenvector of the smallest.
+fn conditioning(h: &Matrix3<f64>, mean_r2: f64) -> (f64, [f64; 3]) {
+    let l = mean_r2.sqrt().max(1e-3);
     let d = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 1.0 / l));
     let eig = SymmetricEigen::new(d * h * d);
     let (mut imin, mut imax) = (0, 0);
@@ -94,13 +145,10 @@ pub fn estimate(corrs: &[Correspondence], pose: [f64; 3], inflation: f64) -> Opt
         }
     }
     let v = eig.eigenvectors.column(imin);
-    let u = Uncertainty {
-        cov: (cov + cov.transpose()) * 0.5,
-        conditioning: eig.eigenvalues[imin] / eig.eigenvalues[imax],
-        weak_direction: [v[0], v[1], v[2]],
-        rms: (ss / dof).sqrt(),
-    };
-    (u.cov.iter().all(|x| x.is_finite()) && u.conditioning.is_finite()).then_some(u)
+    (
+        eig.eigenvalues[imin] / eig.eigenvalues[imax],
+        [v[0], v[1], v[2]],
+    )
 }
 
 #[cfg(test)]
@@ -116,7 +164,8 @@ mod tests {
                     y + if i % 2 == 0 { 0.01 } else { -0.01 },
                 ],
                 normal: Some([0.0, 1.0]),
-                w: 1.0,
+                residual: if i % 2 == 0 { -0.01 } else { 0.01 },
+                weight: 1.0,
             })
             .collect()
     }
@@ -136,7 +185,8 @@ mod tests {
                 i as f64 * 0.1 - 1.0,
             ],
             normal: Some([1.0, 0.0]),
-            w: 1.0,
+            residual: if i % 2 == 0 { -0.01 } else { 0.01 },
+            weight: 1.0,
         }));
         let u = estimate(&c, [0.0; 3], 1.0).unwrap();
         assert!(u.conditioning > 1e-3);

@@ -169,33 +169,8 @@ impl ScanMatcher {
         let dt = t1 - t0;
         let given = prior.filter(pose_finite);
         let cv = self.constant_velocity(dt);
-        let (prior, source) = match (given, cv) {
-            (Some(p), Some(cv)) if !self.plausible_change(&p, t1, dt) => {
-                (cv, PriorSource::Substituted)
-            }
-            (Some(p), _) => (p, PriorSource::Given),
-            (None, Some(cv)) => (cv, PriorSource::ConstantVelocity),
-            _ => (Pose2::identity(), PriorSource::None),
-        };
-        // The prior term's centre: the odometry, or its blend with a
-        // constant-velocity guess from a pair the scans fully measured.
-        self.pair_given = given.filter(|_| source == PriorSource::Given);
-        self.pair_cv = cv;
-        self.pair_sigma = self.params.prior_sigma_xy;
-        let prior = match self.pair_given {
-            Some(g) if self.params.prior_blend_rate > 0.0 => {
-                let p = &self.params;
-                let measured = self
-                    .velocity
-                    .is_some_and(|v| v.cond >= p.prior_blend_conditioning);
-                let [lo, hi] = p.prior_sigma_bounds;
-                let cv = cv.as_ref().filter(|_| measured);
-                let (c, s) = self.model.prior(&g, cv, p.prior_sigma_xy, (lo, hi));
-                self.pair_sigma = s;
-                c
-            }
-            _ => prior,
-        };
+        let (prior, source) = self.choose_prior(given, cv, t1, dt);
+        let prior = self.prior_term_centre(prior, given, cv, source);
         if source == PriorSource::Substituted {
             self.substituted_since.get_or_insert(t0);
         } else if dt > 0.0 {
@@ -210,35 +185,110 @@ impl ScanMatcher {
             return Some(self.failed(t0, t1, &Pose2::identity(), PairFailure::BadTime));
         }
         self.last = Some((t1, scan.ranges.len()));
+        self.prepare_scan(scan, &prior, source, dt);
+        let given = given.filter(|_| source == PriorSource::Substituted);
+        if let Some(f) = self.scan_failure(scan.ranges.len() != beams0) {
+            return Some(self.skip_pair(t0, t1, &prior, given, f));
+        }
+        Some(self.match_pair(t0, t1, &prior, source, given))
+    }
+
+    /// The initial guess of a pair ending at `t1` (s, `dt` long) and where it
+    /// comes from: the given prior, unless it is implausible against the last
+    /// motion (then the constant-velocity guess `cv` is substituted); else
+    /// `cv`; else the identity.
+    fn choose_prior(
+        &self,
+        given: Option<Pose2>,
+        cv: Option<Pose2>,
+        t1: f64,
+        dt: f64,
+    ) -> (Pose2, PriorSource) {
+        match (given, cv) {
+            (Some(p), Some(cv)) if !self.plausible_change(&p, t1, dt) => {
+                (cv, PriorSource::Substituted)
+            }
+            (Some(p), _) => (p, PriorSource::Given),
+            (None, Some(cv)) => (cv, PriorSource::ConstantVelocity),
+            _ => (Pose2::identity(), PriorSource::None),
+        }
+    }
+
+    /// The prior term's centre: the odometry, or its blend with a
+    /// constant-velocity guess from a pair the scans fully measured (see
+    /// `PriorModel::prior`). Records the pair's given prior, guess and
+    /// prior-term σ for the model and the registration.
+    fn prior_term_centre(
+        &mut self,
+        prior: Pose2,
+        given: Option<Pose2>,
+        cv: Option<Pose2>,
+        source: PriorSource,
+    ) -> Pose2 {
+        self.pair_given = given.filter(|_| source == PriorSource::Given);
+        self.pair_cv = cv;
+        self.pair_sigma = self.params.prior_sigma_xy;
+        match self.pair_given {
+            Some(g) if self.params.prior_blend_rate > 0.0 => {
+                let p = &self.params;
+                let measured = self
+                    .velocity
+                    .is_some_and(|v| v.cond >= p.prior_blend_conditioning);
+                let [lo, hi] = p.prior_sigma_bounds;
+                let cv = cv.as_ref().filter(|_| measured);
+                let (c, s) = self.model.prior(&g, cv, p.prior_sigma_xy, (lo, hi));
+                self.pair_sigma = s;
+                c
+            }
+            _ => prior,
+        }
+    }
+
+    /// Turns the scan into base-frame points, deskewed by the prior's twist
+    /// over `dt` (s) when it has one, and fits their lines.
+    fn prepare_scan(&mut self, scan: &LaserScan, prior: &Pose2, source: PriorSource, dt: f64) {
         let twist = (self.params.deskew && source != PriorSource::None).then(|| {
-            let (ds, dth) = geom::arc_of_increment(&prior);
+            let (ds, dth) = geom::arc_of_increment(prior);
             (ds / dt, dth / dt)
         });
         self.pre.points(scan, twist, &mut self.cur);
         self.set_own();
-        let usable = self.cur.pts.len() >= self.params.min_points;
-        let failure = if !usable {
+    }
+
+    /// Why the prepared scan cannot be matched, if it cannot: too few points
+    /// (in it or in the reference), or a beam count other than the previous
+    /// scan's (`beams_changed`).
+    fn scan_failure(&self, beams_changed: bool) -> Option<PairFailure> {
+        if self.cur.pts.len() < self.params.min_points {
             Some(PairFailure::TooFewPoints)
-        } else if scan.ranges.len() != beams0 {
+        } else if beams_changed {
             Some(PairFailure::Inconsistent)
         } else if self.reference.is_empty() {
             Some(PairFailure::TooFewPoints)
         } else {
             None
-        };
-        let given = given.filter(|_| source == PriorSource::Substituted);
-        if let Some(f) = failure {
-            let prior = self.fallback(&prior, given, dt);
-            let m = self.failed(t0, t1, &prior, f);
-            let ref_from_cur = self.ref_from_last * prior;
-            if usable {
-                self.start_reference(ref_from_cur);
-            } else {
-                self.ref_from_last = ref_from_cur;
-            }
-            return Some(m);
         }
-        Some(self.match_pair(t0, t1, &prior, source, given))
+    }
+
+    /// A pair not matched (`f`): placed by the fallback of `prior`; a usable
+    /// scan starts a new reference there.
+    fn skip_pair(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        prior: &Pose2,
+        given: Option<Pose2>,
+        f: PairFailure,
+    ) -> Motion {
+        let prior = self.fallback(prior, given, t1 - t0);
+        let m = self.failed(t0, t1, &prior, f);
+        let ref_from_cur = self.ref_from_last * prior;
+        if self.cur.pts.len() >= self.params.min_points {
+            self.start_reference(ref_from_cur);
+        } else {
+            self.ref_from_last = ref_from_cur;
+        }
+        m
     }
 
     /// Matches the prepared scan from `prior`; `given` is the caller's prior
@@ -251,6 +301,29 @@ impl ScanMatcher {
         source: PriorSource,
         given: Option<Pose2>,
     ) -> Motion {
+        self.prepare_source();
+        let dt = t1 - t0;
+        let best = self.best_attempt(prior, source, given, dt);
+        self.info.prior_source = best.source;
+        if let Some(u) = best.reg.uncertainty {
+            self.info.conditioning = u.conditioning;
+            self.info.weak_direction = u.weak_direction;
+            self.info.rms = u.rms;
+        }
+        if let Some(f) = best.failure {
+            let prior = &self.fallback(prior, given, dt);
+            let mut m = self.failed(t0, t1, prior, f);
+            m.iterations = best.reg.iterations;
+            m.inliers = best.reg.inliers as u32;
+            self.bridge(prior, m.cov);
+            return m;
+        }
+        self.accept(t0, t1, best)
+    }
+
+    /// The source points of the prepared scan (downsampled) and their own
+    /// surface normals (NaN where none was fitted).
+    fn prepare_source(&mut self) {
         let p = &self.params;
         self.pre.downsample(
             &self.cur.pts,
@@ -265,14 +338,22 @@ impl ScanMatcher {
                 .iter()
                 .map(|&i| self.own.normal(i).unwrap_or([f64::NAN; 2])),
         );
-        let dt = t1 - t0;
-        // A failed match from a given prior is tried again from the
-        // constant-velocity guess and from the previous pair's increment as
-        // it was (where the stamps bunch up, velocity × dt is not a guess).
+    }
+
+    /// The registration a pair is measured by: from `prior` with the prior
+    /// term, again without it when the scans contradict it, the substituted
+    /// guess against the `given` prior it replaced, and after a failure from
+    /// a given prior, the motion guesses.
+    fn best_attempt(
+        &mut self,
+        prior: &Pose2,
+        source: PriorSource,
+        given: Option<Pose2>,
+        dt: f64,
+    ) -> Attempt {
         // A prior the robot could have driven in dt still bounds the answer
-        // (a retry must agree with it too); one it could not (odometry that
-        // froze, then caught up in one jump) does not. The retry with more
-        // inliers is kept.
+        // of a retry (it must agree with it too); one it could not (odometry
+        // that froze, then caught up in one jump) does not.
         let possible = self.within_limits(prior, &Matrix3::zeros(), dt);
         let mut best = self.attempt(prior, source);
         self.info.prior_conflict = best.conflict;
@@ -291,54 +372,60 @@ impl ScanMatcher {
         // the scans can (the match with more inliers is kept).
         if let Some(g) = given {
             let alt = self.attempt(&g, PriorSource::Given);
-            if alt.failure.is_none()
-                && (best.failure.is_some() || alt.reg.inliers > best.reg.inliers)
-            {
+            if alt.improves_on(&best) {
                 best = alt;
             }
         }
         if source == PriorSource::Given && best.failure.is_some() {
-            let guesses = [self.constant_velocity(dt), self.velocity.map(|v| v.inc)];
-            for (k, guess) in guesses.iter().enumerate() {
-                let Some(g) = guess else { continue };
-                if k == 1 && guesses[0].is_some_and(|cv| close(&cv, g)) {
-                    continue;
-                }
-                let alt = self.attempt(g, PriorSource::ConstantVelocity);
-                let admissible = alt.failure.is_none()
-                    && (!possible || self.agrees_with_prior(&alt.motion, prior, source));
-                if admissible && (best.failure.is_some() || alt.reg.inliers > best.reg.inliers) {
-                    best = alt;
-                }
+            best = self.retry_from_guesses(best, prior, source, possible, dt);
+        }
+        best
+    }
+
+    /// A failed match from a given prior, tried again from the
+    /// constant-velocity guess and from the previous pair's increment as it
+    /// was (where the stamps bunch up, velocity × dt is not a guess). With a
+    /// `possible` prior, a retry must agree with it. The retry with more
+    /// inliers is kept.
+    fn retry_from_guesses(
+        &mut self,
+        mut best: Attempt,
+        prior: &Pose2,
+        source: PriorSource,
+        possible: bool,
+        dt: f64,
+    ) -> Attempt {
+        let guesses = [self.constant_velocity(dt), self.velocity.map(|v| v.inc)];
+        for (k, guess) in guesses.iter().enumerate() {
+            let Some(g) = guess else { continue };
+            if k == 1 && guesses[0].is_some_and(|cv| close(&cv, g)) {
+                continue;
+            }
+            let alt = self.attempt(g, PriorSource::ConstantVelocity);
+            let admissible = !possible || self.agrees_with_prior(&alt.motion, prior, source);
+            if admissible && alt.improves_on(&best) {
+                best = alt;
             }
         }
+        best
+    }
+
+    /// A successful match: its covariance, the error models it trains (not
+    /// after failed scans), the next reference. A geometrically sound match
+    /// that the robot could not have driven in dt (bursts of scans stamped
+    /// milliseconds apart) means the stamps are wrong, not the geometry: the
+    /// motion is kept for the trajectory but flagged, so it never becomes a
+    /// velocity observation.
+    fn accept(&mut self, t0: f64, t1: f64, best: Attempt) -> Motion {
         let Attempt {
             reg,
             ref_from_cur,
             motion,
-            failure,
             init,
             source,
             ..
         } = best;
-        self.info.prior_source = source;
-        if let Some(u) = reg.uncertainty {
-            self.info.conditioning = u.conditioning;
-            self.info.weak_direction = u.weak_direction;
-            self.info.rms = u.rms;
-        }
-        if let Some(f) = failure {
-            let prior = &self.fallback(prior, given, dt);
-            let mut m = self.failed(t0, t1, prior, f);
-            m.iterations = reg.iterations;
-            m.inliers = reg.inliers as u32;
-            self.bridge(prior, m.cov);
-            return m;
-        }
-        // A geometrically sound match that the robot could not have driven
-        // in dt (bursts of scans stamped milliseconds apart): the stamps are
-        // wrong, not the geometry. The motion is kept for the trajectory but
-        // flagged, so it never becomes a velocity observation.
+        let dt = t1 - t0;
         let u = reg.uncertainty.expect("checked by attempt");
         let cov = if self.params.local_map {
             // motion = inv(W_last) W_cur, both registered against the map.
@@ -351,20 +438,8 @@ impl ScanMatcher {
         let bridged = self.misses > 0;
         if !bridged {
             self.threshold.update(&geom::between(&init, &motion));
-            if time_ok
-                && self.params.prior_blend_rate > 0.0
-                && u.conditioning >= self.params.prior_blend_conditioning
-            {
-                // Only when the winning match started from the odometry.
-                let odo = self.pair_given.filter(|_| source == PriorSource::Given);
-                self.model.record(
-                    &motion,
-                    odo.as_ref(),
-                    self.pair_cv.as_ref(),
-                    self.params.prior_blend_rate,
-                );
-            }
             if time_ok {
+                self.learn(&motion, source, u.conditioning);
                 self.velocity = Some(Velocity {
                     cond: u.conditioning,
                     inc: motion,
@@ -386,6 +461,22 @@ impl ScanMatcher {
                 None
             },
             ..Motion::from_increment(t0, t1, &motion, cov)
+        }
+    }
+
+    /// Trains the prediction error model on a matched `motion` the scans
+    /// measured in every direction (`conditioning`); the odometry only when
+    /// the winning match started from it (`source`).
+    fn learn(&mut self, motion: &Pose2, source: PriorSource, conditioning: f64) {
+        let p = &self.params;
+        if p.prior_blend_rate > 0.0 && conditioning >= p.prior_blend_conditioning {
+            let odo = self.pair_given.filter(|_| source == PriorSource::Given);
+            self.model.record(
+                motion,
+                odo.as_ref(),
+                self.pair_cv.as_ref(),
+                p.prior_blend_rate,
+            );
         }
     }
 
@@ -678,6 +769,14 @@ struct Attempt {
     /// what the scan alone says (see [`prior_conflict`]); 0 without a prior
     /// term.
     conflict: f64,
+}
+
+impl Attempt {
+    /// Whether this attempt succeeded and beats `best`: `best` failed, or
+    /// this one has more inliers.
+    fn improves_on(&self, best: &Attempt) -> bool {
+        self.failure.is_none() && (best.failure.is_some() || self.reg.inliers > best.reg.inliers)
+    }
 }
 
 /// Squared Mahalanobis distance (3 dof) between the centre `init` of a prior

@@ -43,6 +43,7 @@
 
 mod covariance;
 mod matcher;
+mod metric;
 mod params;
 mod preprocess;
 mod prior_model;

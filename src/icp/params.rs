@@ -187,7 +187,14 @@ pub struct IcpParamsError {
 impl IcpParams {
     /// Checks ranges and orderings once, before any matching.
     pub fn validate(&self) -> Result<(), IcpParamsError> {
-        let e = |name, why| Err(IcpParamsError { name, why });
+        self.check_positive()?;
+        self.check_non_negative()?;
+        self.check_bounds()?;
+        self.check_counts()
+    }
+
+    /// Lengths, angles, tolerances and rates that must be positive and finite.
+    fn check_positive(&self) -> Result<(), IcpParamsError> {
         let pos = [
             ("max_range", self.max_range),
             ("gap_factor", self.gap_factor),
@@ -214,9 +221,14 @@ impl IcpParams {
         ];
         for (name, v) in pos {
             if !(v > 0.0 && v.is_finite()) {
-                return e(name, "must be positive and finite");
+                return invalid(name, "must be positive and finite");
             }
         }
+        Ok(())
+    }
+
+    /// Values where 0 means "off" or "none": non-negative and finite.
+    fn check_non_negative(&self) -> Result<(), IcpParamsError> {
         let nonneg = [
             ("min_range", self.min_range),
             ("normal_length", self.normal_length),
@@ -231,42 +243,57 @@ impl IcpParams {
         ];
         for (name, v) in nonneg {
             if !(v >= 0.0 && v.is_finite()) {
-                return e(name, "must be non-negative and finite");
+                return invalid(name, "must be non-negative and finite");
             }
-        }
-        if self.min_range >= self.max_range {
-            return e("min_range", "must be below max_range");
-        }
-        if self.min_threshold > self.max_threshold {
-            return e("min_threshold", "must not exceed max_threshold");
-        }
-        if self.prior_blend_rate > 1.0 {
-            return e("prior_blend_rate", "must be at most 1");
-        }
-        let [lo, hi] = self.prior_sigma_bounds;
-        if !(lo > 0.0 && lo <= hi && hi.is_finite()) {
-            return e("prior_sigma_bounds", "must be positive, finite and ordered");
-        }
-        if self.min_inlier_fraction > 1.0 {
-            return e("min_inlier_fraction", "must be at most 1");
-        }
-        if self.beam_stride == 0 {
-            return e("beam_stride", "must be at least 1");
-        }
-        if self.normal_window == 0 {
-            return e("normal_window", "must be at least 1");
-        }
-        if self.max_iterations == 0 {
-            return e("max_iterations", "must be at least 1");
-        }
-        if self.min_points < 3 || self.min_correspondences < 3 {
-            return e("min_points", "need at least 3 points to fix a 2D pose");
-        }
-        if self.local_map && self.keyframes == 0 {
-            return e("keyframes", "must be at least 1 with local_map");
         }
         Ok(())
     }
+
+    /// Orderings of paired limits and upper bounds of fractions.
+    fn check_bounds(&self) -> Result<(), IcpParamsError> {
+        if self.min_range >= self.max_range {
+            return invalid("min_range", "must be below max_range");
+        }
+        if self.min_threshold > self.max_threshold {
+            return invalid("min_threshold", "must not exceed max_threshold");
+        }
+        if self.prior_blend_rate > 1.0 {
+            return invalid("prior_blend_rate", "must be at most 1");
+        }
+        let [lo, hi] = self.prior_sigma_bounds;
+        if !(lo > 0.0 && lo <= hi && hi.is_finite()) {
+            return invalid("prior_sigma_bounds", "must be positive, finite and ordered");
+        }
+        if self.min_inlier_fraction > 1.0 {
+            return invalid("min_inlier_fraction", "must be at most 1");
+        }
+        Ok(())
+    }
+
+    /// Counts: strides, windows, iterations, points and keyframes.
+    fn check_counts(&self) -> Result<(), IcpParamsError> {
+        if self.beam_stride == 0 {
+            return invalid("beam_stride", "must be at least 1");
+        }
+        if self.normal_window == 0 {
+            return invalid("normal_window", "must be at least 1");
+        }
+        if self.max_iterations == 0 {
+            return invalid("max_iterations", "must be at least 1");
+        }
+        if self.min_points < 3 || self.min_correspondences < 3 {
+            return invalid("min_points", "need at least 3 points to fix a 2D pose");
+        }
+        if self.local_map && self.keyframes == 0 {
+            return invalid("keyframes", "must be at least 1 with local_map");
+        }
+        Ok(())
+    }
+}
+
+/// The error for parameter `name`.
+fn invalid(name: &'static str, why: &'static str) -> Result<(), IcpParamsError> {
+    Err(IcpParamsError { name, why })
 }
 
 #[cfg(test)]

@@ -11,6 +11,7 @@
 //! reference noise. A line fitted through `2k + 1` linked neighbours averages
 //! the noise out of both its position and its direction.
 
+use super::metric;
 use super::preprocess::ScanPoints;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
@@ -373,7 +374,7 @@ impl Reference {
         if !l.ok {
             return None;
         }
-        let e = (q[0] - l.c[0]) * l.n[0] + (q[1] - l.c[1]) * l.n[1];
+        let e = metric::residual(q, l.c, l.n);
         Some(Closest {
             target: [q[0] - e * l.n[0], q[1] - e * l.n[1]],
             normal: l.n,

@@ -13,6 +13,7 @@
 //! correspondences, so a pair converges in 3–5 iterations.
 
 use super::covariance::{self, Correspondence, Uncertainty};
+use super::metric::{self, Placement};
 use super::reference::{Closest, Reference};
 
 use nalgebra::{Matrix3, Vector3};
@@ -95,19 +96,22 @@ pub struct Scratch {
 /// Registers `source` (points in their own frame, with the unit normals of
 /// their own surface, NaN when unknown) onto `reference` starting from
 /// `init` = `[x, y, θ]`. Each iteration:
-/// 1. move every source point by the current pose,
-/// 2. find the nearest reference point (kd-tree, or a walk along the surface
-///    from the previous iteration's once the steps are small) and the foot on
-///    its fitted line,
-/// 3. drop pairs whose point-to-line distance exceeds the gate or whose
-///    normals differ by more than the allowed angle, weight the
-///    rest with Geman–McClure `w = (κ² / (κ² + e²))²`, κ = 2 robust σ of
-///    the residuals (MAD), within [`min_kappa`, gate / 3], never widening,
-/// 4. take the reweighted Gauss–Newton step of Σ ρ(e) with
-///    `e = nᵀ (R p + t − c)` (Newton's curvature once the correspondences
-///    are frozen), plus the prior term `½ σ² (x − init)ᵀ P (x − init)`
-///    (`P` = `prior_precision`, σ the residuals' robust scale), halving the
-///    step length while steps reverse.
+/// 1. [`associate`]: move every source point by the current pose, find the
+///    nearest reference point (kd-tree, or a walk along the surface from the
+///    previous iteration's once the steps are small) and the foot on its
+///    fitted line, and drop pairs whose point-to-line distance exceeds the
+///    gate or whose normals differ by more than the allowed angle,
+/// 2. [`robust_scale`] and [`weigh`]: Geman–McClure weights
+///    `w = (κ² / (κ² + e²))²`, κ = 2 robust σ of the residuals (MAD),
+///    within [`min_kappa`, gate / 3], never widening,
+/// 3. [`normal_system`] and [`add_prior`]: the reweighted Gauss–Newton
+///    system of Σ ρ(e) with `e = nᵀ (R p + t − c)` (see `metric`; Newton's
+///    curvature once the correspondences are frozen), plus the prior term
+///    `½ σ² (x − init)ᵀ P (x − init)` (`P` = `prior_precision`, σ the
+///    residuals' robust scale),
+/// 4. [`damped_step`] and [`StepControl::limit`]: its damped solution,
+///    halving the step length while steps reverse, never beyond the gate,
+/// 5. [`converged`]: stop once the step is below `convergence`.
 ///
 /// The returned covariance is the residuals' alone: the prior never makes a
 /// loose direction look measured.
@@ -140,161 +144,294 @@ pub fn register(
     hints.resize(source.len(), usize::MAX);
     lines.clear();
     lines.resize(source.len(), usize::MAX);
-    let mut use_hints = false;
+    let mut search = Search::default();
     let mut kappa = f64::INFINITY;
-    let mut frozen = false;
-    // Step length factor: halved whenever a step reverses the previous one
-    // (two correspondence sets pulling the pose back and forth), regrown
-    // while successive steps agree.
-    let mut trust = 1.0f64;
-    let mut prev_step: Option<Vector3<f64>> = None;
+    let mut control = StepControl::default();
     for it in 1..=set.max_iterations {
         out.iterations = it;
-        let (s, c) = pose[2].sin_cos();
-        corrs.clear();
-        for (((&p, hint), line), &ns) in source
-            .iter()
-            .zip(hints.iter_mut())
-            .zip(lines.iter_mut())
-            .zip(normals)
-        {
-            let rp = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
-            let q = [rp[0] + pose[0], rp[1] + pose[1]];
-            let found: Option<Closest> = if frozen {
-                if *line == usize::MAX {
-                    continue;
-                }
-                reference.on_line(q, *line)
-            } else {
-                let near = if use_hints && *hint != usize::MAX {
-                    reference.walk(q, *hint)
-                } else {
-                    reference.nearest(q)
-                };
-                let Some((j, d2)) = near else {
-                    continue;
-                };
-                *hint = j;
-                reference.correspondence(q, j, d2)
-            };
-            *line = found.map_or(usize::MAX, |c| c.index);
-            let Some(cl) = found else {
-                continue;
-            };
-            let e = cl.residual;
-            if e.abs() > set.threshold || cl.vertex_dist > set.threshold + set.max_gap {
-                continue;
-            }
-            // Both surfaces must face the same way: a source point on a
-            // short face next to a corner is otherwise pulled onto the wall
-            // of its nearest reference sample.
-            let n = cl.normal;
-            let rn = [c * ns[0] - s * ns[1], s * ns[0] + c * ns[1]];
-            if !((rn[0] * n[0] + rn[1] * n[1]).abs() >= set.min_normal_cos) {
-                continue;
-            }
-            corrs.push(Correspondence {
-                p,
-                q: cl.target,
-                normal: Some(n),
-                w: e,
-            });
-        }
+        let at = Placement::new(pose);
+        let memory = Memory {
+            hints,
+            lines,
+            search,
+        };
+        associate(reference, source, normals, &at, set, memory, corrs);
         out.inliers = corrs.len();
         if corrs.len() < set.min_correspondences {
             return out;
         }
-        // Robust scale of the residuals (MAD), so that the Geman–McClure
-        // kernel follows the actual noise rather than the gate.
-        abs_res.clear();
-        abs_res.extend(corrs.iter().map(|k| k.w.abs()));
-        let mid = abs_res.len() / 2;
-        let mad = *abs_res.select_nth_unstable_by(mid, f64::total_cmp).1;
-        // Never widening again keeps the iteration a descent (and convergent).
-        kappa = (KAPPA_PER_SIGMA * 1.4826 * mad)
-            .clamp(set.min_kappa, set.threshold / 3.0)
-            .min(kappa);
-        let kappa2 = kappa * kappa;
-        let mut h = Matrix3::<f64>::zeros();
-        let mut g = Vector3::<f64>::zeros();
-        for k in corrs.iter_mut() {
-            let e = k.w;
-            let w = (kappa2 / (kappa2 + e * e)).powi(2);
-            let n = k.normal.unwrap_or_default();
-            let rp = [c * k.p[0] - s * k.p[1], s * k.p[0] + c * k.p[1]];
-            let j = Vector3::new(n[0], n[1], n[1] * rp[0] - n[0] * rp[1]);
-            // Once the correspondences are fixed, Newton's curvature of the
-            // Geman–McClure cost, ρ'' = w (κ² − 3e²) / (κ² + e²), clamped at
-            // zero: quadratic convergence where the reweighting alone
-            // (curvature w) converges linearly at a rate of about one half.
-            // Before, the reweighting curvature: always at least as large, so
-            // the steps stay short while correspondences still change.
-            let curv = if frozen {
-                w * ((kappa2 - 3.0 * e * e) / (kappa2 + e * e)).max(0.0)
-            } else {
-                w
-            };
-            h += curv * j * j.transpose();
-            g += (w * e) * j;
-            k.w = w;
-        }
-        // The prior in the units of this cost: Σ ρ(e) is the negative
-        // log-likelihood times the residual variance, which the kernel's
-        // scale estimates (and the covariance inflation corrects for the
-        // residuals' correlation, as in `covariance`).
-        let var = (kappa / KAPPA_PER_SIGMA).powi(2) * set.cov_inflation;
-        let off = [
-            pose[0] - init[0],
-            pose[1] - init[1],
-            crate::geom::wrap_angle(pose[2] - init[2]),
-        ];
-        for k in 0..3 {
-            h[(k, k)] += var * set.prior_precision[k];
-            g[k] += var * set.prior_precision[k] * off[k];
-        }
-        let damp = DAMPING * h.trace();
-        for k in 0..3 {
-            h[(k, k)] += damp;
-        }
-        let Some(chol) = h.cholesky() else {
+        kappa = robust_scale(corrs, abs_res, set, kappa);
+        weigh(corrs, kappa);
+        let (mut h, mut g) = normal_system(corrs, &at, kappa, search.frozen);
+        add_prior(&mut h, &mut g, kappa, pose, init, set);
+        let Some(d) = damped_step(h, g) else {
             return out;
         };
-        let mut d = -chol.solve(&g);
-        if !d.iter().all(|v| v.is_finite()) {
-            return out;
-        }
-        // A step that undoes the previous one means the correspondences
-        // flip between two sets: shorten the steps until they settle.
-        if let Some(prev) = prev_step {
-            let lever = Vector3::new(1.0, 1.0, LEVER * LEVER);
-            let dot = d.component_mul(&lever).dot(&prev);
-            if dot < 0.0 {
-                trust = (trust * 0.5).max(1.0 / 64.0);
-            } else {
-                trust = (trust * 2.0).min(1.0);
-            }
-        }
-        d *= trust;
-        // Never jump farther than the gate in one step: beyond it the
-        // correspondences of this iteration say nothing.
-        let moved = d.xy().norm() + d.z.abs() * LEVER;
-        if moved > set.threshold {
-            d *= set.threshold / moved;
-        }
+        let (d, moved) = control.limit(d, set.threshold);
         pose = [
             pose[0] + d.x,
             pose[1] + d.y,
             crate::geom::wrap_angle(pose[2] + d.z),
         ];
         out.pose = pose;
-        use_hints = moved < HINT_STEP;
-        frozen |= moved < FREEZE_STEP;
-        prev_step = Some(d);
-        if d.xy().norm() + d.z.abs() < set.convergence {
+        search.use_hints = moved < HINT_STEP;
+        search.frozen |= moved < FREEZE_STEP;
+        if converged(&d, set) {
             out.converged = true;
             break;
         }
     }
     out.uncertainty = covariance::estimate(corrs, pose, set.cov_inflation);
     out
+}
+
+/// How the correspondences of an iteration are searched.
+#[derive(Debug, Clone, Copy, Default)]
+struct Search {
+    /// Start from the previous iteration's nearest points (small steps).
+    use_hints: bool,
+    /// Keep the previous iteration's lines (steps below `FREEZE_STEP`).
+    frozen: bool,
+}
+
+/// What an iteration keeps of the previous one's association: per source
+/// point, and how to use it.
+struct Memory<'a> {
+    /// Nearest reference point (search hint), `usize::MAX` for none.
+    hints: &'a mut [usize],
+    /// Reference line matched to (held when frozen), `usize::MAX` for none.
+    lines: &'a mut [usize],
+    search: Search,
+}
+
+/// Step 1, association: each source point `p`, moved to `x = R p + t` by
+/// the placement `at`, corresponds to the foot of `x` on its nearest
+/// reference point's fitted line (or, frozen, on the line it had), with the
+/// point-to-line residual `e = nᵀ (x − c)`. Kept when `|e| ≤ τ` (the
+/// adaptive gate), the nearest point is within `τ + max_gap`, and the
+/// surfaces face the same way, `|(R n_p)ᵀ n| ≥ cos α_max`.
+fn associate(
+    reference: &Reference,
+    source: &[[f64; 2]],
+    normals: &[[f64; 2]],
+    at: &Placement,
+    set: &RegisterSettings,
+    memory: Memory,
+    corrs: &mut Vec<Correspondence>,
+) {
+    corrs.clear();
+    for (((&p, hint), line), &ns) in source
+        .iter()
+        .zip(memory.hints.iter_mut())
+        .zip(memory.lines.iter_mut())
+        .zip(normals)
+    {
+        let Some(cl) = find(reference, at.apply(p).x, hint, line, memory.search) else {
+            continue;
+        };
+        if !admits(&cl, at.rotate(ns), set) {
+            continue;
+        }
+        corrs.push(Correspondence {
+            p,
+            q: cl.target,
+            normal: Some(cl.normal),
+            residual: cl.residual,
+            weight: 1.0,
+        });
+    }
+}
+
+/// The correspondence of the moved point `q`: on the line it had when
+/// frozen, else on the line of its nearest reference point (walked to from
+/// `hint` when hints are in use). Updates `hint` and `line`.
+fn find(
+    reference: &Reference,
+    q: [f64; 2],
+    hint: &mut usize,
+    line: &mut usize,
+    search: Search,
+) -> Option<Closest> {
+    let found = if search.frozen {
+        if *line == usize::MAX {
+            return None;
+        }
+        reference.on_line(q, *line)
+    } else {
+        let near = if search.use_hints && *hint != usize::MAX {
+            reference.walk(q, *hint)
+        } else {
+            reference.nearest(q)
+        };
+        let (j, d2) = near?;
+        *hint = j;
+        reference.correspondence(q, j, d2)
+    };
+    *line = found.map_or(usize::MAX, |c| c.index);
+    found
+}
+
+/// The gate of step 1 for a correspondence `cl` whose source point's own
+/// normal, rotated into the reference frame, is `rn` (NaN when unknown:
+/// never admitted).
+fn admits(cl: &Closest, rn: [f64; 2], set: &RegisterSettings) -> bool {
+    if cl.residual.abs() > set.threshold || cl.vertex_dist > set.threshold + set.max_gap {
+        return false;
+    }
+    // Both surfaces must face the same way: a source point on a short face
+    // next to a corner is otherwise pulled onto the wall of its nearest
+    // reference sample.
+    let n = cl.normal;
+    (rn[0] * n[0] + rn[1] * n[1]).abs() >= set.min_normal_cos
+}
+
+/// Step 2, robust scale: `κ = min(κ_prev, clamp(2 · 1.4826 · median|e|,
+/// min_kappa, τ / 3))`, the residuals' MAD as a standard deviation, so that
+/// the Geman–McClure kernel follows the actual noise rather than the gate.
+/// Never widening again keeps the iteration a descent (and convergent).
+fn robust_scale(
+    corrs: &[Correspondence],
+    abs_res: &mut Vec<f64>,
+    set: &RegisterSettings,
+    kappa: f64,
+) -> f64 {
+    abs_res.clear();
+    abs_res.extend(corrs.iter().map(|k| k.residual.abs()));
+    let mid = abs_res.len() / 2;
+    let mad = *abs_res.select_nth_unstable_by(mid, f64::total_cmp).1;
+    (KAPPA_PER_SIGMA * 1.4826 * mad)
+        .clamp(set.min_kappa, set.threshold / 3.0)
+        .min(kappa)
+}
+
+/// Step 2, weights: Geman–McClure `w = (κ² / (κ² + e²))²` of each residual.
+fn weigh(corrs: &mut [Correspondence], kappa: f64) {
+    let kappa2 = kappa * kappa;
+    for k in corrs.iter_mut() {
+        let e = k.residual;
+        k.weight = (kappa2 / (kappa2 + e * e)).powi(2);
+    }
+}
+
+/// Step 3, the normal system `H = Σ ρ''ᵢ Jᵢ Jᵢᵀ`, `g = Σ wᵢ eᵢ Jᵢ` of the
+/// weighted point-to-line residuals at the placement `at` (`J` from
+/// `metric::jacobian`), in correspondence order.
+fn normal_system(
+    corrs: &[Correspondence],
+    at: &Placement,
+    kappa: f64,
+    frozen: bool,
+) -> (Matrix3<f64>, Vector3<f64>) {
+    let kappa2 = kappa * kappa;
+    let mut h = Matrix3::<f64>::zeros();
+    let mut g = Vector3::<f64>::zeros();
+    for k in corrs {
+        let (e, w) = (k.residual, k.weight);
+        let j = metric::jacobian(at.rotate(k.p), k.normal.unwrap_or_default());
+        let curv = curvature(e, w, kappa2, frozen);
+        h += curv * j * j.transpose();
+        g += (w * e) * j;
+    }
+    (h, g)
+}
+
+/// The curvature `ρ''` a residual `e` of weight `w` contributes. Once the
+/// correspondences are fixed, Newton's curvature of the Geman–McClure cost,
+/// `ρ'' = w (κ² − 3e²) / (κ² + e²)`, clamped at zero: quadratic convergence
+/// where the reweighting alone (curvature `w`) converges linearly at a rate
+/// of about one half. Before, the reweighting curvature `w`: always at least
+/// as large, so the steps stay short while correspondences still change.
+fn curvature(e: f64, w: f64, kappa2: f64, frozen: bool) -> f64 {
+    if frozen {
+        w * ((kappa2 - 3.0 * e * e) / (kappa2 + e * e)).max(0.0)
+    } else {
+        w
+    }
+}
+
+/// Step 3, the weak prior term `½ σ² (x − init)ᵀ P (x − init)`:
+/// `H += σ² P`, `g += σ² P (x − init)` (θ wrapped), with
+/// `σ² = (κ / 2)² · cov_inflation`. That is the prior in the units of this
+/// cost: Σ ρ(e) is the negative log-likelihood times the residual variance,
+/// which the kernel's scale estimates (and the covariance inflation corrects
+/// for the residuals' correlation, as in `covariance`).
+fn add_prior(
+    h: &mut Matrix3<f64>,
+    g: &mut Vector3<f64>,
+    kappa: f64,
+    pose: [f64; 3],
+    init: [f64; 3],
+    set: &RegisterSettings,
+) {
+    let var = (kappa / KAPPA_PER_SIGMA).powi(2) * set.cov_inflation;
+    let off = [
+        pose[0] - init[0],
+        pose[1] - init[1],
+        crate::geom::wrap_angle(pose[2] - init[2]),
+    ];
+    for k in 0..3 {
+        h[(k, k)] += var * set.prior_precision[k];
+        g[k] += var * set.prior_precision[k] * off[k];
+    }
+}
+
+/// Step 4, the damped Gauss–Newton step: `(H + λ tr(H) I) d = −g`,
+/// `λ` = `DAMPING`, solved by Cholesky; `None` when `H` is not positive
+/// definite or the step is not finite.
+fn damped_step(mut h: Matrix3<f64>, g: Vector3<f64>) -> Option<Vector3<f64>> {
+    let damp = DAMPING * h.trace();
+    for k in 0..3 {
+        h[(k, k)] += damp;
+    }
+    let d = -h.cholesky()?.solve(&g);
+    d.iter().all(|v| v.is_finite()).then_some(d)
+}
+
+/// Step 4, the step length: a factor halved whenever a step reverses the
+/// previous one (two correspondence sets pulling the pose back and forth),
+/// regrown while successive steps agree.
+#[derive(Debug, Clone, Copy)]
+struct StepControl {
+    trust: f64,
+    prev: Option<Vector3<f64>>,
+}
+
+impl Default for StepControl {
+    fn default() -> Self {
+        Self {
+            trust: 1.0,
+            prev: None,
+        }
+    }
+}
+
+impl StepControl {
+    /// The step `d` to take: scaled by the trust factor, whose update tests
+    /// `dᵀ diag(1, 1, L²) d_prev < 0` (L = `LEVER`), then shortened to move
+    /// points by at most the gate `threshold` (m), `|d_xy| + L |d_θ| ≤ τ`:
+    /// beyond it the correspondences of this iteration say nothing. Also
+    /// returns that displacement before the gate's cap.
+    fn limit(&mut self, mut d: Vector3<f64>, threshold: f64) -> (Vector3<f64>, f64) {
+        if let Some(prev) = self.prev {
+            let lever = Vector3::new(1.0, 1.0, LEVER * LEVER);
+            let dot = d.component_mul(&lever).dot(&prev);
+            if dot < 0.0 {
+                self.trust = (self.trust * 0.5).max(1.0 / 64.0);
+            } else {
+                self.trust = (self.trust * 2.0).min(1.0);
+            }
+        }
+        d *= self.trust;
+        let moved = d.xy().norm() + d.z.abs() * LEVER;
+        if moved > threshold {
+            d *= threshold / moved;
+        }
+        self.prev = Some(d);
+        (d, moved)
+    }
+}
+
+/// Step 5, convergence: `|d_xy| + |d_θ| < convergence` (m, rad × 1 m).
+fn converged(d: &Vector3<f64>, set: &RegisterSettings) -> bool {
+    d.xy().norm() + d.z.abs() < set.convergence
 }
