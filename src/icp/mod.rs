@@ -10,6 +10,8 @@
 //! - `reference`: the local map (or previous scan) with a line fitted through
 //!   every point's surface neighbourhood (at most `normal_window + 1` beams,
 //!   and about `normal_length` m of surface) and a kd-tree, built once.
+//! - `metric`: the point-to-line error and its Jacobian, the one metric of
+//!   registration and covariance.
 //! - `register`: foot on the nearest point's fitted line + Geman–McClure
 //!   weights + Gauss–Newton steps, until the pose change is below
 //!   `convergence`, with a weak prior term at the odometry guess that holds
@@ -22,10 +24,13 @@
 //!   centred on their inverse-variance blend (`prior_blend_rate`).
 //! - `covariance`: Hessian × residual variance × inflation; the choice and the
 //!   inflation are explained there.
-//! - `matcher`: the streaming [`ScanMatcher`] with prior selection, retries
-//!   of failed matches from the constant-velocity guess, failure flags, and
-//!   a local map kept across a few failed scans; `run`: whole recordings and
-//!   [`integrate`]. Two guards against a wrong odometry prior: an odometry
+//! - `matcher`: the pair-by-pair [`ScanMatcher`] with prior selection,
+//!   retries of failed matches from the constant-velocity guess, failure
+//!   flags, and a local map kept across a few failed scans; `stream`: the
+//!   incremental [`StreamMatcher`] (scan in, motion out) that builds the
+//!   odometry prior from wheel or odometry samples as they arrive; `run`:
+//!   whole recordings ([`match_recording`], a loop over it), [`Tally`],
+//!   [`summarise`] and [`integrate`]. Two guards against a wrong odometry prior: an odometry
 //!   that stands still while the robot cannot have stopped (a frozen
 //!   reading) is replaced by the constant-velocity guess, also for the jump
 //!   that follows, the scans choosing between the two; and a match whose
