@@ -109,7 +109,7 @@ pub fn run(job: &EvalJob) -> Result<EvalReport, PipelineError> {
         ));
     }
     let (cfg, robot) = job.common.load()?;
-    let mut opts = job.options(cfg.eval.clone());
+    let mut opts = job.options(cfg.eval);
     let read = super::read_options(&cfg, &robot);
     let (est, _) = load_trajectory(&job.estimate, job.estimate_times.as_deref(), &read)?;
     let reference = match &job.reference {
