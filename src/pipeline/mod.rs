@@ -2,7 +2,6 @@
 //! write outputs atomically, and return summaries the binary prints.
 
 pub mod calibrate;
-pub mod changing_figure;
 mod config;
 pub mod demo;
 pub mod diagnose;
@@ -12,7 +11,6 @@ pub mod experiment;
 pub mod icp;
 pub mod record;
 pub mod record_stream;
-pub mod scan_montecarlo;
 pub mod simulate;
 
 pub use config::{load_robot, Config};
