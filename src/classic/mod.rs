@@ -33,7 +33,9 @@ pub use heading_pf::{
 };
 pub use laser_obs::{chained_steps, chained_steps_from, laser_streams, LaserObsParams};
 pub use square::{square_report, CornerError, SquareCorner, SquareReport};
-pub use square_fit::{fit_square_effects, square_odometry_corners, SquareEffectFit};
+pub use square_fit::{
+    fit_square_effects, measured_square, square_odometry_corners, SquareEffectFit,
+};
 pub use tacho::{
     fit_tachometer, simulate_tachometer_table, LinearFit, TachoCalibration, TachoReading,
 };

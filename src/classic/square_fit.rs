@@ -94,7 +94,7 @@ pub fn fit_square_effects(
 
 /// Checks the measured corners (start + 4, finite, along +x first) and
 /// returns the actual square's side (m) and direction.
-fn measured_square(measured: &[SquareCorner]) -> Result<(f64, Turn), ClassicError> {
+pub fn measured_square(measured: &[SquareCorner]) -> Result<(f64, Turn), ClassicError> {
     const M: &str = "square effects";
     if measured.len() != 5 {
         return Err(ClassicError::TooFew {

@@ -7,8 +7,8 @@ use super::driver::{bad, ExperimentInputs};
 use super::output::{comma_list, draw_paths, ExperimentOutput};
 use super::stats::{finite_stat, sample_std, Stat};
 use crate::classic::{
-    drive_segments, fit_square_effects, square_odometry_corners, square_report, square_segments,
-    ClassicError, DriveParams, SquareCorner, SquareEffectFit, SquareReport, Turn,
+    drive_segments, fit_square_effects, measured_square, square_odometry_corners, square_report,
+    square_segments, ClassicError, DriveParams, SquareCorner, SquareEffectFit, SquareReport,
 };
 use crate::error::InputError;
 use crate::geom::Pose2;
@@ -78,12 +78,7 @@ pub fn square_experiment(
     let report = square_report(measured)?;
     let nominal = p.nominal;
     let fit = fit_square_effects(measured, &nominal)?;
-    let side = measured[1].actual_x - measured[0].actual_x;
-    let dir = if measured[2].actual_y > measured[1].actual_y {
-        Turn::Ccw
-    } else {
-        Turn::Cw
-    };
+    let (side, dir) = measured_square(measured)?;
     let mut truth = nominal;
     for e in &fit.effects {
         match *e {
