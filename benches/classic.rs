@@ -3,9 +3,10 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use odocal::classic::{
-    calibration_runs, drive_segments, ga_calibrate, heading_pf, irregular_path, simulate_heading,
-    DriveParams, GaParams, HeadingPfParams, HeadingSourceParams, PfExperimentParams,
+    drive_segments, ga_calibrate, heading_pf, irregular_path, simulate_heading, DriveParams,
+    GaParams, HeadingPfParams, HeadingSourceParams,
 };
+use odocal::experiments::{calibration_runs, PfExperimentParams};
 use odocal::geom::Pose2;
 use std::hint::black_box;
 

@@ -14,6 +14,7 @@ pub mod diagnose;
 pub mod effects;
 pub mod error;
 pub mod eval;
+pub mod experiments;
 pub mod geom;
 pub mod icp;
 pub mod io;

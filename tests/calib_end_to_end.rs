@@ -2,9 +2,9 @@
 //! ICP, quantised encoders and the gyro, against the simulator's known radii
 //! and wheel base.
 
-use odocal::calib::{self, experiments::table2_configs, CalibParams, Method};
+use odocal::calib::{self, CalibParams, Method};
+use odocal::experiments::{scan_montecarlo, table2_configs, ScanMonteCarloParams};
 use odocal::icp::IcpParams;
-use odocal::pipeline::scan_montecarlo::{scan_montecarlo, ScanMonteCarloParams};
 use odocal::robot::RobotConfig;
 use odocal::sim::{self, SimConfig};
 
@@ -183,7 +183,7 @@ fn experiment_montecarlo_scans_writes_its_table_and_refuses_bad_settings() {
 
 #[test]
 fn experiment_changing_draws_run_0_over_time_with_the_particle_count() {
-    use odocal::pipeline::experiment::{run, ExperimentInputs, ExperimentSettings};
+    use odocal::experiments::{run_experiment as run, ExperimentInputs, ExperimentSettings};
     let d = crate::support::scratch("experiment_changing");
     let (calib, robot, settings) = (
         CalibParams::default(),
@@ -195,11 +195,10 @@ fn experiment_changing_draws_run_0_over_time_with_the_particle_count() {
         seed: 1,
         calib: &calib,
         robot: &robot,
-        settings: &settings,
         tables: None,
         icp: &IcpParams::default(),
     };
-    let out = run("changing", &inp, &d).unwrap();
+    let out = run("changing", &inp, &settings, &d).unwrap();
     for f in [
         "changing.md",
         "changing.json",

@@ -1,8 +1,10 @@
 //! Every classic method on the same simulated runs (core-kinematics generator).
 
 use odocal::classic::{
-    compare_classic, drive_segments, irregular_path, markdown_table, square_segments,
-    ClassicMethod, CompareParams, CompareScenario, DriveParams, GaParams, HeadingPfParams, Turn,
+    drive_segments, irregular_path, square_segments, DriveParams, GaParams, HeadingPfParams, Turn,
+};
+use odocal::experiments::{
+    compare_classic, markdown_table, ClassicMethod, CompareParams, CompareScenario,
 };
 use odocal::robot::DiffDrive;
 
@@ -118,8 +120,8 @@ fn classic_methods_side_by_side() {
 
 #[test]
 fn classic_methods_on_the_simulator_squares() {
-    use odocal::classic::{compare_on_simulator, sim_run};
     use odocal::effects::Effect;
+    use odocal::experiments::{compare_on_simulator, sim_run};
     use odocal::robot::RobotConfig;
     let robot = RobotConfig::default();
     let effects = [

@@ -1,6 +1,7 @@
 //! The seed-002 genetic algorithm recovers known k1, k2, b from short runs.
 
-use odocal::classic::{calibration_runs, ga_calibrate, ga_cost, DriveParams, GaParams, TickParams};
+use odocal::classic::{ga_calibrate, ga_cost, DriveParams, GaParams, TickParams};
+use odocal::experiments::calibration_runs;
 
 #[test]
 fn ga_recovers_known_parameters_and_is_deterministic() {

@@ -1,9 +1,11 @@
 //! Seed 002's heading-fusion particle filter on simulated irregular paths.
 
 use odocal::classic::{
-    drive_segments, heading_pf, heading_pf_experiment, irregular_path, path_error_markdown,
-    simulate_heading, DriveParams, HeadingPfParams, HeadingSourceParams, PfExperimentParams,
-    SeedPathError,
+    drive_segments, heading_pf, irregular_path, simulate_heading, DriveParams, HeadingPfParams,
+    HeadingSourceParams,
+};
+use odocal::experiments::{
+    heading_pf_experiment, path_error_markdown, PfExperimentParams, SeedPathError,
 };
 use odocal::geom::Pose2;
 use odocal::robot::{wheel_odometry, DiffDrive};

@@ -2,9 +2,9 @@
 //! runs with a known hidden truth, then a load change the filters follow online.
 
 use odocal::calib::CalibParams;
-use odocal::classic::{
-    draw_hidden_truth, literature_run, ClassicMethod, ClassicResult, GaParams, HeadingPfParams,
-    LiteratureParams,
+use odocal::classic::{GaParams, HeadingPfParams};
+use odocal::experiments::{
+    draw_hidden_truth, literature_run, ClassicMethod, ClassicResult, LiteratureParams,
 };
 use odocal::robot::DiffDrive;
 

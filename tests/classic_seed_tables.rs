@@ -4,9 +4,8 @@ use crate::support::shared_data;
 use odocal::classic::{
     fit_heading_gain, fit_square_effects, fit_tachometer, square_report, EncoderChain,
 };
-use odocal::io::seed_tables::{
-    ga_path_errors, heading_trials, read_seed_table, square_corners, tachometer_table,
-};
+use odocal::experiments::{ga_path_errors, heading_trials, square_corners, tachometer_table};
+use odocal::io::seed_tables::read_seed_table;
 use odocal::robot::DiffDrive;
 
 fn table(test: &str, name: &str) -> Option<odocal::io::seed_tables::SeedTable> {

@@ -1,6 +1,7 @@
 //! UMBmark against the core kinematics: signs, correction factors, improvement.
 
-use odocal::classic::{umbmark, umbmark_experiment, umbmark_runs, DriveParams, Turn};
+use odocal::classic::{umbmark, umbmark_runs, DriveParams, Turn};
+use odocal::experiments::umbmark_experiment;
 use odocal::robot::DiffDrive;
 
 const NOMINAL: DiffDrive = DiffDrive {

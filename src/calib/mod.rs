@@ -8,7 +8,6 @@ mod adaptive;
 mod akf;
 mod change;
 mod dkf;
-pub mod experiments;
 mod kalman;
 mod kernels;
 mod nominal;

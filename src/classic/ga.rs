@@ -228,6 +228,46 @@ pub struct GaResult {
 
 /// Runs the GA on the calibration runs. Same params and runs → same result.
 pub fn ga_calibrate(runs: &[GaRun], p: &GaParams) -> Result<GaResult, ClassicError> {
+    let bounds = check_inputs(runs, p)?;
+    let (lo, hi) = bounds;
+    let mut rng = StdRng::seed_from_u64(p.seed);
+    let cost = |pop: &[[f64; 3]]| -> Vec<f64> {
+        pop.par_iter()
+            .map(|g| ga_cost(&TickParams::from_array(*g), runs, p.heading_weight))
+            .collect()
+    };
+    // Uniform initial population inside the bounds.
+    let mut pop: Vec<[f64; 3]> = (0..p.population)
+        .map(|_| std::array::from_fn(|i| rng.random_range(lo[i]..hi[i])))
+        .collect();
+    let mut costs = cost(&pop);
+    let mut evaluations = pop.len();
+    let mut history = Vec::with_capacity(p.generations);
+    for g in 0..p.generations {
+        let (next, elite_costs) = next_generation(&pop, &costs, p, g, bounds, &mut rng);
+        let kid_costs = cost(&next[p.elites..]);
+        evaluations += kid_costs.len();
+        costs = elite_costs.into_iter().chain(kid_costs).collect();
+        pop = next;
+        history.push(costs.iter().copied().fold(f64::INFINITY, f64::min));
+    }
+    let best = (0..p.population)
+        .min_by(|&a, &b| costs[a].total_cmp(&costs[b]))
+        .unwrap_or(0);
+    Ok(GaResult {
+        params: TickParams::from_array(pop[best]),
+        cost: costs[best],
+        best_cost_history: history,
+        evaluations,
+    })
+}
+
+/// Lower and upper bounds of the genes [k1, k2, b].
+type Bounds = ([f64; 3], [f64; 3]);
+
+/// Checks the runs (at least one, finite pulse counts and poses) and the
+/// settings; returns the search box.
+fn check_inputs(runs: &[GaRun], p: &GaParams) -> Result<Bounds, ClassicError> {
     const M: &str = "ga";
     if runs.is_empty() {
         return Err(ClassicError::TooFew {
@@ -265,74 +305,85 @@ pub fn ga_calibrate(runs: &[GaRun], p: &GaParams) -> Result<GaResult, ClassicErr
             "population must exceed elites + 1, generations > 0, crossover fraction in [0, 1]",
         ));
     }
-    let mut rng = StdRng::seed_from_u64(p.seed);
-    let cost = |pop: &[[f64; 3]]| -> Vec<f64> {
-        pop.par_iter()
-            .map(|g| ga_cost(&TickParams::from_array(*g), runs, p.heading_weight))
-            .collect()
-    };
-    // Uniform initial population inside the bounds.
-    let mut pop: Vec<[f64; 3]> = (0..p.population)
-        .map(|_| std::array::from_fn(|i| rng.random_range(lo[i]..hi[i])))
-        .collect();
-    let mut costs = cost(&pop);
-    let mut evaluations = pop.len();
-    let mut history = Vec::with_capacity(p.generations);
+    Ok((lo, hi))
+}
+
+/// Generation `g + 1` from generation `g`: the elites unchanged, then
+/// children by scattered crossover and by Gaussian mutation of parents drawn
+/// by rank roulette. Returns the new population and the elites' costs.
+fn next_generation(
+    pop: &[[f64; 3]],
+    costs: &[f64],
+    p: &GaParams,
+    g: usize,
+    (lo, hi): Bounds,
+    rng: &mut StdRng,
+) -> (Vec<[f64; 3]>, Vec<f64>) {
     let n = p.population;
     let n_kids = n - p.elites;
     let n_cross = (p.crossover_fraction * n_kids as f64).round() as usize;
     let n_mut = n_kids - n_cross;
-    for g in 0..p.generations {
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
-        // Rank scaling: expectation ∝ 1/√rank (MATLAB fitscalingrank), then roulette.
-        let weights: Vec<f64> = (0..n).map(|r| 1.0 / ((r + 1) as f64).sqrt()).collect();
-        let total: f64 = weights.iter().sum();
-        let roulette = |rng: &mut StdRng| -> usize {
-            let mut u = rng.random_range(0.0..total);
-            for (r, w) in weights.iter().enumerate() {
-                if u < *w {
-                    return order[r];
-                }
-                u -= w;
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
+    let roulette = RankRoulette::new(&order);
+    let sigma_frac =
+        p.mutation_scale * (1.0 - p.mutation_shrink * (g + 1) as f64 / p.generations as f64);
+    let mut next: Vec<[f64; 3]> = order[..p.elites].iter().map(|&i| pop[i]).collect();
+    for _ in 0..n_cross {
+        let (a, b) = (pop[roulette.pick(rng)], pop[roulette.pick(rng)]);
+        // Scattered crossover: each gene from a or b by a fair coin.
+        next.push(std::array::from_fn(|i| {
+            if rng.random_bool(0.5) {
+                a[i]
+            } else {
+                b[i]
             }
-            order[n - 1]
-        };
-        let sigma_frac =
-            p.mutation_scale * (1.0 - p.mutation_shrink * (g + 1) as f64 / p.generations as f64);
-        let mut next: Vec<[f64; 3]> = order[..p.elites].iter().map(|&i| pop[i]).collect();
-        for _ in 0..n_cross {
-            let (a, b) = (pop[roulette(&mut rng)], pop[roulette(&mut rng)]);
-            // Scattered crossover: each gene from a or b by a fair coin.
-            next.push(std::array::from_fn(|i| {
-                if rng.random_bool(0.5) {
-                    a[i]
-                } else {
-                    b[i]
-                }
-            }));
-        }
-        for _ in 0..n_mut {
-            let a = pop[roulette(&mut rng)];
-            next.push(std::array::from_fn(|i| {
-                let z: f64 = rng.sample(StandardNormal);
-                (a[i] + sigma_frac.max(0.0) * (hi[i] - lo[i]) * z).clamp(lo[i], hi[i])
-            }));
-        }
-        let elite_costs: Vec<f64> = order[..p.elites].iter().map(|&i| costs[i]).collect();
-        let kid_costs = cost(&next[p.elites..]);
-        evaluations += kid_costs.len();
-        costs = elite_costs.into_iter().chain(kid_costs).collect();
-        pop = next;
-        history.push(costs.iter().copied().fold(f64::INFINITY, f64::min));
+        }));
     }
-    let best = (0..n)
-        .min_by(|&a, &b| costs[a].total_cmp(&costs[b]))
-        .unwrap_or(0);
-    Ok(GaResult {
-        params: TickParams::from_array(pop[best]),
-        cost: costs[best],
-        best_cost_history: history,
-        evaluations,
-    })
+    for _ in 0..n_mut {
+        let a = pop[roulette.pick(rng)];
+        next.push(std::array::from_fn(|i| {
+            let z: f64 = rng.sample(StandardNormal);
+            (a[i] + sigma_frac.max(0.0) * (hi[i] - lo[i]) * z).clamp(lo[i], hi[i])
+        }));
+    }
+    let elite_costs = order[..p.elites].iter().map(|&i| costs[i]).collect();
+    (next, elite_costs)
+}
+
+/// Roulette selection on rank-scaled fitness: expectation ∝ 1/√rank
+/// (MATLAB fitscalingrank).
+struct RankRoulette<'a> {
+    /// Individuals from best to worst.
+    order: &'a [usize],
+    /// Expectation of each rank.
+    weights: Vec<f64>,
+    /// Sum of the weights.
+    total: f64,
+}
+
+impl<'a> RankRoulette<'a> {
+    fn new(order: &'a [usize]) -> Self {
+        let weights: Vec<f64> = (0..order.len())
+            .map(|r| 1.0 / ((r + 1) as f64).sqrt())
+            .collect();
+        let total: f64 = weights.iter().sum();
+        Self {
+            order,
+            weights,
+            total,
+        }
+    }
+
+    /// Draws one individual.
+    fn pick(&self, rng: &mut StdRng) -> usize {
+        let mut u = rng.random_range(0.0..self.total);
+        for (r, w) in self.weights.iter().enumerate() {
+            if u < *w {
+                return self.order[r];
+            }
+            u -= w;
+        }
+        self.order[self.order.len() - 1]
+    }
 }

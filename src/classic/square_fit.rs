@@ -11,6 +11,7 @@ use super::square::SquareCorner;
 use crate::effects::Effect;
 use crate::geom::Pose2;
 use crate::robot::{wheel_odometry, DiffDrive};
+use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 
 /// Odometry corners of a square of side `side` (m) driven exactly (by the true
@@ -65,6 +66,35 @@ pub fn fit_square_effects(
     measured: &[SquareCorner],
     nominal: &DiffDrive,
 ) -> Result<SquareEffectFit, ClassicError> {
+    let (side, dir) = measured_square(measured)?;
+    let fit = SquareFit {
+        measured,
+        nominal,
+        side,
+        dir,
+    };
+    let a0 = [0.0; 3];
+    let r0 = fit.residuals(a0);
+    let rms_before = fit.rms(&r0);
+    let (a, r) = fit.least_squares(a0, r0);
+    let best = fit.rms(&r);
+    Ok(SquareEffectFit {
+        effects: vec![
+            Effect::RadiusScale {
+                right: a[0],
+                left: a[1],
+            },
+            Effect::WheelBaseScale { scale: a[2] },
+        ],
+        rms_before,
+        rms_after: best,
+        fitted: fit.corners(a),
+    })
+}
+
+/// Checks the measured corners (start + 4, finite, along +x first) and
+/// returns the actual square's side (m) and direction.
+pub fn measured_square(measured: &[SquareCorner]) -> Result<(f64, Turn), ClassicError> {
     const M: &str = "square effects";
     if measured.len() != 5 {
         return Err(ClassicError::TooFew {
@@ -93,81 +123,113 @@ pub fn fit_square_effects(
             "the actual square must start along +x",
         ));
     }
-    let sim = |a: [f64; 3]| {
+    Ok((side, dir))
+}
+
+/// The least-squares problem: relative errors a = [right radius, left
+/// radius, wheel base] whose simulated odometry corners match the measured ones.
+struct SquareFit<'a> {
+    measured: &'a [SquareCorner],
+    nominal: &'a DiffDrive,
+    side: f64,
+    dir: Turn,
+}
+
+impl SquareFit<'_> {
+    /// Odometry corners of the square driven by the nominal model scaled by `a`.
+    fn corners(&self, a: [f64; 3]) -> Vec<SquareCorner> {
+        let n = self.nominal;
         let truth = DiffDrive {
-            r_right: nominal.r_right * (1.0 + a[0]),
-            r_left: nominal.r_left * (1.0 + a[1]),
-            wheel_base: nominal.wheel_base * (1.0 + a[2]),
+            r_right: n.r_right * (1.0 + a[0]),
+            r_left: n.r_left * (1.0 + a[1]),
+            wheel_base: n.wheel_base * (1.0 + a[2]),
         };
-        square_odometry_corners(nominal, &truth, side, dir)
-    };
-    let resid = |a: [f64; 3]| -> Vec<f64> {
-        measured
+        square_odometry_corners(n, &truth, self.side, self.dir)
+    }
+
+    /// Simulated − measured odometry corner coordinates (m).
+    fn residuals(&self, a: [f64; 3]) -> Vec<f64> {
+        self.measured
             .iter()
-            .zip(sim(a))
+            .zip(self.corners(a))
             .flat_map(|(p, q)| [q.odom_x - p.odom_x, q.odom_y - p.odom_y])
             .collect()
-    };
-    let norm = |r: &[f64]| (r.iter().map(|v| v * v).sum::<f64>() / measured.len() as f64).sqrt();
-    // Gauss-Newton with a numerical Jacobian and step halving (Levenberg damping).
-    let mut a = [0.0; 3];
-    let mut r = resid(a);
-    let rms_before = norm(&r);
-    let mut lambda = 1e-6;
-    for _ in 0..50 {
+    }
+
+    /// RMS distance per corner of residuals `r` (m).
+    fn rms(&self, r: &[f64]) -> f64 {
+        (r.iter().map(|v| v * v).sum::<f64>() / self.measured.len() as f64).sqrt()
+    }
+
+    /// Gauss-Newton with a numerical Jacobian and step halving (Levenberg
+    /// damping) from `a` with residuals `r`; returns the best `a` and its residuals.
+    fn least_squares(&self, mut a: [f64; 3], mut r: Vec<f64>) -> ([f64; 3], Vec<f64>) {
+        let mut lambda = 1e-6;
+        for _ in 0..50 {
+            let (jtj, jtr) = self.normal_equations(a, &r);
+            let Some((b, rb, small)) = self.damped_step(a, &r, &jtj, &jtr, &mut lambda) else {
+                break;
+            };
+            (a, r) = (b, rb);
+            if small {
+                break;
+            }
+        }
+        (a, r)
+    }
+
+    /// JᵀJ and Jᵀr at `a` (residuals `r`), J by forward differences.
+    fn normal_equations(&self, a: [f64; 3], r: &[f64]) -> (Matrix3<f64>, Vector3<f64>) {
         let h = 1e-6;
         let cols: Vec<Vec<f64>> = (0..3)
             .map(|i| {
                 let mut b = a;
                 b[i] += h;
-                resid(b).iter().zip(&r).map(|(x, y)| (x - y) / h).collect()
+                self.residuals(b)
+                    .iter()
+                    .zip(r)
+                    .map(|(x, y)| (x - y) / h)
+                    .collect()
             })
             .collect();
-        let mut jtj = nalgebra::Matrix3::<f64>::zeros();
-        let mut jtr = nalgebra::Vector3::<f64>::zeros();
+        let mut jtj = Matrix3::<f64>::zeros();
+        let mut jtr = Vector3::<f64>::zeros();
         for i in 0..3 {
             for k in 0..3 {
                 jtj[(i, k)] = cols[i].iter().zip(&cols[k]).map(|(x, y)| x * y).sum();
             }
-            jtr[i] = cols[i].iter().zip(&r).map(|(x, y)| x * y).sum();
+            jtr[i] = cols[i].iter().zip(r).map(|(x, y)| x * y).sum();
         }
-        let mut improved = false;
-        while lambda < 1e6 {
-            let damped =
-                jtj + nalgebra::Matrix3::from_diagonal(&jtj.diagonal().map(|d| d * lambda + 1e-12));
-            let Some(step) = damped.lu().solve(&(-jtr)) else {
-                break;
-            };
+        (jtj, jtr)
+    }
+
+    /// The first damped step that lowers the RMS, raising `lambda` ×10 until
+    /// one does (and lowering it ×10 after); `None` when none does below
+    /// λ = 10⁶. Returns the new `a`, its residuals, and whether the step was
+    /// negligible.
+    fn damped_step(
+        &self,
+        a: [f64; 3],
+        r: &[f64],
+        jtj: &Matrix3<f64>,
+        jtr: &Vector3<f64>,
+        lambda: &mut f64,
+    ) -> Option<([f64; 3], Vec<f64>, bool)> {
+        while *lambda < 1e6 {
+            let damped = jtj + Matrix3::from_diagonal(&jtj.diagonal().map(|d| d * *lambda + 1e-12));
+            let step = damped.lu().solve(&(-jtr))?;
             let b = [a[0] + step[0], a[1] + step[1], a[2] + step[2]];
             if b.iter().all(|v| *v > -0.5 && *v < 1.0) {
-                let rb = resid(b);
-                if norm(&rb) < norm(&r) {
-                    let small = step.norm() < 1e-9;
-                    (a, r) = (b, rb);
-                    lambda = (lambda / 10.0).max(1e-9);
-                    improved = !small;
-                    break;
+                let rb = self.residuals(b);
+                if self.rms(&rb) < self.rms(r) {
+                    *lambda = (*lambda / 10.0).max(1e-9);
+                    return Some((b, rb, step.norm() < 1e-9));
                 }
             }
-            lambda *= 10.0;
+            *lambda *= 10.0;
         }
-        if !improved {
-            break;
-        }
+        None
     }
-    let best = norm(&r);
-    Ok(SquareEffectFit {
-        effects: vec![
-            Effect::RadiusScale {
-                right: a[0],
-                left: a[1],
-            },
-            Effect::WheelBaseScale { scale: a[2] },
-        ],
-        rms_before,
-        rms_after: best,
-        fitted: sim(a),
-    })
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //! a wheel-base error (type A, same in both directions) from unequal wheel
 //! diameters (type B, opposite), and give correction factors for both.
 //!
-//! Conventions (checked by derivation and by simulation, `umbmark_experiment`):
+//! Conventions (checked by derivation and by simulation, `tests/classic_umbmark.rs`):
 //! REP 103 frame, start at the origin heading +x, CW = right turns. The error of
 //! a run is ε = absolute − calculated end position (the paper's eq. 1). To
 //! first order a run ends at x_cw = −2Lα − 2Lβ, x_ccw = −2Lα + 2Lβ, where
@@ -175,27 +175,6 @@ pub fn umbmark(
     })
 }
 
-/// A full UMBmark cycle on a simulated robot: runs before, correction, fresh
-/// runs after with the corrected model.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct UmbmarkExperiment {
-    /// Correction passes applied.
-    pub passes: usize,
-    /// The model after the last pass.
-    pub corrected: super::compare::FinalParams,
-    /// Benchmark with the nominal model.
-    pub before: UmbmarkResult,
-    /// Benchmark on fresh runs driven and computed with the corrected model
-    /// (its own correction factors would be the next pass).
-    pub after: UmbmarkResult,
-    /// E_max,syst before / after.
-    pub improvement: f64,
-    /// Run errors before.
-    pub runs_before: Vec<UmbmarkRun>,
-    /// Run errors after.
-    pub runs_after: Vec<UmbmarkRun>,
-}
-
 /// `n` runs each way on a square of `side` (m) with a robot that is really
 /// `truth` but believes `model`; run i uses seed `seed + i`.
 pub fn umbmark_runs(
@@ -216,48 +195,4 @@ pub fn umbmark_runs(
         }
     }
     out
-}
-
-/// Runs UMBmark on a simulated robot, applies the correction and measures
-/// the improvement factor on fresh runs (different seeds). The paper applies
-/// the correction once (`passes = 1`); its formulas are first order, so with
-/// large errors a residual of order α·β remains, which further passes (each on
-/// fresh runs with the model corrected so far) remove.
-pub fn umbmark_experiment(
-    nominal: &DiffDrive,
-    truth: &DiffDrive,
-    side: f64,
-    n: usize,
-    drive: &DriveParams,
-    passes: usize,
-    seed: u64,
-) -> Result<UmbmarkExperiment, ClassicError> {
-    let runs_before = umbmark_runs(nominal, truth, side, n, drive, seed);
-    let before = umbmark(&runs_before, side, nominal)?;
-    let mut model = before.corrected();
-    for pass in 1..passes {
-        let s = seed.wrapping_add(7_000_003 * pass as u64);
-        model = umbmark(
-            &umbmark_runs(&model, truth, side, n, drive, s),
-            side,
-            &model,
-        )?
-        .corrected();
-    }
-    let runs_after = umbmark_runs(&model, truth, side, n, drive, seed.wrapping_add(1_000_003));
-    let after = umbmark(&runs_after, side, &model)?;
-    let improvement = if after.e_max_syst > 0.0 {
-        before.e_max_syst / after.e_max_syst
-    } else {
-        f64::MAX
-    };
-    Ok(UmbmarkExperiment {
-        passes,
-        corrected: model.into(),
-        before,
-        after,
-        improvement,
-        runs_before,
-        runs_after,
-    })
 }

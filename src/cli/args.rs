@@ -2,6 +2,7 @@
 
 use clap::{Args, Parser, Subcommand};
 use odocal::eval::{Alignment, DeltaUnit};
+use odocal::experiments::ExperimentJob;
 use odocal::pipeline::calibrate::{CalibSource, CalibrateJob, CalibratorChoice};
 use odocal::pipeline::demo::DemoJob;
 use odocal::pipeline::diagnose::DiagnoseJob;
@@ -380,6 +381,21 @@ impl DiagnoseArgs {
             measured: self.measured.clone(),
             holdout: self.holdout,
             report: self.report.clone(),
+            common: self.common.files(),
+        }
+    }
+}
+
+impl ExperimentArgs {
+    /// The job these arguments ask for.
+    pub fn job(&self) -> ExperimentJob {
+        ExperimentJob {
+            name: self.name.clone(),
+            runs: self.runs,
+            seed: self.seed,
+            out: self.out.clone(),
+            settings: self.settings.clone(),
+            tables: self.tables.clone(),
             common: self.common.files(),
         }
     }

@@ -141,18 +141,7 @@ fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
 }
 
 fn experiment(a: ExperimentArgs) -> anyhow::Result<()> {
-    let (cfg, robot) = a.common.files().load()?;
-    let settings = pipeline::experiment::ExperimentSettings::load(a.settings.as_deref())?;
-    let inputs = pipeline::experiment::ExperimentInputs {
-        runs: a.runs,
-        seed: a.seed,
-        calib: &cfg.calib,
-        robot: &robot,
-        settings: &settings,
-        tables: a.tables.as_deref(),
-        icp: &cfg.icp,
-    };
-    let res = pipeline::experiment::run(&a.name, &inputs, &a.out)?;
+    let res = odocal::experiments::run(&a.job())?;
     if a.json {
         out!("{}", res.json);
         return Ok(());

@@ -1,9 +1,9 @@
 //! Reader for the small CSV tables transcribed from the seed papers
 //! (`seed-tables/*.csv`): `#` comment lines, one header line, comma-separated
 //! cells; an empty cell means "not reported". Every problem is an
-//! [`InputError`] naming the file and line.
+//! [`InputError`] naming the file and line. The experiments turn the rows
+//! into their own types.
 
-use crate::classic::{HeadingTrial, SeedPathError, SquareCorner, TachoReading};
 use crate::error::InputError;
 use std::path::Path;
 
@@ -111,65 +111,6 @@ impl SeedTable {
         let k = self.index(name)?;
         Ok(self.rows.iter().map(|(_, c)| c[k].clone()).collect())
     }
-}
-
-/// `encoder_vs_tachometer.csv`: tachometer_rpm,right_encoder_rpm,left_encoder_rpm.
-pub fn tachometer_table(t: &SeedTable) -> Result<Vec<TachoReading>, InputError> {
-    let (a, r, l) = (
-        t.numbers("tachometer_rpm")?,
-        t.numbers("right_encoder_rpm")?,
-        t.numbers("left_encoder_rpm")?,
-    );
-    Ok((0..a.len())
-        .map(|i| TachoReading {
-            tachometer_rpm: a[i],
-            right_encoder_rpm: r[i],
-            left_encoder_rpm: l[i],
-        })
-        .collect())
-}
-
-/// `heading_trials.csv`: actual_deg,estimated_deg (a trial column is ignored).
-pub fn heading_trials(t: &SeedTable) -> Result<Vec<HeadingTrial>, InputError> {
-    let (a, e) = (t.numbers("actual_deg")?, t.numbers("estimated_deg")?);
-    Ok(a.into_iter()
-        .zip(e)
-        .map(|(actual_deg, estimated_deg)| HeadingTrial {
-            actual_deg,
-            estimated_deg,
-        })
-        .collect())
-}
-
-/// `square_path.csv`: odom_x,odom_y,actual_x,actual_y.
-pub fn square_corners(t: &SeedTable) -> Result<Vec<SquareCorner>, InputError> {
-    let c = ["odom_x", "odom_y", "actual_x", "actual_y"].map(|n| t.numbers(n));
-    let [ox, oy, ax, ay] = c;
-    let (ox, oy, ax, ay) = (ox?, oy?, ax?, ay?);
-    Ok((0..ox.len())
-        .map(|i| SquareCorner {
-            odom_x: ox[i],
-            odom_y: oy[i],
-            actual_x: ax[i],
-            actual_y: ay[i],
-        })
-        .collect())
-}
-
-/// `ga_path_errors.csv`: scenario,length_m,error_percent (empty = not completed).
-pub fn ga_path_errors(t: &SeedTable) -> Result<Vec<SeedPathError>, InputError> {
-    let (s, l, e) = (
-        t.text("scenario")?,
-        t.numbers("length_m")?,
-        t.optional_numbers("error_percent")?,
-    );
-    Ok((0..s.len())
-        .map(|i| SeedPathError {
-            scenario: s[i].clone(),
-            length_m: l[i],
-            error_percent: e[i],
-        })
-        .collect())
 }
 
 #[cfg(test)]

@@ -3,19 +3,16 @@
 //! summaries the binary prints. Each command is `pipeline::<command>::run`.
 
 pub mod calibrate;
-pub mod changing_figure;
 mod config;
 pub mod demo;
 pub mod diagnose;
 pub mod drive;
 mod error;
 pub mod evaluate;
-pub mod experiment;
 pub mod icp;
 pub mod observe;
 pub mod outputs;
 pub mod recorder;
-pub mod scan_montecarlo;
 pub mod simulate;
 pub mod viewer;
 

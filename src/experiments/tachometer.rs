@@ -3,11 +3,20 @@
 //! 90° turns, and the correction applied to the straight-driving wheel speed
 //! pairs (Table II) to see whether it brings right and left together.
 
-use super::error::ClassicError;
-use super::heading_gain::{fit_heading_gain, HeadingGain, HeadingTrial};
-use super::tacho::{fit_tachometer, TachoCalibration, TachoReading};
+use super::inputs::{bad, ExperimentInputs};
+use super::square::SquareExperimentParams;
+use super::output::{comma_list, draw_lines, ExperimentOutput};
+use crate::classic::{
+    check_finite, fit_heading_gain, fit_tachometer, ClassicError, HeadingGain, HeadingTrial,
+    TachoCalibration, TachoReading,
+};
+use crate::error::InputError;
+use crate::io::seed_tables::{read_seed_table, SeedTable};
+use crate::pipeline::PipelineError;
+use crate::viz::plot::{LineChart, Series};
 use serde::Serialize;
 use std::fmt::Write;
+use std::path::Path;
 
 /// One straight-driving pair before and after the rpm correction (rad/s).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -47,7 +56,7 @@ pub fn tachometer_experiment(
 ) -> Result<TachometerExperiment, ClassicError> {
     let tachometer = fit_tachometer(table)?;
     let heading_gain = fit_heading_gain(trials)?;
-    super::error::check_finite("tachometer", "speed", pairs.iter().flat_map(|p| [p.0, p.1]))?;
+    check_finite("tachometer", "speed", pairs.iter().flat_map(|p| [p.0, p.1]))?;
     let speed_pairs: Vec<SpeedPair> = pairs
         .iter()
         .map(|&(r, l)| {
@@ -111,11 +120,7 @@ impl TachometerExperiment {
             g.gain,
             g.gain_stderr,
             g.gain_least_squares,
-            g.per_trial
-                .iter()
-                .map(|v| format!("{v:.2}"))
-                .collect::<Vec<_>>()
-                .join(", "),
+            comma_list(&g.per_trial, |v| format!("{v:.2}")),
             g.max_abs_residual_deg
         );
         if let Some([d, e]) = self.effective_wheel_base {
@@ -154,4 +159,100 @@ impl TachometerExperiment {
         }
         s
     }
+}
+
+/// `encoder_vs_tachometer.csv`: tachometer_rpm,right_encoder_rpm,left_encoder_rpm.
+pub fn tachometer_table(t: &SeedTable) -> Result<Vec<TachoReading>, InputError> {
+    let (a, r, l) = (
+        t.numbers("tachometer_rpm")?,
+        t.numbers("right_encoder_rpm")?,
+        t.numbers("left_encoder_rpm")?,
+    );
+    Ok((0..a.len())
+        .map(|i| TachoReading {
+            tachometer_rpm: a[i],
+            right_encoder_rpm: r[i],
+            left_encoder_rpm: l[i],
+        })
+        .collect())
+}
+
+/// `heading_trials.csv`: actual_deg,estimated_deg (a trial column is ignored).
+pub fn heading_trials(t: &SeedTable) -> Result<Vec<HeadingTrial>, InputError> {
+    let (a, e) = (t.numbers("actual_deg")?, t.numbers("estimated_deg")?);
+    Ok(a.into_iter()
+        .zip(e)
+        .map(|(actual_deg, estimated_deg)| HeadingTrial {
+            actual_deg,
+            estimated_deg,
+        })
+        .collect())
+}
+
+/// `wheel_speed_pairs.csv`: right_rad_s,left_rad_s, as (right, left) pairs.
+pub fn speed_pairs(t: &SeedTable) -> Result<Vec<(f64, f64)>, InputError> {
+    let (r, l) = (t.numbers("right_rad_s")?, t.numbers("left_rad_s")?);
+    Ok(r.into_iter().zip(l).collect())
+}
+
+/// The straight-driving pairs of the `--tables` folder, none without the file.
+fn table_pairs(inp: &ExperimentInputs<'_>) -> Result<Vec<(f64, f64)>, PipelineError> {
+    Ok(match inp.tables.map(|d| d.join("wheel_speed_pairs.csv")) {
+        Some(p) if p.is_file() => speed_pairs(&read_seed_table(&p)?)?,
+        _ => Vec::new(),
+    })
+}
+
+/// `odocal experiment tachometer`: both corrections from the seed tables,
+/// encoder − tachometer before and after drawn into `png`.
+pub(super) fn tachometer_output(
+    inp: &ExperimentInputs<'_>,
+    square: &SquareExperimentParams,
+    png: &Path,
+) -> Result<ExperimentOutput, PipelineError> {
+    let rows = tachometer_table(&inp.seed_table("encoder_vs_tachometer.csv")?)?;
+    let trials = heading_trials(&inp.seed_table("heading_trials.csv")?)?;
+    let pairs = table_pairs(inp)?;
+    let e = tachometer_experiment(
+        &rows,
+        &trials,
+        &pairs,
+        Some(square.nominal.wheel_base),
+    )
+    .map_err(bad)?;
+    draw_lines(png, &correction_chart(&rows, &e.tachometer))?;
+    let title = "Seed 001: tachometer rpm correction and heading gain";
+    Ok(ExperimentOutput::titled(title, e.markdown(&rows), &e))
+}
+
+/// Encoder − tachometer rpm per wheel, as read and after the correction `c`.
+fn correction_chart(rows: &[TachoReading], c: &TachoCalibration) -> LineChart {
+    let xs: Vec<f64> = rows.iter().map(|r| r.tachometer_rpm).collect();
+    let err = |f: &dyn Fn(&TachoReading) -> f64| -> Vec<f64> {
+        rows.iter().map(|r| f(r) - r.tachometer_rpm).collect()
+    };
+    let (fr, fl) = (&c.right, &c.left);
+    LineChart::new(
+        "Seed 001 Table I: encoder − tachometer before and after the rpm correction",
+        "tachometer (rpm)",
+    )
+    .panel(
+        "encoder − tachometer (rpm)",
+        vec![
+            Series::from_xy("right, as read", &xs, &err(&|r| r.right_encoder_rpm)),
+            Series::from_xy("left, as read", &xs, &err(&|r| r.left_encoder_rpm)),
+            Series::from_xy(
+                "right, corrected",
+                &xs,
+                &err(&|r| fr.apply(r.right_encoder_rpm)),
+            )
+            .dashed(),
+            Series::from_xy(
+                "left, corrected",
+                &xs,
+                &err(&|r| fl.apply(r.left_encoder_rpm)),
+            )
+            .dashed(),
+        ],
+    )
 }

@@ -3,16 +3,22 @@
 //! the same 6 m square simulated with those errors (noise-free, then with
 //! wheel slip over several runs) to show how much of the table they explain.
 
-use super::compare::FinalParams;
-use super::drive::{drive_segments, square_segments, DriveParams, Turn};
-use super::error::ClassicError;
-use super::square::{square_report, SquareCorner, SquareReport};
-use super::square_fit::{fit_square_effects, square_odometry_corners, SquareEffectFit};
-use crate::calib::experiments::Stat;
+use super::inputs::{bad, ExperimentInputs};
+use super::output::{comma_list, draw_paths, ExperimentOutput};
+use super::stats::{finite_stat, sample_std, Stat};
+use crate::classic::{
+    drive_segments, fit_square_effects, measured_square, square_odometry_corners, square_report,
+    square_segments, ClassicError, DriveParams, SquareCorner, SquareEffectFit, SquareReport,
+};
+use crate::error::InputError;
 use crate::geom::Pose2;
+use crate::io::seed_tables::SeedTable;
+use crate::pipeline::PipelineError;
 use crate::robot::{wheel_odometry, DiffDrive};
+use crate::viz::plot::{PathSeries, TrajectoryPlot};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
+use std::path::Path;
 
 /// Settings of the square experiment.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -20,7 +26,7 @@ use std::fmt::Write;
 pub struct SquareExperimentParams {
     /// The model the seed's odometry used: 30 cm wheels (r = 0.15 m); its
     /// wheel base is not stated, 0.55 m is assumed.
-    pub nominal: FinalParams,
+    pub nominal: DiffDrive,
     /// Driving of the noisy repetitions (slip is the non-systematic error).
     pub drive: DriveParams,
 }
@@ -29,7 +35,7 @@ impl Default for SquareExperimentParams {
     /// r = 0.15 m, D = 0.55 m; 0.4 m/s, 20 Hz, 1 % wheel slip per step.
     fn default() -> Self {
         Self {
-            nominal: FinalParams {
+            nominal: DiffDrive {
                 r_right: 0.15,
                 r_left: 0.15,
                 wheel_base: 0.55,
@@ -61,14 +67,6 @@ pub struct SquareExperiment {
     pub runs: usize,
 }
 
-fn diff(n: &FinalParams) -> DiffDrive {
-    DiffDrive {
-        r_right: n.r_right,
-        r_left: n.r_left,
-        wheel_base: n.wheel_base,
-    }
-}
-
 /// Fits the measured corners, simulates the fitted square, and repeats it
 /// `runs` times with slip (run i seeded `seed + i`).
 pub fn square_experiment(
@@ -78,14 +76,9 @@ pub fn square_experiment(
     seed: u64,
 ) -> Result<SquareExperiment, ClassicError> {
     let report = square_report(measured)?;
-    let nominal = diff(&p.nominal);
+    let nominal = p.nominal;
     let fit = fit_square_effects(measured, &nominal)?;
-    let side = measured[1].actual_x - measured[0].actual_x;
-    let dir = if measured[2].actual_y > measured[1].actual_y {
-        Turn::Ccw
-    } else {
-        Turn::Cw
-    };
+    let (side, dir) = measured_square(measured)?;
     let mut truth = nominal;
     for e in &fit.effects {
         match *e {
@@ -114,17 +107,13 @@ pub fn square_experiment(
             ys.push(o.translation.y - a.translation.y);
         }
     }
-    let sd = |v: &[f64]| {
-        let m = v.iter().sum::<f64>() / v.len().max(1) as f64;
-        (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len().max(2) - 1) as f64).sqrt()
-    };
     Ok(SquareExperiment {
         measured: report,
         fit,
         simulated,
-        noisy_closure_std: [sd(&xs), sd(&ys)],
-        noisy_closure_dx: super::literature::stat(xs),
-        noisy_closure_dy: super::literature::stat(ys),
+        noisy_closure_std: [sample_std(&xs), sample_std(&ys)],
+        noisy_closure_dx: finite_stat(xs),
+        noisy_closure_dy: finite_stat(ys),
         runs,
     })
 }
@@ -139,12 +128,7 @@ impl SquareExperiment {
             "\n## Effects that reproduce it\n\nLeast-squares fit of the odometry corners \
              (the chair driven exactly along the actual square, odometry with the nominal \
              model): {}. Corner RMS {:.3} m with no effect, {:.3} m with these.\n",
-            self.fit
-                .effects
-                .iter()
-                .map(|e| format!("`{e}`"))
-                .collect::<Vec<_>>()
-                .join(", "),
+            comma_list(&self.fit.effects, |e| format!("`{e}`")),
             self.fit.rms_before,
             self.fit.rms_after
         );
@@ -184,14 +168,57 @@ impl SquareExperiment {
             self.noisy_closure_std[0],
             self.noisy_closure_dy.mean,
             self.noisy_closure_std[1],
-            self.measured
-                .odom_sides
-                .iter()
-                .map(|v| format!("{v:.2}"))
-                .collect::<Vec<_>>()
-                .join(", "),
+            comma_list(&self.measured.odom_sides, |v| format!("{v:.2}")),
             self.fit.rms_after
         );
         s
     }
+}
+
+/// `square_path.csv`: odom_x,odom_y,actual_x,actual_y.
+pub fn square_corners(t: &SeedTable) -> Result<Vec<SquareCorner>, InputError> {
+    let c = ["odom_x", "odom_y", "actual_x", "actual_y"].map(|n| t.numbers(n));
+    let [ox, oy, ax, ay] = c;
+    let (ox, oy, ax, ay) = (ox?, oy?, ax?, ay?);
+    let odom = ox.into_iter().zip(oy);
+    let actual = ax.into_iter().zip(ay);
+    Ok(odom
+        .zip(actual)
+        .map(|((odom_x, odom_y), (actual_x, actual_y))| SquareCorner {
+            odom_x,
+            odom_y,
+            actual_x,
+            actual_y,
+        })
+        .collect())
+}
+
+/// `odocal experiment square`: the experiment on `square_path.csv`, the
+/// actual, measured and simulated squares drawn into `png`.
+pub(super) fn square_output(
+    inp: &ExperimentInputs<'_>,
+    params: &SquareExperimentParams,
+    png: &Path,
+) -> Result<ExperimentOutput, PipelineError> {
+    let corners = square_corners(&inp.seed_table("square_path.csv")?)?;
+    let e = square_experiment(&corners, params, inp.runs, inp.seed).map_err(bad)?;
+    let path = |name: &str, f: &dyn Fn(&SquareCorner) -> [f64; 2], rep: &SquareReport| {
+        PathSeries::new(name, rep.corners.iter().map(|c| f(&c.corner)).collect())
+    };
+    let fig = TrajectoryPlot::new(
+        "Seed 001's 6 m square: actual, measured odometry, simulated with fitted errors",
+        vec![
+            path("actual", &|c| [c.actual_x, c.actual_y], &e.measured),
+            path("measured odometry", &|c| [c.odom_x, c.odom_y], &e.measured),
+            path(
+                "simulated odometry (fitted effects)",
+                &|c| [c.odom_x, c.odom_y],
+                &e.simulated,
+            )
+            .dashed(),
+        ],
+    );
+    draw_paths(png, &fig)?;
+    let title = "Seed 001 Table III: the 6 m square";
+    Ok(ExperimentOutput::titled(title, e.markdown(), &e))
 }

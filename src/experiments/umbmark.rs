@@ -1,17 +1,20 @@
-//! UMBmark as an experiment: several robots, each with its own hidden radius
-//! and wheel-base errors, run the benchmark (CW/CCW × n), get corrected, and
-//! run it again on fresh runs; E_max,syst before and after and the
-//! improvement factor (Borenstein & Feng report about 10–20×).
+//! UMBmark as an experiment: a simulated robot runs the benchmark (CW/CCW ×
+//! n), gets corrected, and runs it again on fresh runs; over several robots,
+//! each with its own hidden radius and wheel-base errors, E_max,syst before
+//! and after and the improvement factor (Borenstein & Feng report about
+//! 10–20×).
 
-use super::compare::FinalParams;
-use super::drive::DriveParams;
-use super::error::ClassicError;
-use super::literature::{draw_hidden_truth, stat};
-use super::umbmark::{umbmark_experiment, UmbmarkExperiment};
-use crate::calib::experiments::Stat;
+use super::inputs::{bad, ExperimentInputs};
+use super::output::{draw_bars, ExperimentOutput};
+use super::repetitions::{at_least_one, draw_hidden_truth};
+use super::stats::{finite_stat, Stat};
+use crate::classic::{umbmark, umbmark_runs, ClassicError, DriveParams, UmbmarkResult, UmbmarkRun};
+use crate::pipeline::PipelineError;
 use crate::robot::DiffDrive;
+use crate::viz::plot::BarChart;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
+use std::path::Path;
 
 /// Settings of the UMBmark experiment.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -50,13 +53,78 @@ impl Default for UmbmarkParams {
     }
 }
 
+/// A full UMBmark cycle on a simulated robot: runs before, correction, fresh
+/// runs after with the corrected model.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UmbmarkExperiment {
+    /// Correction passes applied.
+    pub passes: usize,
+    /// The model after the last pass.
+    pub corrected: DiffDrive,
+    /// Benchmark with the nominal model.
+    pub before: UmbmarkResult,
+    /// Benchmark on fresh runs driven and computed with the corrected model
+    /// (its own correction factors would be the next pass).
+    pub after: UmbmarkResult,
+    /// E_max,syst before / after.
+    pub improvement: f64,
+    /// Run errors before.
+    pub runs_before: Vec<UmbmarkRun>,
+    /// Run errors after.
+    pub runs_after: Vec<UmbmarkRun>,
+}
+
+/// Runs UMBmark on a simulated robot, applies the correction and measures
+/// the improvement factor on fresh runs (different seeds). The paper applies
+/// the correction once (`passes = 1`); its formulas are first order, so with
+/// large errors a residual of order α·β remains, which further passes (each on
+/// fresh runs with the model corrected so far) remove.
+pub fn umbmark_experiment(
+    nominal: &DiffDrive,
+    truth: &DiffDrive,
+    side: f64,
+    n: usize,
+    drive: &DriveParams,
+    passes: usize,
+    seed: u64,
+) -> Result<UmbmarkExperiment, ClassicError> {
+    let runs_before = umbmark_runs(nominal, truth, side, n, drive, seed);
+    let before = umbmark(&runs_before, side, nominal)?;
+    let mut model = before.corrected();
+    for pass in 1..passes {
+        let s = seed.wrapping_add(7_000_003 * pass as u64);
+        model = umbmark(
+            &umbmark_runs(&model, truth, side, n, drive, s),
+            side,
+            &model,
+        )?
+        .corrected();
+    }
+    let runs_after = umbmark_runs(&model, truth, side, n, drive, seed.wrapping_add(1_000_003));
+    let after = umbmark(&runs_after, side, &model)?;
+    let improvement = if after.e_max_syst > 0.0 {
+        before.e_max_syst / after.e_max_syst
+    } else {
+        f64::MAX
+    };
+    Ok(UmbmarkExperiment {
+        passes,
+        corrected: model,
+        before,
+        after,
+        improvement,
+        runs_before,
+        runs_after,
+    })
+}
+
 /// One robot's benchmark cycle.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct UmbmarkCycle {
     /// Seed of the cycle.
     pub seed: u64,
     /// Hidden true parameters (m).
-    pub truth: FinalParams,
+    pub truth: DiffDrive,
     /// Before, correction, after.
     pub result: UmbmarkExperiment,
 }
@@ -83,14 +151,11 @@ pub fn umbmark_cycles(
     runs: usize,
     seed: u64,
 ) -> Result<UmbmarkCycles, ClassicError> {
-    if runs == 0 || p.runs_per_direction == 0 || p.passes == 0 {
-        return Err(ClassicError::TooFew {
-            method: "umbmark",
-            what: "runs, runs per direction and passes",
-            needed: 1,
-            got: 0,
-        });
-    }
+    at_least_one(
+        "umbmark",
+        "runs, runs per direction and passes",
+        &[runs, p.runs_per_direction, p.passes],
+    )?;
     let cycles: Vec<UmbmarkCycle> = (0..runs)
         .map(|i| {
             let s = seed.wrapping_add(i as u64);
@@ -106,13 +171,14 @@ pub fn umbmark_cycles(
             )?;
             Ok(UmbmarkCycle {
                 seed: s,
-                truth: truth.into(),
+                truth,
                 result,
             })
         })
         .collect::<Result<_, ClassicError>>()?;
-    let col =
-        |f: &dyn Fn(&UmbmarkExperiment) -> f64| stat(cycles.iter().map(|c| f(&c.result)).collect());
+    let col = |f: &dyn Fn(&UmbmarkExperiment) -> f64| {
+        finite_stat(cycles.iter().map(|c| f(&c.result)).collect())
+    };
     Ok(UmbmarkCycles {
         params: p.clone(),
         e_max_before: col(&|r| r.before.e_max_syst),
@@ -165,4 +231,47 @@ impl UmbmarkCycles {
         );
         s
     }
+}
+
+/// `odocal experiment umbmark`: `--runs` robots, E_max,syst before and after
+/// correction drawn into `png`.
+pub(super) fn umbmark_output(
+    inp: &ExperimentInputs<'_>,
+    params: &UmbmarkParams,
+    png: &Path,
+) -> Result<ExperimentOutput, PipelineError> {
+    let c = umbmark_cycles(
+        &inp.robot.diff_drive(),
+        params,
+        inp.runs,
+        inp.seed,
+    )
+    .map_err(bad)?;
+    let cats: Vec<String> = c
+        .cycles
+        .iter()
+        .map(|k| format!("robot {}", k.seed))
+        .collect();
+    let chart = BarChart::new(
+        format!(
+            "UMBmark: E_max,syst before and after correction ({} robots)",
+            c.cycles.len()
+        ),
+        cats,
+        vec!["before".into(), "after (fresh runs)".into()],
+    )
+    .panel(
+        "E_max,syst (m)",
+        vec![
+            c.cycles
+                .iter()
+                .map(|k| k.result.before.e_max_syst)
+                .collect(),
+            c.cycles.iter().map(|k| k.result.after.e_max_syst).collect(),
+        ],
+        None,
+    );
+    draw_bars(png, &chart)?;
+    let title = "UMBmark (Borenstein & Feng 1996)";
+    Ok(ExperimentOutput::titled(title, c.markdown(), &c))
 }

@@ -3,12 +3,12 @@
 //! calibrators see what they would see on a real chair (ICP motions with
 //! their own σ, quantised encoders, the gyro), not ICP-like synthetic noise.
 
-use super::PipelineError;
-use crate::calib::experiments::{montecarlo_with, MonteCarloRuns, MonteCarloTable, RunTruth};
+use super::{montecarlo_with, MonteCarloRuns, MonteCarloTable, RunTruth};
 use crate::calib::{self, synth::draw_truth, CalibParams};
 use crate::geom::{self, Pose2};
 use crate::icp::IcpParams;
 use crate::motion::arc_along_chord;
+use crate::pipeline::PipelineError;
 use crate::robot::{DiffDrive, RobotConfig};
 use crate::sim::{self, SimConfig, Truth};
 use crate::traj::Trajectory;
@@ -141,7 +141,7 @@ fn prepare_run(
     let (rec, truth) = sim::simulate(&cfg, &truth_robot, &[], &mut |_| {})
         .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
     // ICP's prior is the wheel odometry of the nominal chair, as on a real one.
-    let out = super::icp::match_recording(&rec, nominal, icp)?;
+    let out = crate::pipeline::icp::match_recording(&rec, nominal, icp)?;
     let steps = calib::steps(
         &out.observations(),
         &rec.wheels,

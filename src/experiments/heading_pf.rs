@@ -3,15 +3,23 @@
 //! end-position error of uncalibrated odometry, calibrated odometry and
 //! calibrated odometry fused with a heading source, as % of the path length.
 
-use super::drive::{drive_segments, irregular_path, DriveParams, Segment};
-use super::error::ClassicError;
-use super::ga::{ga_calibrate, GaParams, GaRun, TickParams};
-use super::heading_pf::{heading_pf, simulate_heading, HeadingPfParams, HeadingSourceParams};
+use super::inputs::{bad, ExperimentInputs};
+use super::output::{draw_bars, ExperimentOutput};
+use super::stats::sample_std;
+use crate::classic::{
+    drive_segments, ga_calibrate, heading_pf, irregular_path, simulate_heading, ClassicError,
+    DriveParams, GaParams, GaRun, HeadingPfParams, HeadingSourceParams, Segment, TickParams,
+};
+use crate::error::InputError;
 use crate::geom::Pose2;
+use crate::io::seed_tables::SeedTable;
+use crate::pipeline::PipelineError;
 use crate::robot::{wheel_odometry, DiffDrive};
+use crate::viz::plot::BarChart;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
 /// One of the seed's Table 2 numbers (empty = the vehicle could not finish).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -132,6 +140,13 @@ pub fn calibration_runs(
         .collect()
 }
 
+/// The scenarios of seed 002's Table 2, in its order.
+const SCENARIOS: [&str; 3] = [
+    "uncalibrated",
+    "calibrated_odometry",
+    "calibrated_odometry_vo_pf",
+];
+
 /// Regenerates seed 002's Table 2 on simulated runs: the vehicle follows random
 /// irregular paths; each estimator's end-position error is reported as % of
 /// the path length (mean of `trials`), next to the seed's numbers. Returns the
@@ -151,60 +166,16 @@ pub fn heading_pf_experiment(
         p.seed,
     );
     let ga = ga_calibrate(&runs, &p.ga)?;
-    let calibrated = ga.params.to_diff_drive(p.ticks_per_rev);
-    let names = [
-        "uncalibrated",
-        "calibrated_odometry",
-        "calibrated_odometry_vo_pf",
-    ];
+    let models = [believed, ga.params.to_diff_drive(p.ticks_per_rev)];
     let mut rows = Vec::new();
     for &length in &p.lengths {
-        let mut errs: [Vec<f64>; 3] = Default::default();
-        for trial in 0..p.trials {
-            let s = p
-                .seed
-                .wrapping_mul(1_000_003)
-                .wrapping_add((length * 1000.0) as u64 * 131 + trial as u64);
-            let segs = irregular_path(length, s);
-            let run = drive_segments(&truth, &truth, &segs, &p.drive, s ^ 0x5eed);
-            let Some(end) = run.truth.poses.last().copied() else {
-                continue;
-            };
-            let plen = run.truth.path_length().max(1e-9);
-            let id = Pose2::identity();
-            let headings = simulate_heading(&run.truth, &p.heading, s ^ 0xbeef);
-            let pf = heading_pf(
-                &calibrated,
-                &run.wheels,
-                &headings,
-                &id,
-                &HeadingPfParams { seed: s, ..p.pf },
-            )?;
-            let ends = [
-                wheel_odometry(&believed, &run.wheels, id)
-                    .poses
-                    .last()
-                    .copied(),
-                wheel_odometry(&calibrated, &run.wheels, id)
-                    .poses
-                    .last()
-                    .copied(),
-                pf.poses.last().copied(),
-            ];
-            for (e, est) in errs.iter_mut().zip(ends) {
-                let est = est.unwrap_or(id);
-                e.push(100.0 * (est.translation.vector - end.translation.vector).norm() / plen);
-            }
-        }
-        for (name, e) in names.iter().zip(&errs) {
-            let m = e.iter().sum::<f64>() / e.len().max(1) as f64;
-            let sd = (e.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (e.len().max(2) - 1) as f64)
-                .sqrt();
+        let errs = path_errors(p, length, &truth, &models)?;
+        for (name, e) in SCENARIOS.iter().zip(&errs) {
             rows.push(PathErrorRow {
                 scenario: name.to_string(),
                 length_m: length,
-                error_percent: m,
-                error_std: sd,
+                error_percent: e.iter().sum::<f64>() / e.len().max(1) as f64,
+                error_std: sample_std(e),
                 seed_error_percent: seed_table
                     .iter()
                     .find(|r| r.scenario == *name && (r.length_m - length).abs() < 1e-9)
@@ -213,6 +184,56 @@ pub fn heading_pf_experiment(
         }
     }
     Ok((rows, ga.params))
+}
+
+/// End-position errors (% of the path length) of every trial on paths of
+/// `length` (m), per scenario: odometry with the believed model, with the
+/// calibrated one (`models`), and the calibrated odometry fused with the
+/// heading source.
+fn path_errors(
+    p: &PfExperimentParams,
+    length: f64,
+    truth: &DiffDrive,
+    [believed, calibrated]: &[DiffDrive; 2],
+) -> Result<[Vec<f64>; 3], ClassicError> {
+    let mut errs: [Vec<f64>; 3] = Default::default();
+    for trial in 0..p.trials {
+        let s = p
+            .seed
+            .wrapping_mul(1_000_003)
+            .wrapping_add((length * 1000.0) as u64 * 131 + trial as u64);
+        let segs = irregular_path(length, s);
+        let run = drive_segments(truth, truth, &segs, &p.drive, s ^ 0x5eed);
+        let Some(end) = run.truth.poses.last().copied() else {
+            continue;
+        };
+        let plen = run.truth.path_length().max(1e-9);
+        let id = Pose2::identity();
+        let headings = simulate_heading(&run.truth, &p.heading, s ^ 0xbeef);
+        let pf = heading_pf(
+            calibrated,
+            &run.wheels,
+            &headings,
+            &id,
+            &HeadingPfParams { seed: s, ..p.pf },
+        )?;
+        let ends = [
+            wheel_odometry(believed, &run.wheels, id)
+                .poses
+                .last()
+                .copied(),
+            wheel_odometry(calibrated, &run.wheels, id)
+                .poses
+                .last()
+                .copied(),
+            pf.poses.last().copied(),
+        ];
+        for (e, est) in errs.iter_mut().zip(ends) {
+            let est = est.unwrap_or(id);
+            e.push(100.0 * (est.translation.vector - end.translation.vector).norm() / plen);
+        }
+    }
+    Ok(errs)
 }
 
 /// The rows as a markdown table in the layout of seed 002's Table 2, ours
@@ -229,4 +250,92 @@ pub fn path_error_markdown(rows: &[PathErrorRow]) -> String {
         ));
     }
     s
+}
+
+/// `ga_path_errors.csv`: scenario,length_m,error_percent (empty = not completed).
+pub fn ga_path_errors(t: &SeedTable) -> Result<Vec<SeedPathError>, InputError> {
+    let (s, l, e) = (
+        t.text("scenario")?,
+        t.numbers("length_m")?,
+        t.optional_numbers("error_percent")?,
+    );
+    Ok((0..s.len())
+        .map(|i| SeedPathError {
+            scenario: s[i].clone(),
+            length_m: l[i],
+            error_percent: e[i],
+        })
+        .collect())
+}
+
+/// `odocal experiment heading-pf`: Table 2 with `--runs` trials per length,
+/// next to the seed's numbers when `--tables` gives them, drawn into `png`.
+pub(super) fn heading_pf_output(
+    inp: &ExperimentInputs<'_>,
+    params: &PfExperimentParams,
+    png: &Path,
+) -> Result<ExperimentOutput, PipelineError> {
+    let seed_rows = match inp.tables {
+        Some(_) => ga_path_errors(&inp.seed_table("ga_path_errors.csv")?)?,
+        None => Vec::new(),
+    };
+    let p = PfExperimentParams {
+        trials: inp.runs,
+        seed: inp.seed,
+        ..params.clone()
+    };
+    let (rows, ga) = heading_pf_experiment(&p, &seed_rows).map_err(bad)?;
+    draw_bars(png, &table_chart(&p, &rows, !seed_rows.is_empty()))?;
+    let md = format!(
+        "{} trials per length; GA-calibrated k_left {:.6e}, k_right {:.6e} m/pulse, b {:.5} m \
+         (truth {:.6e}, {:.6e}, {:.5}).\n\n{}",
+        p.trials,
+        ga.k_left,
+        ga.k_right,
+        ga.wheel_base,
+        p.truth.k_left,
+        p.truth.k_right,
+        p.truth.wheel_base,
+        path_error_markdown(&rows)
+    );
+    Ok(ExperimentOutput::titled(
+        "Seed 002 Table 2: GA calibration and heading fusion",
+        md,
+        &serde_json::json!({ "rows": rows, "ga": ga, "params": p }),
+    ))
+}
+
+/// Bars per length and scenario: our errors with their spread and, when
+/// `with_seed`, the seed's numbers.
+fn table_chart(p: &PfExperimentParams, rows: &[PathErrorRow], with_seed: bool) -> BarChart {
+    let cats: Vec<String> = p.lengths.iter().map(|l| format!("{l} m")).collect();
+    let cell = |n: &str, l: f64, f: &dyn Fn(&PathErrorRow) -> f64| {
+        rows.iter()
+            .find(|r| r.scenario == n && r.length_m == l)
+            .map_or(0.0, f)
+    };
+    let grid = |f: &dyn Fn(&PathErrorRow) -> f64| -> Vec<Vec<f64>> {
+        SCENARIOS
+            .iter()
+            .map(|n| p.lengths.iter().map(|&l| cell(n, l, f)).collect())
+            .collect()
+    };
+    let mut chart = BarChart::new(
+        format!("Seed 002 Table 2: end-position error ({} trials)", p.trials),
+        cats,
+        SCENARIOS.iter().map(|s| s.to_string()).collect(),
+    )
+    .panel(
+        "odocal: error (% of length)",
+        grid(&|r| r.error_percent),
+        Some(grid(&|r| r.error_std)),
+    );
+    if with_seed {
+        chart = chart.panel(
+            "seed 002 (0 = not completed)",
+            grid(&|r| r.seed_error_percent.unwrap_or(0.0)),
+            None,
+        );
+    }
+    chart
 }

@@ -4,9 +4,8 @@
 //! misread by the nominal model (the mirror image of a robot driving by
 //! odometry); UMBmark's first-order formulas are the same in both cases.
 
-use super::compare::{compare_classic, ClassicResult, CompareParams, CompareScenario};
-use super::drive::SimRun;
-use super::error::ClassicError;
+use super::{compare_classic, ClassicResult, CompareParams, CompareScenario};
+use crate::classic::{ClassicError, SimRun};
 use crate::effects::Effect;
 use crate::geom;
 use crate::robot::RobotConfig;

@@ -3,12 +3,11 @@
 //! their radius estimates against the truth and the Adaptive-PF's particle
 //! count over time.
 
-use super::PipelineError;
-use crate::calib::experiments::MonteCarloParams;
-use crate::calib::synth::{draw_truth, generate};
-use crate::calib::{build, run, steps, CalibParams, CalibrationRun, Method};
-use crate::robot::DiffDrive;
-use crate::viz::plot::{self, LineChart, Series};
+use super::{synthetic_run, MonteCarloParams};
+use crate::calib::{build, run, CalibParams, CalibrationRun, Method};
+use crate::experiments::output::draw_lines;
+use crate::pipeline::PipelineError;
+use crate::viz::plot::{LineChart, Series};
 use std::path::Path;
 
 /// At most this many points per plotted series.
@@ -39,13 +38,8 @@ pub fn changing_figure(
     configs: &[(String, CalibParams)],
     png: &Path,
 ) -> Result<Option<ParticleCounts>, PipelineError> {
-    let nominal = DiffDrive {
-        r_right: mc.nominal[0],
-        r_left: mc.nominal[1],
-        wheel_base: mc.nominal[2],
-    };
-    let data = generate(&mc.synth, draw_truth(mc.seed), mc.seed);
-    let st = steps(&data.obs, &data.wheels, &data.gyro, mc.synth.gyro_sigma);
+    let nominal = mc.nominal_drive();
+    let (st, data) = synthetic_run(mc, mc.seed);
     let runs: Vec<(&str, CalibrationRun)> = configs
         .iter()
         // The fixed PF's estimate swings by ±10 mm and would flatten every
@@ -95,7 +89,7 @@ pub fn changing_figure(
             .collect();
         chart = chart.panel("particles", vec![Series::new(*label, pts)]);
     }
-    plot::line_chart(png, &chart).map_err(|e| PipelineError::write(png, e))?;
+    draw_lines(png, &chart)?;
     let step = mc.synth.radius_step.map_or(f64::INFINITY, |s| s.time);
     Ok(pf.map(|(_, r)| {
         let h = &r.history;

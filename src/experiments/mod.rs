@@ -1,0 +1,55 @@
+//! The seed papers' tables and figures regenerated on our own data, above
+//! the math modules: Monte Carlo over synthetic and simulated wheelchair runs
+//! (seed 000), every method of the literature side by side, seed 001's square
+//! and tachometer tables, seed 002's GA and heading-fusion table, and UMBmark
+//! on simulated robots. [`run`] is `odocal experiment NAME`: it writes each
+//! experiment as `NAME.md`, `NAME.json` and `NAME.png`. Experiments sit
+//! above the pipeline too: they run ICP on simulated scans through it.
+//!
+//! The algorithms live in `calib` and `classic`; this module drives them over
+//! simulated runs, summarises, and turns the seed tables (`io::seed_tables`)
+//! into their inputs.
+
+mod compare;
+mod driver;
+mod heading_pf;
+mod inputs;
+mod literature;
+mod montecarlo;
+mod output;
+mod repetitions;
+mod square;
+mod stats;
+mod tachometer;
+mod umbmark;
+
+pub use compare::{
+    compare_classic, compare_on_simulator, markdown_table, sim_run, split_short_runs,
+    ClassicMethod, ClassicResult, CompareParams, CompareScenario,
+};
+pub use driver::{run, run_experiment, ExperimentJob, ExperimentSettings, EXPERIMENTS};
+pub use inputs::ExperimentInputs;
+pub use heading_pf::{
+    calibration_runs, ga_path_errors, heading_pf_experiment, path_error_markdown, PathErrorRow,
+    PfExperimentParams, SeedPathError,
+};
+pub use literature::{
+    literature, literature_run, LiteratureParams, LiteratureRow, LiteratureRun, LiteratureTable,
+};
+pub use montecarlo::{
+    changing_figure, montecarlo, montecarlo_with, scan_montecarlo, score, table1_configs,
+    table2_configs, MonteCarloParams, MonteCarloRuns, MonteCarloTable, ParticleCounts, PreparedRun,
+    RunMetrics, RunTruth, ScanMonteCarloParams, TableRow,
+};
+pub use output::ExperimentOutput;
+pub use repetitions::draw_hidden_truth;
+pub use square::{square_corners, square_experiment, SquareExperiment, SquareExperimentParams};
+pub use stats::Stat;
+pub use tachometer::{
+    heading_trials, speed_pairs, tachometer_experiment, tachometer_table, SpeedPair,
+    TachometerExperiment,
+};
+pub use umbmark::{
+    umbmark_cycles, umbmark_experiment, UmbmarkCycle, UmbmarkCycles, UmbmarkExperiment,
+    UmbmarkParams,
+};
