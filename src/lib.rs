@@ -1,9 +1,11 @@
 //! odocal: calibrated wheel odometry for differential-drive robots from 2D
 //! laser scans and wheel encoders.
 //!
-//! Math modules (`geom`, `scan`, `robot`, `icp`, `calib`, `sim`, `eval`,
-//! `diagnose`) know nothing of files, the command line or Rerun; `io` reads and
-//! writes formats, `pipeline` wires the stages, `viz` draws them.
+//! Math modules (`geom`, `scan`, `robot`, `icp`, `calib`, `classic`, `sim`,
+//! `eval`, `diagnose`) know nothing of files, the command line or Rerun; `io`
+//! reads and writes formats and nothing else; `pipeline` wires the stages
+//! through one driver, `viz` draws them, and `experiments` regenerates the
+//! seed papers' tables on top of all of them.
 #![warn(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
