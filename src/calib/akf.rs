@@ -3,6 +3,7 @@
 //! with the velocity model's noise (`NoiseParams::model_sigma_v`,
 //! `model_sigma_w`, the same the particle filters use) as process noise.
 
+use super::dkf::kalman_estimate;
 use super::kalman::{model, observability, prior, turn_jacobian, turn_rate_for_observability};
 use super::params::CalibParams;
 use super::robust::student_t_weight;
@@ -94,22 +95,13 @@ impl Calibrator for AugmentedKf {
         for i in 2..5 {
             self.x[i] = self.x[i].max(1e-6);
         }
-        let sd = |i: usize| self.p[(i, i)].max(0.0).sqrt();
-        Estimate {
-            t: s.t1,
-            r_right: self.x[2],
-            r_left: self.x[3],
-            wheel_base: self.x[4],
-            std_r_right: sd(2),
-            std_r_left: sd(3),
-            std_wheel_base: sd(4),
-            v: self.x[0],
-            w: self.x[1],
-            particles: 0,
-            process_sigma: self.q[2].sqrt(),
-            resampled: false,
-            weights_reset: false,
-        }
+        kalman_estimate(
+            s.t1,
+            [self.x[2], self.x[3], self.x[4]],
+            [self.p[(2, 2)], self.p[(3, 3)], self.p[(4, 4)]],
+            [self.x[0], self.x[1]],
+            self.q[2],
+        )
     }
 
     fn name(&self) -> &'static str {

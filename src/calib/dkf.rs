@@ -95,25 +95,48 @@ impl Calibrator for DualKf {
         }
         self.p_theta = 0.5 * (self.p_theta + self.p_theta.transpose());
         self.theta = self.theta.map(|t| t.max(1e-6));
-        let sd = |i: usize| self.p_theta[(i, i)].max(0.0).sqrt();
-        Estimate {
-            t: s.t1,
-            r_right: self.theta[0],
-            r_left: self.theta[1],
-            wheel_base: self.theta[2],
-            std_r_right: sd(0),
-            std_r_left: sd(1),
-            std_wheel_base: sd(2),
-            v: x[0],
-            w: x[1],
-            particles: 0,
-            process_sigma: self.q_theta.sqrt(),
-            resampled: false,
-            weights_reset: false,
-        }
+        kalman_estimate(
+            s.t1,
+            self.theta.into(),
+            [
+                self.p_theta[(0, 0)],
+                self.p_theta[(1, 1)],
+                self.p_theta[(2, 2)],
+            ],
+            [x[0], x[1]],
+            self.q_theta,
+        )
     }
 
     fn name(&self) -> &'static str {
         "dkf"
+    }
+}
+
+/// The estimate of a Kalman filter at time `t`: parameters `theta` =
+/// (R_R, R_L, D) with variances `var` (a negative one read as 0), velocities
+/// `vw` = (V, W) and the parameters' process noise variance `q`.
+pub(super) fn kalman_estimate(
+    t: f64,
+    theta: [f64; 3],
+    var: [f64; 3],
+    vw: [f64; 2],
+    q: f64,
+) -> Estimate {
+    let sd = |v: f64| v.max(0.0).sqrt();
+    Estimate {
+        t,
+        r_right: theta[0],
+        r_left: theta[1],
+        wheel_base: theta[2],
+        std_r_right: sd(var[0]),
+        std_r_left: sd(var[1]),
+        std_wheel_base: sd(var[2]),
+        v: vw[0],
+        w: vw[1],
+        particles: 0,
+        process_sigma: q.sqrt(),
+        resampled: false,
+        weights_reset: false,
     }
 }

@@ -45,6 +45,26 @@ pub(crate) struct Predict<'a> {
     pub zw: f64,
 }
 
+impl Predict<'_> {
+    /// The same inputs with every column cut to the particle count (a
+    /// shorter one panics): known lengths spare the chunks their bounds
+    /// checks.
+    #[inline(always)]
+    fn cut(self) -> Self {
+        let n = self.rr.len();
+        Self {
+            rl: &mut self.rl[..n],
+            d: &mut self.d[..n],
+            v: &mut self.v[..n],
+            w: &mut self.w[..n],
+            lw: &mut self.lw[..n],
+            rho: &self.rho[..n],
+            e: self.e.map(|e| &e[..n]),
+            ..self
+        }
+    }
+}
+
 /// Output of [`predict`]: prior weighted-mean velocities and the largest
 /// log-weight.
 pub(crate) struct Predicted {
@@ -63,109 +83,83 @@ fn clamp_len(x: f64) -> f64 {
     }
 }
 
+/// Running sums of the fused pass, one per lane: `[Σ ρ·V, Σ ρ·W, max
+/// log-weight]`.
+type PredictSums<const N: usize> = [[f64; N]; 3];
+
+/// The fused pass over all particles: whole chunks of `LANES` particles, one
+/// accumulator lane each, then the leftover particles on lane 0.
 #[inline(always)]
 fn predict_impl(a: Predict<'_>) -> Predicted {
+    let mut a = a.cut();
     let n = a.rr.len();
-    let Predict {
-        rr,
-        rl,
-        d,
-        v,
-        w,
-        lw,
-        rho,
-        e,
-        wr,
-        wl,
-        sr,
-        sd,
-        obs,
-        ratio,
-        kv,
-        zv,
-        kw,
-        zw,
-    } = a;
-    let rfix = (1.0 - obs) * ratio;
-    let (rl, d, v, w, lw, rho) = (
-        &mut rl[..n],
-        &mut d[..n],
-        &mut v[..n],
-        &mut w[..n],
-        &mut lw[..n],
-        &rho[..n],
-    );
-    let (e1, e2, e3) = (&e[0][..n], &e[1][..n], &e[2][..n]);
-    let mut vo = [0.0f64; LANES];
-    let mut wo = [0.0f64; LANES];
-    let mut mx = [f64::NEG_INFINITY; LANES];
-    macro_rules! body {
-        ($rr:ident, $rl:ident, $d:ident, $v:ident, $w:ident, $lw:ident, $rho:ident, $e1:ident, $e2:ident, $e3:ident, $l:expr, $i:expr) => {{
-            let (l, i) = ($l, $i);
-            let (rr, rl, d, v, w, lw, rho, e1, e2, e3) = (&mut *$rr, &mut *$rl, &mut *$d, &mut *$v, &mut *$w, &mut *$lw, &*$rho, &*$e1, &*$e2, &*$e3);
-            let a = clamp_len(rr[i] + sr * e1[i]);
-            let b = clamp_len(rl[i] + sr * e2[i]);
-            let c = clamp_len(d[i] + sd * e3[i]);
-            rr[i] = a;
-            rl[i] = b;
-            d[i] = c;
-            let (x, y) = (wr * a, wl * b);
-            let vi = 0.5 * (x + y);
-            let wi = (x - y) / (rfix * (a + b) + obs * c);
-            v[i] = vi;
-            w[i] = wi;
-            vo[l] += rho[i] * vi;
-            wo[l] += rho[i] * wi;
-            let (ev, ew) = (vi - zv, wi - zw);
-            let q = lw[i] - kv * ev * ev - kw * ew * ew;
-            lw[i] = q;
-            mx[l] = if q > mx[l] { q } else { mx[l] };
-        }};
-    }
+    let rfix = (1.0 - a.obs) * a.ratio;
+    let mut acc: PredictSums<LANES> = [[0.0; LANES], [0.0; LANES], [f64::NEG_INFINITY; LANES]];
     let full = n / LANES * LANES;
     for c in (0..full).step_by(LANES) {
-        // Fixed-size views: one bounds check per chunk, none per lane.
-        let rr: &mut [f64; LANES] = (&mut rr[c..c + LANES]).try_into().unwrap();
-        let rl: &mut [f64; LANES] = (&mut rl[c..c + LANES]).try_into().unwrap();
-        let d: &mut [f64; LANES] = (&mut d[c..c + LANES]).try_into().unwrap();
-        let v: &mut [f64; LANES] = (&mut v[c..c + LANES]).try_into().unwrap();
-        let w: &mut [f64; LANES] = (&mut w[c..c + LANES]).try_into().unwrap();
-        let lw: &mut [f64; LANES] = (&mut lw[c..c + LANES]).try_into().unwrap();
-        let rho: &[f64; LANES] = rho[c..c + LANES].try_into().unwrap();
-        let e1: &[f64; LANES] = e1[c..c + LANES].try_into().unwrap();
-        let e2: &[f64; LANES] = e2[c..c + LANES].try_into().unwrap();
-        let e3: &[f64; LANES] = e3[c..c + LANES].try_into().unwrap();
-        // Whole-chunk operations, the same arithmetic as `body!`.
-        let a: [f64; LANES] = std::array::from_fn(|l| clamp_len(rr[l] + sr * e1[l]));
-        let b: [f64; LANES] = std::array::from_fn(|l| clamp_len(rl[l] + sr * e2[l]));
-        let cc: [f64; LANES] = std::array::from_fn(|l| clamp_len(d[l] + sd * e3[l]));
-        let x: [f64; LANES] = std::array::from_fn(|l| wr * a[l]);
-        let y: [f64; LANES] = std::array::from_fn(|l| wl * b[l]);
-        let vi: [f64; LANES] = std::array::from_fn(|l| 0.5 * (x[l] + y[l]));
-        let wi: [f64; LANES] =
-            std::array::from_fn(|l| (x[l] - y[l]) / (rfix * (a[l] + b[l]) + obs * cc[l]));
-        let ev: [f64; LANES] = std::array::from_fn(|l| vi[l] - zv);
-        let ew: [f64; LANES] = std::array::from_fn(|l| wi[l] - zw);
-        let q: [f64; LANES] =
-            std::array::from_fn(|l| lw[l] - kv * ev[l] * ev[l] - kw * ew[l] * ew[l]);
-        *rr = a;
-        *rl = b;
-        *d = cc;
-        *v = vi;
-        *w = wi;
-        *lw = q;
-        vo = std::array::from_fn(|l| vo[l] + rho[l] * vi[l]);
-        wo = std::array::from_fn(|l| wo[l] + rho[l] * wi[l]);
-        mx = std::array::from_fn(|l| if q[l] > mx[l] { q[l] } else { mx[l] });
+        acc = predict_lanes(&mut a, rfix, c, acc);
     }
     for i in full..n {
-        body!(rr, rl, d, v, w, lw, rho, e1, e2, e3, 0, i);
+        let lane0 = predict_lanes(&mut a, rfix, i, acc.map(|x| [x[0]]));
+        for (x, l) in acc.iter_mut().zip(lane0) {
+            x[0] = l[0];
+        }
     }
+    let [vo, wo, mx] = acc;
     Predicted {
         vo: vo.iter().sum(),
         wo: wo.iter().sum(),
         max: mx.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)),
     }
+}
+
+/// Predicts and weighs the `N` particles from index `c` on (eq. 2–4), one
+/// per lane, and returns the running sums `acc` updated with them. Written
+/// as whole-chunk operations so that the compiler vectorises them; `rfix` is
+/// `(1 − obs)·ratio`.
+#[inline(always)]
+fn predict_lanes<const N: usize>(
+    a: &mut Predict<'_>,
+    rfix: f64,
+    c: usize,
+    acc: PredictSums<N>,
+) -> PredictSums<N> {
+    let (sr, sd, wr, wl, obs) = (a.sr, a.sd, a.wr, a.wl, a.obs);
+    let (kv, zv, kw, zw) = (a.kv, a.zv, a.kw, a.zw);
+    // Fixed-size views: no bounds check per lane.
+    let rr: &mut [f64; N] = (&mut a.rr[c..c + N]).try_into().unwrap();
+    let rl: &mut [f64; N] = (&mut a.rl[c..c + N]).try_into().unwrap();
+    let d: &mut [f64; N] = (&mut a.d[c..c + N]).try_into().unwrap();
+    let v: &mut [f64; N] = (&mut a.v[c..c + N]).try_into().unwrap();
+    let w: &mut [f64; N] = (&mut a.w[c..c + N]).try_into().unwrap();
+    let lw: &mut [f64; N] = (&mut a.lw[c..c + N]).try_into().unwrap();
+    let rho: &[f64; N] = a.rho[c..c + N].try_into().unwrap();
+    let e1: &[f64; N] = a.e[0][c..c + N].try_into().unwrap();
+    let e2: &[f64; N] = a.e[1][c..c + N].try_into().unwrap();
+    let e3: &[f64; N] = a.e[2][c..c + N].try_into().unwrap();
+    let [vo, wo, mx] = acc;
+    let aa: [f64; N] = std::array::from_fn(|l| clamp_len(rr[l] + sr * e1[l]));
+    let b: [f64; N] = std::array::from_fn(|l| clamp_len(rl[l] + sr * e2[l]));
+    let cc: [f64; N] = std::array::from_fn(|l| clamp_len(d[l] + sd * e3[l]));
+    let x: [f64; N] = std::array::from_fn(|l| wr * aa[l]);
+    let y: [f64; N] = std::array::from_fn(|l| wl * b[l]);
+    let vi: [f64; N] = std::array::from_fn(|l| 0.5 * (x[l] + y[l]));
+    let wi: [f64; N] =
+        std::array::from_fn(|l| (x[l] - y[l]) / (rfix * (aa[l] + b[l]) + obs * cc[l]));
+    let ev: [f64; N] = std::array::from_fn(|l| vi[l] - zv);
+    let ew: [f64; N] = std::array::from_fn(|l| wi[l] - zw);
+    let q: [f64; N] = std::array::from_fn(|l| lw[l] - kv * ev[l] * ev[l] - kw * ew[l] * ew[l]);
+    *rr = aa;
+    *rl = b;
+    *d = cc;
+    *v = vi;
+    *w = wi;
+    *lw = q;
+    [
+        std::array::from_fn(|l| vo[l] + rho[l] * vi[l]),
+        std::array::from_fn(|l| wo[l] + rho[l] * wi[l]),
+        std::array::from_fn(|l| if q[l] > mx[l] { q[l] } else { mx[l] }),
+    ]
 }
 
 /// Inputs of the normalise-and-summarise passes.
@@ -323,22 +317,10 @@ fn moments_impl(
 #[inline(always)]
 fn summarize_impl(a: Summarize<'_>) -> Sums {
     let n = a.rr.len();
-    let Summarize {
-        rr,
-        rl,
-        d,
-        v,
-        w,
-        lw,
-        buf,
-        shift,
-        uniform,
-        r,
-    } = a;
-    let (lw, buf) = (&mut lw[..n], &mut buf[..n]);
-    let [sum, sq, max, sv, sw] = weigh_impl(lw, buf, v, w, shift, uniform);
+    let (lw, buf) = (&mut a.lw[..n], &mut a.buf[..n]);
+    let [sum, sq, max, sv, sw] = weigh_impl(lw, buf, a.v, a.w, a.shift, a.uniform);
     let inv = 1.0 / sum;
-    let (m, s2) = moments_impl(buf, rr, rl, d, r, inv);
+    let (m, s2) = moments_impl(buf, a.rr, a.rl, a.d, a.r, inv);
     Sums {
         sum,
         sq,

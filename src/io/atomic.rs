@@ -2,14 +2,16 @@
 //! directory, fsync, then rename over the target, so a failed or killed run
 //! leaves either the previous file or none, never a torn one. A killed run
 //! may leave its temporary sibling `.NAME.tmp-PID`; the next write of `NAME`
-//! removes it.
+//! removes it. [`write_atomic`] fills a file in one go; a file written row by
+//! row goes through the same two steps, `begin` and `finish`, with its
+//! rows in between.
 
 use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// The temporary sibling `.NAME.tmp-PID` a write goes through before the rename.
-pub(crate) fn temp_path(path: &Path) -> PathBuf {
+fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -18,32 +20,80 @@ pub(crate) fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(unique)
 }
 
+/// The directory `path` is in, if it names one.
+fn parent_dir(path: &Path) -> Option<&Path> {
+    path.parent().filter(|d| !d.as_os_str().is_empty())
+}
+
+/// Removes `.NAME.tmp-PID` siblings of `path` whose process no longer runs
+/// (on Linux, checked through /proc; elsewhere only our own PID is spared).
+pub fn remove_stale_temps(path: &Path) {
+    let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else {
+        return;
+    };
+    let dir = match parent_dir(path) {
+        Some(d) => d.to_path_buf(),
+        None => PathBuf::from("."),
+    };
+    let prefix = format!(".{name}.tmp-");
+    let Ok(entries) = fs::read_dir(&dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = file.strip_prefix(&prefix) else {
+            continue;
+        };
+        let Ok(pid) = pid.parse::<u32>() else {
+            continue;
+        };
+        let alive = pid == std::process::id()
+            || (cfg!(target_os = "linux") && Path::new(&format!("/proc/{pid}")).exists());
+        if !alive {
+            let _ = fs::remove_file(e.path());
+        }
+    }
+}
+
+/// First step of a write of `path`: creates its directory, removes stale
+/// temporary siblings left by killed runs, and returns the temporary path
+/// to write to.
+pub(crate) fn begin(path: &Path) -> io::Result<PathBuf> {
+    if let Some(dir) = parent_dir(path) {
+        fs::create_dir_all(dir)?;
+    }
+    remove_stale_temps(path);
+    Ok(temp_path(path))
+}
+
+/// Last step of a write: syncs the written temporary file `f` at `tmp`,
+/// renames it over `path` and syncs the directory, so that the rename itself
+/// is durable.
+pub(crate) fn finish(f: File, tmp: &Path, path: &Path) -> io::Result<()> {
+    f.sync_all()?;
+    drop(f);
+    fs::rename(tmp, path)?;
+    if let Some(dir) = parent_dir(path) {
+        if let Ok(d) = File::open(dir) {
+            let _ = d.sync_all();
+        }
+    }
+    Ok(())
+}
+
 /// Writes `path` atomically with the bytes `fill` writes. On any error the
 /// temporary file is removed and the target is left untouched.
 pub fn write_atomic<F>(path: &Path, fill: F) -> io::Result<()>
 where
     F: FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        fs::create_dir_all(dir)?;
-    }
-    super::stream_out::remove_stale_temps(path);
-    let tmp = temp_path(path);
+    let tmp = begin(path)?;
     let result = (|| {
         let mut w = BufWriter::new(File::create(&tmp)?);
         fill(&mut w)?;
         w.flush()?;
         let f = w.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        drop(f);
-        fs::rename(&tmp, path)?;
-        // Make the rename itself durable.
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            if let Ok(d) = File::open(dir) {
-                let _ = d.sync_all();
-            }
-        }
-        Ok(())
+        finish(f, &tmp, path)
     })();
     if result.is_err() {
         let _ = fs::remove_file(&tmp);

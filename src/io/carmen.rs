@@ -87,25 +87,12 @@ pub fn read_carmen_bytes(
             Err(m) => return Err(err(m)),
         };
         known += 1;
+        let tolerance = opts.reorder_tolerance;
         if let Some(s) = scan {
-            if s.stamp < latest_scan - opts.reorder_tolerance {
-                return Err(err(format!(
-                    "time goes backwards by {:.3} s, more than the {} s tolerance",
-                    latest_scan - s.stamp,
-                    opts.reorder_tolerance
-                )));
-            }
-            latest_scan = latest_scan.max(s.stamp);
+            in_order("time", s.stamp, &mut latest_scan, tolerance).map_err(err)?;
             rec.scans.push(s);
         }
-        if odom.stamp < latest_odom - opts.reorder_tolerance {
-            return Err(err(format!(
-                "odometry time goes backwards by {:.3} s, more than the {} s tolerance",
-                latest_odom - odom.stamp,
-                opts.reorder_tolerance
-            )));
-        }
-        latest_odom = latest_odom.max(odom.stamp);
+        in_order("odometry time", odom.stamp, &mut latest_odom, tolerance).map_err(err)?;
         rec.odom.push(odom);
     }
     if known == 0 {
@@ -116,6 +103,20 @@ pub fn read_carmen_bytes(
     }
     rec.sort_streams();
     Ok(rec)
+}
+
+/// Checks that a stream's `stamp` goes back at most `tolerance` s behind the
+/// `latest` stamp it has seen (the time policy in [`super`]), then advances
+/// `latest`; `what` names the stream's time in the error.
+fn in_order(what: &str, stamp: f64, latest: &mut f64, tolerance: f64) -> Result<(), String> {
+    if stamp < *latest - tolerance {
+        return Err(format!(
+            "{what} goes backwards by {:.3} s, more than the {tolerance} s tolerance",
+            *latest - stamp
+        ));
+    }
+    *latest = latest.max(stamp);
+    Ok(())
 }
 
 fn num(fields: &[&str], i: usize, what: &str) -> Result<f64, String> {

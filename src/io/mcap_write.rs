@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use super::atomic::write_bytes_atomic;
 use super::cdr::CdrWriter;
 use super::mcap_canon::{canonicalize_summary, canonicalize_summary_tail};
-use super::options::TopicConfig;
+use super::options::{ReadOptions, TopicConfig};
 use super::ros_msgs::{
     Header, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, Pose, Quat, RosMsg,
     TfMessage, Time, TransformStamped, Vec3,
@@ -46,26 +46,27 @@ pub struct WriteOptions {
 
 impl Default for WriteOptions {
     fn default() -> Self {
-        let robot = RobotConfig::default();
-        Self {
-            topics: TopicConfig::default(),
-            left_joint: robot.left_joint,
-            right_joint: robot.right_joint,
-            base_frame: "base_link".into(),
-            laser_frame: "laser".into(),
-            odom_frame: "odom".into(),
-            world_frame: "map".into(),
-        }
+        Self::for_robot(&RobotConfig::default())
     }
 }
 
 impl WriteOptions {
     /// Default names with the robot's wheel joint names.
     pub fn for_robot(robot: &RobotConfig) -> Self {
+        Self::read_back_with(&ReadOptions::for_robot(robot))
+    }
+
+    /// The topics and wheel joints `read` looks for, with the default frames:
+    /// a bag written with these options reads back with `read`.
+    fn read_back_with(read: &ReadOptions) -> Self {
         Self {
-            left_joint: robot.left_joint.clone(),
-            right_joint: robot.right_joint.clone(),
-            ..Self::default()
+            topics: read.topics.clone(),
+            left_joint: read.left_joint.clone(),
+            right_joint: read.right_joint.clone(),
+            base_frame: "base_link".into(),
+            laser_frame: "laser".into(),
+            odom_frame: "odom".into(),
+            world_frame: "map".into(),
         }
     }
 }
@@ -223,14 +224,59 @@ fn encode_into<W: Write + Seek>(
         .compression(Some(mcap::Compression::Zstd))
         .compression_threads(0)
         .create(out)?;
-    let t = &opts.topics;
+    let messages = Messages {
+        rec,
+        opts,
+        ref_type: reference_type(rec),
+        velocities: wheel_velocities(&rec.wheels),
+    };
+    let streams = streams(rec, feed, &opts.topics, messages.ref_type);
+    let channel = declare_channels(&mut w, &streams)?;
+    let order = message_order(&streams, rec, feed);
+    let mut seq = [0u32; 6];
+    let mut cdr = CdrWriter::new();
+    for (stamp, s, i) in order {
+        cdr.clear();
+        messages.encode(&mut cdr, feed, s, i, stamp);
+        let k = s as usize;
+        let log_time = (stamp.max(0.0) * 1e9).round() as u64;
+        w.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id: channel[k],
+                sequence: seq[k],
+                log_time,
+                publish_time: log_time,
+            },
+            cdr.bytes(),
+        )?;
+        seq[k] += 1;
+    }
+    w.finish()?;
+    Ok(w.into_inner())
+}
+
+/// One stream of the bag: which, its topic, message type and message count.
+type StreamDecl<'a> = (Stream, &'a str, &'static str, usize);
+
+/// Message type of the reference: odometry when any pose has a heading (or
+/// there is none), points otherwise.
+fn reference_type(rec: &Recording) -> &'static str {
     let reference_has_heading = rec.reference.iter().any(|p| p.has_heading);
-    let ref_type = if reference_has_heading || rec.reference.is_empty() {
+    if reference_has_heading || rec.reference.is_empty() {
         OdometryMsg::TYPE
     } else {
         PointStampedMsg::TYPE
-    };
-    let mut streams: Vec<(Stream, &str, &str, usize)> = Vec::new();
+    }
+}
+
+/// The streams with messages, in the order their channels are declared.
+fn streams<'a>(
+    rec: &Recording,
+    feed: &dyn ScanFeed,
+    t: &'a TopicConfig,
+    ref_type: &'static str,
+) -> Vec<StreamDecl<'a>> {
+    let mut streams: Vec<StreamDecl<'a>> = Vec::new();
     if rec.base_from_laser.is_some() {
         streams.push((Stream::TfStatic, &t.tf_static, TfMessage::TYPE, 1));
     }
@@ -255,9 +301,17 @@ fn encode_into<W: Write + Seek>(
             streams.push((s, topic, ty, n));
         }
     }
-    // Channel ids indexed by Stream.
+    streams
+}
+
+/// Adds each stream's schema and channel; returns the channel ids indexed by
+/// [`Stream`].
+fn declare_channels<W: Write + Seek>(
+    w: &mut mcap::Writer<W>,
+    streams: &[StreamDecl<'_>],
+) -> Result<[u16; 6], mcap::McapError> {
     let mut channel = [0u16; 6];
-    for &(s, topic, ty, _) in &streams {
+    for &(s, topic, ty, _) in streams {
         let text = schema_text(ty).unwrap_or_default();
         let schema = w.add_schema(ty, "ros2msg", text.as_bytes())?;
         let qos = if s == Stream::TfStatic {
@@ -268,14 +322,23 @@ fn encode_into<W: Write + Seek>(
         let meta = BTreeMap::from([("offered_qos_profiles".to_string(), qos.to_string())]);
         channel[s as usize] = w.add_channel(schema, topic, "cdr", &meta)?;
     }
+    Ok(channel)
+}
+
+/// Every message as (stamp, stream, index), merged in stamp order; the
+/// static transform is stamped with the earliest stamp of the recording.
+fn message_order(
+    streams: &[StreamDecl<'_>],
+    rec: &Recording,
+    feed: &dyn ScanFeed,
+) -> Vec<(f64, Stream, usize)> {
     let first_scan = (!feed.is_empty()).then(|| feed.stamp(0));
     let start = match (rec.time_span().map(|(a, _)| a), first_scan) {
         (Some(a), Some(b)) => a.min(b),
         (a, b) => a.or(b).unwrap_or(0.0),
     };
-    // Every message as (stamp, stream, index), merged in stamp order.
     let mut order: Vec<(f64, Stream, usize)> = Vec::new();
-    for &(s, _, _, n) in &streams {
+    for &(s, _, _, n) in streams {
         for i in 0..n {
             let stamp = match s {
                 Stream::TfStatic => start,
@@ -289,33 +352,36 @@ fn encode_into<W: Write + Seek>(
         }
     }
     order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
-    let velocities = wheel_velocities(&rec.wheels);
-    let mut seq = [0u32; 6];
-    let mut cdr = CdrWriter::new();
-    for (stamp, s, i) in order {
-        cdr.clear();
+    order
+}
+
+/// What the messages are made of: the recording, the names, the reference's
+/// message type and the wheel rates of the joint states.
+struct Messages<'a> {
+    rec: &'a Recording,
+    opts: &'a WriteOptions,
+    ref_type: &'static str,
+    velocities: Vec<(f64, f64)>,
+}
+
+impl Messages<'_> {
+    /// Writes message `i` of stream `s`, stamped `stamp`, into `cdr`.
+    fn encode(
+        &self,
+        cdr: &mut CdrWriter,
+        feed: &mut dyn ScanFeed,
+        s: Stream,
+        i: usize,
+        stamp: f64,
+    ) {
+        let (rec, opts) = (self.rec, self.opts);
         let header = |frame: &str| Header {
             stamp: Time::from_seconds(stamp),
             frame_id: frame.to_string(),
         };
         match s {
-            Stream::TfStatic => {
-                let b = rec.base_from_laser.unwrap_or_else(Pose2::identity);
-                TfMessage {
-                    transforms: vec![TransformStamped {
-                        header: header(&opts.base_frame),
-                        child_frame_id: opts.laser_frame.clone(),
-                        translation: Vec3 {
-                            x: b.translation.vector.x,
-                            y: b.translation.vector.y,
-                            z: 0.0,
-                        },
-                        rotation: Quat::from_yaw(geom::heading(&b)),
-                    }],
-                }
-                .write(&mut cdr)
-            }
-            Stream::Reference if ref_type == PointStampedMsg::TYPE => {
+            Stream::TfStatic => tf_static(header(&opts.base_frame), opts, rec).write(cdr),
+            Stream::Reference if self.ref_type == PointStampedMsg::TYPE => {
                 let p = &rec.reference[i].pose.translation.vector;
                 PointStampedMsg {
                     header: header(&opts.world_frame),
@@ -325,73 +391,86 @@ fn encode_into<W: Write + Seek>(
                         z: 0.0,
                     },
                 }
-                .write(&mut cdr)
+                .write(cdr)
             }
             Stream::Reference => {
-                odometry(header(&opts.world_frame), opts, &rec.reference[i]).write(&mut cdr)
+                odometry(header(&opts.world_frame), opts, &rec.reference[i]).write(cdr)
             }
-            Stream::Odom => odometry(header(&opts.odom_frame), opts, &rec.odom[i]).write(&mut cdr),
-            Stream::Imu => {
-                let mut cov = [0.0; 9];
-                cov[0] = -1.0; // no orientation estimate (REP 145)
-                ImuMsg {
-                    header: header(&opts.base_frame),
-                    orientation: Quat::default(),
-                    orientation_covariance: cov,
-                    angular_velocity: Vec3 {
-                        x: 0.0,
-                        y: 0.0,
-                        z: rec.gyro[i].wz,
-                    },
-                    ..Default::default()
-                }
-                .write(&mut cdr)
-            }
+            Stream::Odom => odometry(header(&opts.odom_frame), opts, &rec.odom[i]).write(cdr),
+            Stream::Imu => imu(header(&opts.base_frame), rec.gyro[i].wz).write(cdr),
             Stream::Joints => {
-                let ws = &rec.wheels[i];
-                let (vl, vr) = velocities[i];
-                JointStateMsg {
-                    header: header(""),
-                    name: vec![opts.left_joint.clone(), opts.right_joint.clone()],
-                    position: vec![ws.left, ws.right],
-                    velocity: vec![vl, vr],
-                    effort: Vec::new(),
-                }
-                .write(&mut cdr)
+                joint_state(header(""), opts, &rec.wheels[i], self.velocities[i]).write(cdr)
             }
-            Stream::Scan => {
-                let sc = feed.scan(i);
-                let n = sc.ranges.len();
-                LaserScanMsg {
-                    header: header(&opts.laser_frame),
-                    angle_min: sc.angle_min as f32,
-                    angle_max: sc.beam_angle(n.saturating_sub(1)) as f32,
-                    angle_increment: sc.angle_increment as f32,
-                    time_increment: sc.time_increment as f32,
-                    scan_time: sc.scan_time as f32,
-                    range_min: sc.range_min as f32,
-                    range_max: sc.range_max as f32,
-                    ranges: sc.ranges.clone(),
-                    intensities: Vec::new(),
-                }
-                .write(&mut cdr)
-            }
+            Stream::Scan => laser_scan(header(&opts.laser_frame), feed.scan(i)).write(cdr),
         }
-        let k = s as usize;
-        let log_time = (stamp.max(0.0) * 1e9).round() as u64;
-        w.write_to_known_channel(
-            &mcap::records::MessageHeader {
-                channel_id: channel[k],
-                sequence: seq[k],
-                log_time,
-                publish_time: log_time,
-            },
-            cdr.bytes(),
-        )?;
-        seq[k] += 1;
     }
-    w.finish()?;
-    Ok(w.into_inner())
+}
+
+/// The base-to-laser transform (identity when the recording has none).
+fn tf_static(header: Header, opts: &WriteOptions, rec: &Recording) -> TfMessage {
+    let b = rec.base_from_laser.unwrap_or_else(Pose2::identity);
+    TfMessage {
+        transforms: vec![TransformStamped {
+            header,
+            child_frame_id: opts.laser_frame.clone(),
+            translation: Vec3 {
+                x: b.translation.vector.x,
+                y: b.translation.vector.y,
+                z: 0.0,
+            },
+            rotation: Quat::from_yaw(geom::heading(&b)),
+        }],
+    }
+}
+
+/// A gyro sample: the z rate `wz` (rad/s) only.
+fn imu(header: Header, wz: f64) -> ImuMsg {
+    let mut cov = [0.0; 9];
+    cov[0] = -1.0; // no orientation estimate (REP 145)
+    ImuMsg {
+        header,
+        orientation: Quat::default(),
+        orientation_covariance: cov,
+        angular_velocity: Vec3 {
+            x: 0.0,
+            y: 0.0,
+            z: wz,
+        },
+        ..Default::default()
+    }
+}
+
+/// Wheel angles `ws` with their rates `(left, right)`.
+fn joint_state(
+    header: Header,
+    opts: &WriteOptions,
+    ws: &WheelSample,
+    (vl, vr): (f64, f64),
+) -> JointStateMsg {
+    JointStateMsg {
+        header,
+        name: vec![opts.left_joint.clone(), opts.right_joint.clone()],
+        position: vec![ws.left, ws.right],
+        velocity: vec![vl, vr],
+        effort: Vec::new(),
+    }
+}
+
+/// A laser scan (angles and limits in `f32`, as the message has them).
+fn laser_scan(header: Header, sc: &LaserScan) -> LaserScanMsg {
+    let n = sc.ranges.len();
+    LaserScanMsg {
+        header,
+        angle_min: sc.angle_min as f32,
+        angle_max: sc.beam_angle(n.saturating_sub(1)) as f32,
+        angle_increment: sc.angle_increment as f32,
+        time_increment: sc.time_increment as f32,
+        scan_time: sc.scan_time as f32,
+        range_min: sc.range_min as f32,
+        range_max: sc.range_max as f32,
+        ranges: sc.ranges.clone(),
+        intensities: Vec::new(),
+    }
 }
 
 fn odometry(header: Header, opts: &WriteOptions, p: &StampedPose) -> OdometryMsg {

@@ -9,7 +9,7 @@ use std::fs::{self, File};
 use std::io::{self, BufWriter};
 use std::path::{Path, PathBuf};
 
-use super::atomic::temp_path;
+use super::atomic;
 
 /// A file being written: rows go to its temporary sibling until [`commit`](Self::commit).
 pub struct AtomicWriter {
@@ -22,11 +22,7 @@ impl AtomicWriter {
     /// Starts writing `path` (creating its directory); removes stale
     /// temporary siblings of `path` left by killed runs.
     pub fn create(path: &Path) -> io::Result<Self> {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            fs::create_dir_all(dir)?;
-        }
-        remove_stale_temps(path);
-        let tmp = temp_path(path);
+        let tmp = atomic::begin(path)?;
         // Readable too, so that a writer may patch what it wrote (an MCAP summary).
         let f = fs::OpenOptions::new()
             .read(true)
@@ -51,15 +47,7 @@ impl AtomicWriter {
     pub fn commit(mut self) -> io::Result<()> {
         let w = self.w.take().expect("commit runs once");
         let f = w.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        drop(f);
-        fs::rename(&self.tmp, &self.path)?;
-        if let Some(dir) = self.path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            if let Ok(d) = File::open(dir) {
-                let _ = d.sync_all();
-            }
-        }
-        Ok(())
+        atomic::finish(f, &self.tmp, &self.path)
     }
 }
 
@@ -67,36 +55,6 @@ impl Drop for AtomicWriter {
     fn drop(&mut self) {
         if self.w.take().is_some() {
             let _ = fs::remove_file(&self.tmp);
-        }
-    }
-}
-
-/// Removes `.NAME.tmp-PID` siblings of `path` whose process no longer runs
-/// (on Linux, checked through /proc; elsewhere only our own PID is spared).
-pub fn remove_stale_temps(path: &Path) {
-    let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else {
-        return;
-    };
-    let dir = match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(d) => d.to_path_buf(),
-        None => PathBuf::from("."),
-    };
-    let prefix = format!(".{name}.tmp-");
-    let Ok(entries) = fs::read_dir(&dir) else {
-        return;
-    };
-    for e in entries.flatten() {
-        let file = e.file_name().to_string_lossy().into_owned();
-        let Some(pid) = file.strip_prefix(&prefix) else {
-            continue;
-        };
-        let Ok(pid) = pid.parse::<u32>() else {
-            continue;
-        };
-        let alive = pid == std::process::id()
-            || (cfg!(target_os = "linux") && Path::new(&format!("/proc/{pid}")).exists());
-        if !alive {
-            let _ = fs::remove_file(e.path());
         }
     }
 }

@@ -89,12 +89,56 @@ impl Grid {
     /// nearest segment, if within `max` (m).
     #[inline]
     pub(crate) fn cast(&self, ox: f64, oy: f64, dx: f64, dy: f64, max: f64) -> Option<f64> {
-        // Clip the ray to the grid's box (slab method).
+        let (ix_inv, iy_inv) = (1.0 / dx, 1.0 / dy);
+        let (t_enter, t_exit) = self.clip(ox, oy, ix_inv, iy_inv, max)?;
+        let px = ox + dx * t_enter;
+        let py = oy + dy * t_enter;
+        let mut ix = (((px - self.x0) / self.cell).floor().max(0.0) as usize).min(self.nx - 1);
+        let mut iy = (((py - self.y0) / self.cell).floor().max(0.0) as usize).min(self.ny - 1);
+        let (step_x, step_y) = (dx >= 0.0, dy >= 0.0);
+        // An axis-parallel ray never crosses the other axis' cell borders.
+        let mut tnx = if dx != 0.0 {
+            self.next_border(self.x0, ix, step_x, ox, ix_inv)
+        } else {
+            f64::INFINITY
+        };
+        let mut tny = if dy != 0.0 {
+            self.next_border(self.y0, iy, step_y, oy, iy_inv)
+        } else {
+            f64::INFINITY
+        };
+        let (dtx, dty) = (self.cell * ix_inv.abs(), self.cell * iy_inv.abs());
+        let mut best = f64::INFINITY;
+        loop {
+            best = self.nearest_in_cell(iy * self.nx + ix, ox, oy, dx, dy, best);
+            let t_cell_exit = tnx.min(tny);
+            if best <= t_cell_exit || t_cell_exit >= t_exit {
+                break;
+            }
+            if tnx < tny {
+                if !step_cell(&mut ix, step_x, self.nx) {
+                    break;
+                }
+                tnx += dtx;
+            } else {
+                if !step_cell(&mut iy, step_y, self.ny) {
+                    break;
+                }
+                tny += dty;
+            }
+        }
+        (best <= max).then_some(best)
+    }
+
+    /// The stretch `(t_enter, t_exit)` of the ray from `(ox, oy)` (inverse
+    /// direction `(ix_inv, iy_inv)`) inside the grid's box and within `max`
+    /// (slab method), `None` when it misses.
+    #[inline(always)]
+    fn clip(&self, ox: f64, oy: f64, ix_inv: f64, iy_inv: f64, max: f64) -> Option<(f64, f64)> {
         let (gx1, gy1) = (
             self.x0 + self.nx as f64 * self.cell,
             self.y0 + self.ny as f64 * self.cell,
         );
-        let (ix_inv, iy_inv) = (1.0 / dx, 1.0 / dy);
         let (tx0, tx1) = ((self.x0 - ox) * ix_inv, (gx1 - ox) * ix_inv);
         let (ty0, ty1) = ((self.y0 - oy) * iy_inv, (gy1 - oy) * iy_inv);
         let t_enter = tx0.min(tx1).max(ty0.min(ty1)).max(0.0);
@@ -103,73 +147,53 @@ impl Grid {
         if t_enter > t_exit {
             return None;
         }
-        let px = ox + dx * t_enter;
-        let py = oy + dy * t_enter;
-        let mut ix = (((px - self.x0) / self.cell).floor().max(0.0) as usize).min(self.nx - 1);
-        let mut iy = (((py - self.y0) / self.cell).floor().max(0.0) as usize).min(self.ny - 1);
-        let (step_x, step_y) = (dx >= 0.0, dy >= 0.0);
-        let next_x = |ix: usize| {
-            let bx = self.x0 + (ix + step_x as usize) as f64 * self.cell;
-            (bx - ox) * ix_inv
-        };
-        let next_y = |iy: usize| {
-            let by = self.y0 + (iy + step_y as usize) as f64 * self.cell;
-            (by - oy) * iy_inv
-        };
-        // An axis-parallel ray never crosses the other axis' cell borders.
-        let mut tnx = if dx != 0.0 { next_x(ix) } else { f64::INFINITY };
-        let mut tny = if dy != 0.0 { next_y(iy) } else { f64::INFINITY };
-        let (dtx, dty) = (self.cell * ix_inv.abs(), self.cell * iy_inv.abs());
-        let mut best = f64::INFINITY;
-        loop {
-            let c = iy * self.nx + ix;
-            for &k in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
-                let [sx, sy, ex, ey] = self.segs[k as usize];
-                // o + t d = s + u e  →  t = (w × e) / (d × e), u = (w × d) / (d × e).
-                let den = dx * ey - dy * ex;
-                if den == 0.0 {
-                    continue;
-                }
-                let (wx, wy) = (sx - ox, sy - oy);
-                let t = (wx * ey - wy * ex) / den;
-                let u = (wx * dy - wy * dx) / den;
-                if t >= 0.0 && t < best && (0.0..=1.0).contains(&u) {
-                    best = t;
-                }
+        Some((t_enter, t_exit))
+    }
+
+    /// Ray parameter at which the ray from `o` (inverse direction `inv`
+    /// along one axis) leaves cell `i` of that axis, whose grid starts at
+    /// `start`, going up when `up`.
+    #[inline(always)]
+    fn next_border(&self, start: f64, i: usize, up: bool, o: f64, inv: f64) -> f64 {
+        let b = start + (i + up as usize) as f64 * self.cell;
+        (b - o) * inv
+    }
+
+    /// The smaller of `best` and the ray parameter of the nearest hit, in
+    /// cell `c`, of the ray from `(ox, oy)` along `(dx, dy)`.
+    #[inline(always)]
+    fn nearest_in_cell(&self, c: usize, ox: f64, oy: f64, dx: f64, dy: f64, best: f64) -> f64 {
+        let mut best = best;
+        for &k in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+            let [sx, sy, ex, ey] = self.segs[k as usize];
+            // o + t d = s + u e  →  t = (w × e) / (d × e), u = (w × d) / (d × e).
+            let den = dx * ey - dy * ex;
+            if den == 0.0 {
+                continue;
             }
-            let t_cell_exit = tnx.min(tny);
-            if best <= t_cell_exit || t_cell_exit >= t_exit {
-                break;
-            }
-            if tnx < tny {
-                if step_x {
-                    ix += 1;
-                    if ix >= self.nx {
-                        break;
-                    }
-                } else {
-                    if ix == 0 {
-                        break;
-                    }
-                    ix -= 1;
-                }
-                tnx += dtx;
-            } else {
-                if step_y {
-                    iy += 1;
-                    if iy >= self.ny {
-                        break;
-                    }
-                } else {
-                    if iy == 0 {
-                        break;
-                    }
-                    iy -= 1;
-                }
-                tny += dty;
+            let (wx, wy) = (sx - ox, sy - oy);
+            let t = (wx * ey - wy * ex) / den;
+            let u = (wx * dy - wy * dx) / den;
+            if t >= 0.0 && t < best && (0.0..=1.0).contains(&u) {
+                best = t;
             }
         }
-        (best <= max).then_some(best)
+        best
+    }
+}
+
+/// Moves cell index `i` one cell up (when `up`) or down; false when that
+/// leaves the `n` cells of the axis.
+#[inline(always)]
+fn step_cell(i: &mut usize, up: bool, n: usize) -> bool {
+    if up {
+        *i += 1;
+        *i < n
+    } else if *i == 0 {
+        false
+    } else {
+        *i -= 1;
+        true
     }
 }
 

@@ -75,6 +75,22 @@ fn wall(segs: &mut Vec<[f64; 4]>, a: [f64; 2], b: [f64; 2], left_free: bool, fea
     push(p(s, 0.0), p(len, 0.0));
 }
 
+/// The four walls of the axis-aligned rectangle `lo`–`hi`, counter-clockwise
+/// from `lo` (bottom, right, top, left side), each with its features; the
+/// free side is inside the rectangle when `inside_free`, outside otherwise.
+fn rectangle_walls(
+    segs: &mut Vec<[f64; 4]>,
+    lo: [f64; 2],
+    hi: [f64; 2],
+    inside_free: bool,
+    feats: [&[Feature]; 4],
+) {
+    let corners = [lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]];
+    for (k, f) in feats.iter().enumerate() {
+        wall(segs, corners[k], corners[(k + 1) % 4], inside_free, f);
+    }
+}
+
 /// A regular polygon (people, plants: 8 sides) of radius `r` at `c`.
 fn ngon(segs: &mut Vec<[f64; 4]>, c: [f64; 2], r: f64, sides: usize) {
     let v = |i: usize| {
@@ -95,139 +111,83 @@ fn rect(segs: &mut Vec<[f64; 4]>, x0: f64, y0: f64, x1: f64, y1: f64) {
     segs.push([x0, y1, x0, y0]);
 }
 
+/// Features of the corridor ring's outer walls (bottom, right, top, left):
+/// door niches, cabinets and side rooms.
+const CORRIDOR_OUTER: [&[Feature]; 4] = [
+    &[
+        bump(5.0, 1.2, -0.3),
+        bump(9.5, 0.6, 0.2),
+        room(15.0, 3.0, 2.5, 1.0),
+        bump(21.0, 1.0, -0.25),
+        bump(25.5, 2.0, 0.15),
+    ],
+    &[
+        bump(4.5, 1.0, -0.3),
+        room(10.0, 4.0, 3.0, 1.2),
+        bump(15.5, 0.5, 0.2),
+    ],
+    &[
+        bump(4.0, 0.8, 0.2),
+        bump(8.0, 1.2, -0.3),
+        bump(12.5, 1.2, -0.3),
+        room(20.0, 3.5, 2.5, 1.0),
+        bump(26.0, 1.5, 0.1),
+    ],
+    &[
+        bump(5.0, 2.5, -0.4),
+        bump(11.0, 0.6, 0.2),
+        bump(15.0, 1.0, -0.3),
+    ],
+];
+
+/// Features of the corridor ring's inner block (bottom, right, top, left).
+const CORRIDOR_INNER: [&[Feature]; 4] = [
+    &[
+        bump(3.5, 1.0, -0.3),
+        bump(8.0, 0.5, 0.2),
+        bump(14.0, 1.2, -0.3),
+        bump(19.5, 3.0, 0.12),
+    ],
+    &[
+        bump(3.0, 1.0, -0.3),
+        bump(8.5, 0.8, 0.15),
+        bump(12.0, 1.5, -0.35),
+    ],
+    &[
+        bump(4.0, 1.0, -0.3),
+        bump(10.0, 2.0, 0.12),
+        bump(16.0, 1.0, -0.3),
+        bump(21.0, 0.5, 0.2),
+    ],
+    &[bump(4.0, 0.6, 0.2), bump(9.5, 1.4, -0.3)],
+];
+
 /// A 30 m × 20 m ring of 2.5 m wide corridors around a 25 m × 15 m block,
 /// with door niches, cabinets and side rooms so no stretch is featureless.
 /// The corridor centre line is the rectangle (1.25, 1.25)–(28.75, 18.75).
 fn corridor_loop() -> Vec<[f64; 4]> {
     let mut s = Vec::new();
-    // Outer walls, counter-clockwise: the corridor is on the left.
-    wall(
-        &mut s,
-        [0.0, 0.0],
-        [30.0, 0.0],
-        true,
-        &[
-            bump(5.0, 1.2, -0.3),
-            bump(9.5, 0.6, 0.2),
-            room(15.0, 3.0, 2.5, 1.0),
-            bump(21.0, 1.0, -0.25),
-            bump(25.5, 2.0, 0.15),
-        ],
-    );
-    wall(
-        &mut s,
-        [30.0, 0.0],
-        [30.0, 20.0],
-        true,
-        &[
-            bump(4.5, 1.0, -0.3),
-            room(10.0, 4.0, 3.0, 1.2),
-            bump(15.5, 0.5, 0.2),
-        ],
-    );
-    wall(
-        &mut s,
-        [30.0, 20.0],
-        [0.0, 20.0],
-        true,
-        &[
-            bump(4.0, 0.8, 0.2),
-            bump(8.0, 1.2, -0.3),
-            bump(12.5, 1.2, -0.3),
-            room(20.0, 3.5, 2.5, 1.0),
-            bump(26.0, 1.5, 0.1),
-        ],
-    );
-    wall(
-        &mut s,
-        [0.0, 20.0],
-        [0.0, 0.0],
-        true,
-        &[
-            bump(5.0, 2.5, -0.4),
-            bump(11.0, 0.6, 0.2),
-            bump(15.0, 1.0, -0.3),
-        ],
-    );
-    // Inner block, counter-clockwise: the corridor is on the right.
-    wall(
-        &mut s,
-        [2.5, 2.5],
-        [27.5, 2.5],
-        false,
-        &[
-            bump(3.5, 1.0, -0.3),
-            bump(8.0, 0.5, 0.2),
-            bump(14.0, 1.2, -0.3),
-            bump(19.5, 3.0, 0.12),
-        ],
-    );
-    wall(
-        &mut s,
-        [27.5, 2.5],
-        [27.5, 17.5],
-        false,
-        &[
-            bump(3.0, 1.0, -0.3),
-            bump(8.5, 0.8, 0.15),
-            bump(12.0, 1.5, -0.35),
-        ],
-    );
-    wall(
-        &mut s,
-        [27.5, 17.5],
-        [2.5, 17.5],
-        false,
-        &[
-            bump(4.0, 1.0, -0.3),
-            bump(10.0, 2.0, 0.12),
-            bump(16.0, 1.0, -0.3),
-            bump(21.0, 0.5, 0.2),
-        ],
-    );
-    wall(
-        &mut s,
-        [2.5, 17.5],
-        [2.5, 2.5],
-        false,
-        &[bump(4.0, 0.6, 0.2), bump(9.5, 1.4, -0.3)],
-    );
+    // Outer walls: the corridor is inside them.
+    rectangle_walls(&mut s, [0.0, 0.0], [30.0, 20.0], true, CORRIDOR_OUTER);
+    // Inner block: the corridor is outside it.
+    rectangle_walls(&mut s, [2.5, 2.5], [27.5, 17.5], false, CORRIDOR_INNER);
     s
 }
+
+/// Features of the hall's walls (bottom, right, top, left): door niches.
+const HALL_WALLS: [&[Feature]; 4] = [
+    &[bump(8.0, 1.2, -0.3), bump(20.0, 1.6, -0.3)],
+    &[bump(14.0, 1.5, -0.3)],
+    &[bump(6.0, 2.0, -0.3), bump(16.0, 1.2, -0.3)],
+    &[bump(4.0, 1.2, -0.3)],
+];
 
 /// A 30 m × 18 m hall: two rows of 0.6 m pillars (x = 5, 10, 15; y = 6, 12)
 /// in the left part, an open right part (x > 18), standing people (0.25 m
 /// octagons), a bench and a desk.
 fn hall() -> Vec<[f64; 4]> {
     let mut s = Vec::new();
-    wall(
-        &mut s,
-        [0.0, 0.0],
-        [30.0, 0.0],
-        true,
-        &[bump(8.0, 1.2, -0.3), bump(20.0, 1.6, -0.3)],
-    );
-    wall(
-        &mut s,
-        [30.0, 0.0],
-        [30.0, 18.0],
-        true,
-        &[bump(14.0, 1.5, -0.3)],
-    );
-    wall(
-        &mut s,
-        [30.0, 18.0],
-        [0.0, 18.0],
-        true,
-        &[bump(6.0, 2.0, -0.3), bump(16.0, 1.2, -0.3)],
-    );
-    wall(
-        &mut s,
-        [0.0, 18.0],
-        [0.0, 0.0],
-        true,
-        &[bump(4.0, 1.2, -0.3)],
-    );
+    rectangle_walls(&mut s, [0.0, 0.0], [30.0, 18.0], true, HALL_WALLS);
     for x in [5.0, 10.0, 15.0] {
         for y in [6.0, 12.0] {
             rect(&mut s, x - 0.3, y - 0.3, x + 0.3, y + 0.3);
@@ -241,27 +201,17 @@ fn hall() -> Vec<[f64; 4]> {
     s
 }
 
+/// Features of the square room's walls (bottom, right, top, left): door
+/// niches in the bottom and top ones.
+const SQUARE_ROOM_WALLS: [&[Feature]; 4] =
+    [&[bump(3.0, 1.0, -0.3)], &[], &[bump(5.0, 1.0, -0.3)], &[]];
+
 /// A 10 m × 10 m room with a door niche and furniture kept ≥ 0.9 m away from
 /// the square path (2, 2)–(8, 8): a centre table, shelves, a cabinet, a chair
 /// and a plant.
 fn square_room() -> Vec<[f64; 4]> {
     let mut s = Vec::new();
-    wall(
-        &mut s,
-        [0.0, 0.0],
-        [10.0, 0.0],
-        true,
-        &[bump(3.0, 1.0, -0.3)],
-    );
-    wall(&mut s, [10.0, 0.0], [10.0, 10.0], true, &[]);
-    wall(
-        &mut s,
-        [10.0, 10.0],
-        [0.0, 10.0],
-        true,
-        &[bump(5.0, 1.0, -0.3)],
-    );
-    wall(&mut s, [0.0, 10.0], [0.0, 0.0], true, &[]);
+    rectangle_walls(&mut s, [0.0, 0.0], [10.0, 10.0], true, SQUARE_ROOM_WALLS);
     rect(&mut s, 4.4, 4.6, 5.6, 5.4); // table
     rect(&mut s, 0.2, 9.4, 2.5, 9.8); // shelf
     rect(&mut s, 9.4, 3.0, 9.8, 6.0); // shelf

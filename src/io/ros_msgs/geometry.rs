@@ -1,7 +1,7 @@
 //! Poses over time: `nav_msgs/Odometry`, `geometry_msgs` PoseStamped,
 //! PointStamped and TransformStamped, `tf2_msgs/TFMessage`.
 
-use super::{Header, Pose, Quat, RosMsg, Vec3};
+use super::{fields_in_order, Field, Header, Pose, Quat, RosMsg, Vec3};
 use crate::io::cdr::{CdrError, CdrReader, CdrWriter};
 
 /// `nav_msgs/msg/Odometry`.
@@ -40,27 +40,15 @@ impl Default for OdometryMsg {
 impl RosMsg for OdometryMsg {
     const TYPE: &'static str = "nav_msgs/msg/Odometry";
 
-    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            header: Header::read(r)?,
-            child_frame_id: r.string()?.to_string(),
-            pose: Pose::read(r)?,
-            pose_covariance: r.f64_array()?,
-            linear: Vec3::read(r)?,
-            angular: Vec3::read(r)?,
-            twist_covariance: r.f64_array()?,
-        })
-    }
-
-    fn write(&self, w: &mut CdrWriter) {
-        self.header.write(w);
-        w.string(&self.child_frame_id);
-        self.pose.write(w);
-        w.f64_array(&self.pose_covariance);
-        self.linear.write(w);
-        self.angular.write(w);
-        w.f64_array(&self.twist_covariance);
-    }
+    fields_in_order!(
+        header,
+        child_frame_id,
+        pose,
+        pose_covariance,
+        linear,
+        angular,
+        twist_covariance
+    );
 }
 
 /// `geometry_msgs/msg/PoseStamped`.
@@ -75,17 +63,7 @@ pub struct PoseStampedMsg {
 impl RosMsg for PoseStampedMsg {
     const TYPE: &'static str = "geometry_msgs/msg/PoseStamped";
 
-    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            header: Header::read(r)?,
-            pose: Pose::read(r)?,
-        })
-    }
-
-    fn write(&self, w: &mut CdrWriter) {
-        self.header.write(w);
-        self.pose.write(w);
-    }
+    fields_in_order!(header, pose);
 }
 
 /// `geometry_msgs/msg/PointStamped`.
@@ -100,17 +78,7 @@ pub struct PointStampedMsg {
 impl RosMsg for PointStampedMsg {
     const TYPE: &'static str = "geometry_msgs/msg/PointStamped";
 
-    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            header: Header::read(r)?,
-            point: Vec3::read(r)?,
-        })
-    }
-
-    fn write(&self, w: &mut CdrWriter) {
-        self.header.write(w);
-        self.point.write(w);
-    }
+    fields_in_order!(header, point);
 }
 
 /// `geometry_msgs/TransformStamped`: `header.frame_id` from `child_frame_id`.
@@ -124,6 +92,10 @@ pub struct TransformStamped {
     pub translation: Vec3,
     /// Rotation.
     pub rotation: Quat,
+}
+
+impl Field for TransformStamped {
+    fields_in_order!(header, child_frame_id, translation, rotation);
 }
 
 /// `tf2_msgs/msg/TFMessage`.
@@ -141,12 +113,7 @@ impl RosMsg for TfMessage {
         let n = r.seq_len(72)?;
         let mut transforms = Vec::with_capacity(n);
         for _ in 0..n {
-            transforms.push(TransformStamped {
-                header: Header::read(r)?,
-                child_frame_id: r.string()?.to_string(),
-                translation: Vec3::read(r)?,
-                rotation: Quat::read(r)?,
-            });
+            transforms.push(TransformStamped::read(r)?);
         }
         Ok(Self { transforms })
     }
@@ -154,10 +121,7 @@ impl RosMsg for TfMessage {
     fn write(&self, w: &mut CdrWriter) {
         w.seq_len(self.transforms.len());
         for t in &self.transforms {
-            t.header.write(w);
-            w.string(&t.child_frame_id);
-            t.translation.write(w);
-            t.rotation.write(w);
+            t.write(w);
         }
     }
 }

@@ -36,6 +36,69 @@ pub trait RosMsg: Sized {
     }
 }
 
+/// A part of a message with a fixed CDR layout (primitives, arrays and the
+/// nested types), read and written where it stands among the fields.
+trait Field: Sized {
+    /// Reads the value.
+    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError>;
+    /// Writes the value.
+    fn write(&self, w: &mut CdrWriter);
+}
+
+/// The `read` and `write` of a struct encoded as the listed fields one after
+/// the other (schema order), each with its own [`Field`] codec.
+macro_rules! fields_in_order {
+    ($($field:ident),+ $(,)?) => {
+        fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
+            Ok(Self {
+                $($field: Field::read(r)?,)+
+            })
+        }
+
+        fn write(&self, w: &mut CdrWriter) {
+            $(Field::write(&self.$field, w);)+
+        }
+    };
+}
+use fields_in_order;
+
+/// [`Field`] for the primitives, each read and written by the CDR method
+/// of its name.
+macro_rules! primitive_fields {
+    ($($t:ident),+) => {
+        $(
+            impl Field for $t {
+                fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
+                    r.$t()
+                }
+                fn write(&self, w: &mut CdrWriter) {
+                    w.$t(*self)
+                }
+            }
+        )+
+    };
+}
+primitive_fields!(i32, u32, f64);
+
+impl Field for String {
+    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
+        Ok(r.string()?.to_string())
+    }
+    fn write(&self, w: &mut CdrWriter) {
+        w.string(self)
+    }
+}
+
+/// Covariance matrices: fixed-size, no length prefix.
+impl<const N: usize> Field for [f64; N] {
+    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
+        r.f64_array()
+    }
+    fn write(&self, w: &mut CdrWriter) {
+        w.f64_array(self)
+    }
+}
+
 /// `builtin_interfaces/Time`: seconds and nanoseconds.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Time {
@@ -69,18 +132,10 @@ impl Time {
     pub fn is_zero(&self) -> bool {
         self.sec == 0 && self.nanosec == 0
     }
+}
 
-    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            sec: r.i32()?,
-            nanosec: r.u32()?,
-        })
-    }
-
-    fn write(&self, w: &mut CdrWriter) {
-        w.i32(self.sec);
-        w.u32(self.nanosec);
-    }
+impl Field for Time {
+    fields_in_order!(sec, nanosec);
 }
 
 /// `std_msgs/Header`: stamp and frame.
@@ -92,18 +147,8 @@ pub struct Header {
     pub frame_id: String,
 }
 
-impl Header {
-    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            stamp: Time::read(r)?,
-            frame_id: r.string()?.to_string(),
-        })
-    }
-
-    fn write(&self, w: &mut CdrWriter) {
-        self.stamp.write(w);
-        w.string(&self.frame_id);
-    }
+impl Field for Header {
+    fields_in_order!(stamp, frame_id);
 }
 
 /// `geometry_msgs/Vector3` and `geometry_msgs/Point` (same layout).
@@ -117,20 +162,8 @@ pub struct Vec3 {
     pub z: f64,
 }
 
-impl Vec3 {
-    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            x: r.f64()?,
-            y: r.f64()?,
-            z: r.f64()?,
-        })
-    }
-
-    fn write(&self, w: &mut CdrWriter) {
-        w.f64(self.x);
-        w.f64(self.y);
-        w.f64(self.z);
-    }
+impl Field for Vec3 {
+    fields_in_order!(x, y, z);
 }
 
 /// `geometry_msgs/Quaternion`.
@@ -168,22 +201,10 @@ impl Quat {
         let Self { x, y, z, w } = *self;
         (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
     }
+}
 
-    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            x: r.f64()?,
-            y: r.f64()?,
-            z: r.f64()?,
-            w: r.f64()?,
-        })
-    }
-
-    fn write(&self, w: &mut CdrWriter) {
-        w.f64(self.x);
-        w.f64(self.y);
-        w.f64(self.z);
-        w.f64(self.w);
-    }
+impl Field for Quat {
+    fields_in_order!(x, y, z, w);
 }
 
 /// `geometry_msgs/Pose`.
@@ -195,18 +216,8 @@ pub struct Pose {
     pub orientation: Quat,
 }
 
-impl Pose {
-    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            position: Vec3::read(r)?,
-            orientation: Quat::read(r)?,
-        })
-    }
-
-    fn write(&self, w: &mut CdrWriter) {
-        self.position.write(w);
-        self.orientation.write(w);
-    }
+impl Field for Pose {
+    fields_in_order!(position, orientation);
 }
 
 #[cfg(test)]

@@ -1,6 +1,6 @@
 //! `sensor_msgs`: LaserScan, JointState, Imu.
 
-use super::{Header, Quat, RosMsg, Vec3};
+use super::{fields_in_order, Field, Header, Quat, RosMsg, Vec3};
 use crate::io::cdr::{CdrError, CdrReader, CdrWriter};
 
 /// `sensor_msgs/msg/LaserScan`.
@@ -135,25 +135,13 @@ pub struct ImuMsg {
 impl RosMsg for ImuMsg {
     const TYPE: &'static str = "sensor_msgs/msg/Imu";
 
-    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            header: Header::read(r)?,
-            orientation: Quat::read(r)?,
-            orientation_covariance: r.f64_array()?,
-            angular_velocity: Vec3::read(r)?,
-            angular_velocity_covariance: r.f64_array()?,
-            linear_acceleration: Vec3::read(r)?,
-            linear_acceleration_covariance: r.f64_array()?,
-        })
-    }
-
-    fn write(&self, w: &mut CdrWriter) {
-        self.header.write(w);
-        self.orientation.write(w);
-        w.f64_array(&self.orientation_covariance);
-        self.angular_velocity.write(w);
-        w.f64_array(&self.angular_velocity_covariance);
-        self.linear_acceleration.write(w);
-        w.f64_array(&self.linear_acceleration_covariance);
-    }
+    fields_in_order!(
+        header,
+        orientation,
+        orientation_covariance,
+        angular_velocity,
+        angular_velocity_covariance,
+        linear_acceleration,
+        linear_acceleration_covariance
+    );
 }

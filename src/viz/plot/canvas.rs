@@ -160,6 +160,14 @@ pub(crate) fn palette(i: usize) -> RGBColor {
     RGBColor(r, g, b)
 }
 
+/// A series' own sRGB colour, else the `i`-th palette colour.
+pub(crate) fn own_or_palette(color: Option<[u8; 3]>, i: usize) -> RGBColor {
+    match color {
+        Some([r, g, b]) => RGBColor(r, g, b),
+        None => palette(i),
+    }
+}
+
 /// One legend entry: colour, whether dashed, whether drawn as a box (bars).
 pub(crate) struct LegendEntry<'a> {
     pub name: &'a str,

@@ -3,18 +3,20 @@
 //! particle count (Fig. 5), error over time.
 
 use super::canvas::{
-    draw_legend, legend_width, padded_range, palette, plot_err, render, tick_formatter,
-    LegendEntry, Rgb, FAMILY,
+    draw_legend, legend_width, own_or_palette, padded_range, render, tick_formatter, LegendEntry,
+    Rgb,
 };
+use super::frame::{axes, draw_curve, draw_mesh, frame};
 use crate::viz::VizError;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
 
 /// One named curve. Non-finite points break the line instead of being drawn.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
-    /// Legend name (series with the same name in several panels share one
-    /// legend entry).
+    /// Legend name (in a line chart, series with the same name in several
+    /// panels share one legend entry).
     pub name: String,
     /// `[x, y]` points in drawing order.
     pub points: Vec<[f64; 2]>,
@@ -107,95 +109,30 @@ fn series_colors(chart: &LineChart) -> Vec<(String, RGBColor, bool)> {
         if named.iter().any(|(n, _, _)| *n == s.name) {
             continue;
         }
-        let c = match s.color {
-            Some([r, g, b]) => RGBColor(r, g, b),
-            None => palette(named.len()),
-        };
-        named.push((s.name.clone(), c, s.dashed));
+        named.push((
+            s.name.clone(),
+            own_or_palette(s.color, named.len()),
+            s.dashed,
+        ));
     }
     named
-}
-
-/// Runs of consecutive finite points.
-fn finite_runs(points: &[[f64; 2]]) -> Vec<Vec<(f64, f64)>> {
-    let mut runs = Vec::new();
-    let mut cur = Vec::new();
-    for p in points {
-        if p[0].is_finite() && p[1].is_finite() {
-            cur.push((p[0], p[1]));
-        } else if !cur.is_empty() {
-            runs.push(std::mem::take(&mut cur));
-        }
-    }
-    if !cur.is_empty() {
-        runs.push(cur);
-    }
-    runs
 }
 
 /// Draws the chart into an RGB image.
 pub fn render_line_chart(chart: &LineChart) -> Result<Rgb, VizError> {
     let all = || chart.panels.iter().flat_map(|p| &p.series);
-    let (xlo, xhi) = padded_range(all().flat_map(|s| s.points.iter().map(|p| p[0])), 0.0)
+    let x = padded_range(all().flat_map(|s| s.points.iter().map(|p| p[0])), 0.0)
         .ok_or_else(|| VizError::Input(format!("{}: no finite points", chart.title)))?;
     let colors = series_colors(chart);
-    let color_of = |name: &str| {
-        colors
-            .iter()
-            .find(|(n, _, _)| n == name)
-            .map(|(_, c, _)| *c)
-            .unwrap_or(BLACK)
-    };
     let names: Vec<&str> = colors.iter().map(|(n, _, _)| n.as_str()).collect();
     let legend_w = legend_width(&names);
     render(chart.size, |root| {
-        let body = root
-            .titled(&chart.title, (FAMILY, 24).into_font())
-            .map_err(plot_err)?;
-        let (w, _) = body.dim_in_pixel();
-        let (plots, legend) = body.split_horizontally(w.saturating_sub(legend_w));
-        let areas = plots.split_evenly((chart.panels.len(), 1));
+        let f = frame(root, &chart.title, legend_w)?;
+        let areas = f.plots.split_evenly((chart.panels.len(), 1));
         let n = chart.panels.len();
         for (k, (panel, area)) in chart.panels.iter().zip(&areas).enumerate() {
-            let last = k + 1 == n;
-            let ys = panel
-                .series
-                .iter()
-                .flat_map(|s| s.points.iter().filter(|p| p[0].is_finite()).map(|p| p[1]));
-            let (ylo, yhi) = padded_range(ys, 0.06).unwrap_or((0.0, 1.0));
-            let mut c = ChartBuilder::on(area)
-                .margin(12)
-                .x_label_area_size(if last { 55 } else { 30 })
-                .y_label_area_size(95)
-                .build_cartesian_2d(xlo..xhi, ylo..yhi)
-                .map_err(plot_err)?;
-            let fx = tick_formatter(xlo, xhi);
-            let fy = tick_formatter(ylo, yhi);
-            c.configure_mesh()
-                .x_desc(if last { chart.x_label.as_str() } else { "" })
-                .y_desc(panel.y_label.as_str())
-                .x_label_formatter(&fx)
-                .y_label_formatter(&fy)
-                .x_labels(10)
-                .y_labels(6)
-                .label_style((FAMILY, 15))
-                .axis_desc_style((FAMILY, 17))
-                .light_line_style(RGBColor(238, 238, 238))
-                .bold_line_style(RGBColor(215, 215, 215))
-                .draw()
-                .map_err(plot_err)?;
-            for s in &panel.series {
-                let style = color_of(&s.name).stroke_width(2);
-                for run in finite_runs(&s.points) {
-                    if s.dashed {
-                        c.draw_series(DashedLineSeries::new(run, 10, 6, style))
-                            .map_err(plot_err)?;
-                    } else {
-                        c.draw_series(LineSeries::new(run, style))
-                            .map_err(plot_err)?;
-                    }
-                }
-            }
+            let x_label = (k + 1 == n).then_some(chart.x_label.as_str());
+            draw_panel(area, panel, x, x_label, &colors)?;
         }
         let entries: Vec<LegendEntry> = colors
             .iter()
@@ -206,8 +143,45 @@ pub fn render_line_chart(chart: &LineChart) -> Result<Rgb, VizError> {
                 boxed: false,
             })
             .collect();
-        draw_legend(&legend, &entries, 30)
+        draw_legend(&f.legend, &entries, 30)
     })
+}
+
+/// Draws one panel over the x range `(xlo, xhi)`; the bottom one has the
+/// x-axis label `x_label` (and room for it).
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    panel: &LinePanel,
+    (xlo, xhi): (f64, f64),
+    x_label: Option<&str>,
+    colors: &[(String, RGBColor, bool)],
+) -> Result<(), VizError> {
+    let ys = panel
+        .series
+        .iter()
+        .flat_map(|s| s.points.iter().filter(|p| p[0].is_finite()).map(|p| p[1]));
+    let (ylo, yhi) = padded_range(ys, 0.06).unwrap_or((0.0, 1.0));
+    let x_area = if x_label.is_some() { 55 } else { 30 };
+    let mut c = axes(area, 12, (x_area, 95), xlo..xhi, ylo..yhi)?;
+    let fx = tick_formatter(xlo, xhi);
+    let fy = tick_formatter(ylo, yhi);
+    let mut mesh = c.configure_mesh();
+    mesh.x_desc(x_label.unwrap_or(""))
+        .y_desc(panel.y_label.as_str())
+        .x_label_formatter(&fx)
+        .y_label_formatter(&fy)
+        .x_labels(10)
+        .y_labels(6);
+    draw_mesh(mesh)?;
+    for s in &panel.series {
+        let color = colors
+            .iter()
+            .find(|(n, _, _)| *n == s.name)
+            .map(|(_, c, _)| *c)
+            .unwrap_or(BLACK);
+        draw_curve(&mut c, &s.points, s.dashed, color.stroke_width(2))?;
+    }
+    Ok(())
 }
 
 /// Draws the chart and writes it as PNG to `path` (atomically).

@@ -6,6 +6,7 @@
 
 mod bars;
 mod canvas;
+mod frame;
 mod line;
 mod trajectory;
 

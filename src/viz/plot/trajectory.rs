@@ -3,49 +3,19 @@
 //! paper's Fig. 7). Each path's start is marked with a dot.
 
 use super::canvas::{
-    draw_legend, legend_width, padded_range, palette, plot_err, render, tick_formatter,
-    LegendEntry, Rgb, FAMILY,
+    draw_legend, legend_width, own_or_palette, padded_range, plot_err, render, tick_formatter,
+    LegendEntry, Rgb,
 };
+use super::frame::{axes, draw_curve, draw_mesh, frame, Chart};
+use super::line::Series;
 use crate::viz::VizError;
 use plotters::prelude::*;
 use std::path::Path;
 
-/// One named path of `[x, y]` positions (m, world frame).
-#[derive(Clone, Debug, PartialEq)]
-pub struct PathSeries {
-    /// Legend name.
-    pub name: String,
-    /// Positions (m) in time order; non-finite ones break the line.
-    pub xy: Vec<[f64; 2]>,
-    /// sRGB colour; `None` takes the palette.
-    pub color: Option<[u8; 3]>,
-    /// Dashed instead of solid.
-    pub dashed: bool,
-}
-
-impl PathSeries {
-    /// A solid path with a palette colour.
-    pub fn new(name: impl Into<String>, xy: Vec<[f64; 2]>) -> Self {
-        PathSeries {
-            name: name.into(),
-            xy,
-            color: None,
-            dashed: false,
-        }
-    }
-
-    /// With a fixed colour.
-    pub fn color(mut self, rgb: [u8; 3]) -> Self {
-        self.color = Some(rgb);
-        self
-    }
-
-    /// Drawn dashed.
-    pub fn dashed(mut self) -> Self {
-        self.dashed = true;
-        self
-    }
-}
+/// One named path: a [`Series`] of `[x, y]` positions (m, world frame) in
+/// time order; non-finite ones break the line. Each path has its own legend
+/// entry.
+pub type PathSeries = Series;
 
 /// An x–y figure of several paths.
 #[derive(Clone, Debug, PartialEq)]
@@ -91,7 +61,7 @@ fn equal_aspect(x: (f64, f64), y: (f64, f64), w: u32, h: u32) -> ((f64, f64), (f
 
 /// Draws the trajectories into an RGB image.
 pub fn render_trajectory_plot(plot: &TrajectoryPlot) -> Result<Rgb, VizError> {
-    let pts = || plot.paths.iter().flat_map(|p| p.xy.iter());
+    let pts = || plot.paths.iter().flat_map(|p| p.points.iter());
     let x = padded_range(pts().filter(|p| p[1].is_finite()).map(|p| p[0]), 0.05);
     let y = padded_range(pts().filter(|p| p[0].is_finite()).map(|p| p[1]), 0.05);
     let (Some(x), Some(y)) = (x, y) else {
@@ -101,86 +71,70 @@ pub fn render_trajectory_plot(plot: &TrajectoryPlot) -> Result<Rgb, VizError> {
         .paths
         .iter()
         .enumerate()
-        .map(|(i, p)| match p.color {
-            Some([r, g, b]) => RGBColor(r, g, b),
-            None => palette(i),
-        })
+        .map(|(i, p)| own_or_palette(p.color, i))
         .collect();
     let names: Vec<&str> = plot.paths.iter().map(|p| p.name.as_str()).collect();
     let legend_w = legend_width(&names);
     render(plot.size, |root| {
-        let body = root
-            .titled(&plot.title, (FAMILY, 24).into_font())
-            .map_err(plot_err)?;
-        let (w, h) = body.dim_in_pixel();
-        let (area, legend) = body.split_horizontally(w.saturating_sub(legend_w));
+        let f = frame(root, &plot.title, legend_w)?;
+        let (w, h) = f.size;
         let pw = w.saturating_sub(legend_w + 2 * MARGIN + Y_AREA);
         let ph = h.saturating_sub(2 * MARGIN + X_AREA);
         let ((xlo, xhi), (ylo, yhi)) = equal_aspect(x, y, pw, ph);
-        let mut c = ChartBuilder::on(&area)
-            .margin(MARGIN)
-            .x_label_area_size(X_AREA)
-            .y_label_area_size(Y_AREA)
-            .build_cartesian_2d(xlo..xhi, ylo..yhi)
-            .map_err(plot_err)?;
+        let mut c = axes(&f.plots, MARGIN, (X_AREA, Y_AREA), xlo..xhi, ylo..yhi)?;
         let fx = tick_formatter(xlo, xhi);
         let fy = tick_formatter(ylo, yhi);
-        c.configure_mesh()
-            .x_desc("x (m)")
+        let mut mesh = c.configure_mesh();
+        mesh.x_desc("x (m)")
             .y_desc("y (m)")
             .x_label_formatter(&fx)
-            .y_label_formatter(&fy)
-            .label_style((FAMILY, 15))
-            .axis_desc_style((FAMILY, 17))
-            .light_line_style(RGBColor(238, 238, 238))
-            .bold_line_style(RGBColor(215, 215, 215))
-            .draw()
-            .map_err(plot_err)?;
+            .y_label_formatter(&fy);
+        draw_mesh(mesh)?;
         for (p, &color) in plot.paths.iter().zip(&colors) {
-            let style = color.stroke_width(2);
-            let mut first = None;
-            let mut run = Vec::new();
-            for q in p.xy.iter().chain(std::iter::once(&[f64::NAN, f64::NAN])) {
-                if q[0].is_finite() && q[1].is_finite() {
-                    first.get_or_insert((q[0], q[1]));
-                    run.push((q[0], q[1]));
-                    continue;
-                }
-                let r = std::mem::take(&mut run);
-                if r.is_empty() {
-                    continue;
-                }
-                if p.dashed {
-                    c.draw_series(DashedLineSeries::new(r, 10, 6, style))
-                        .map_err(plot_err)?;
-                } else {
-                    c.draw_series(LineSeries::new(r, style)).map_err(plot_err)?;
-                }
-            }
-            if let Some(s) = first {
-                c.draw_series([Circle::new(s, 5, color.filled())])
-                    .map_err(plot_err)?;
-            }
+            draw_path(&mut c, p, color)?;
         }
-        let mut entries: Vec<LegendEntry> = plot
-            .paths
-            .iter()
-            .zip(&colors)
-            .map(|(p, c)| LegendEntry {
-                name: &p.name,
-                color: *c,
-                dashed: p.dashed,
-                boxed: false,
-            })
-            .collect();
-        entries.push(LegendEntry {
-            name: "● start",
-            color: WHITE,
-            dashed: false,
-            boxed: true,
-        });
-        draw_legend(&legend, &entries, 30)
+        draw_legend(&f.legend, &legend_entries(plot, &colors), 30)
     })
+}
+
+/// Draws path `p` in `color` and marks its first finite position with a dot.
+fn draw_path<DB: DrawingBackend>(
+    c: &mut Chart<'_, DB>,
+    p: &PathSeries,
+    color: RGBColor,
+) -> Result<(), VizError> {
+    draw_curve(c, &p.points, p.dashed, color.stroke_width(2))?;
+    let first = p
+        .points
+        .iter()
+        .find(|q| q[0].is_finite() && q[1].is_finite());
+    if let Some(s) = first {
+        c.draw_series([Circle::new((s[0], s[1]), 5, color.filled())])
+            .map_err(plot_err)?;
+    }
+    Ok(())
+}
+
+/// One legend entry per path, then the start marker's.
+fn legend_entries<'a>(plot: &'a TrajectoryPlot, colors: &[RGBColor]) -> Vec<LegendEntry<'a>> {
+    let mut entries: Vec<LegendEntry> = plot
+        .paths
+        .iter()
+        .zip(colors)
+        .map(|(p, c)| LegendEntry {
+            name: &p.name,
+            color: *c,
+            dashed: p.dashed,
+            boxed: false,
+        })
+        .collect();
+    entries.push(LegendEntry {
+        name: "● start",
+        color: WHITE,
+        dashed: false,
+        boxed: true,
+    });
+    entries
 }
 
 /// Draws the trajectories and writes the PNG to `path` (atomically).
