@@ -3,7 +3,7 @@
 //! with the velocity model's noise (`NoiseParams::model_sigma_v`,
 //! `model_sigma_w`, the same the particle filters use) as process noise.
 
-use super::dkf::kalman_estimate;
+use super::kalman::kalman_estimate;
 use super::kalman::{model, observability, prior, turn_jacobian, turn_rate_for_observability};
 use super::params::CalibParams;
 use super::robust::student_t_weight;

@@ -2,6 +2,7 @@
 //! respect to the parameters and the initial parameter belief.
 
 use super::params::CalibParams;
+use super::Estimate;
 use nalgebra::{Matrix3, Vector3};
 
 /// `f(θ) = [V, W]` for θ = [R_R, R_L, D] and wheel rates (rad/s), with its
@@ -75,6 +76,34 @@ pub(crate) fn turn_rate_for_observability(
         s / sw
     } else {
         predicted
+    }
+}
+
+/// The estimate of a Kalman filter at time `t`: parameters `theta` =
+/// (R_R, R_L, D) with variances `var` (a negative one read as 0), velocities
+/// `vw` = (V, W) and the parameters' process noise variance `q`.
+pub(super) fn kalman_estimate(
+    t: f64,
+    theta: [f64; 3],
+    var: [f64; 3],
+    vw: [f64; 2],
+    q: f64,
+) -> Estimate {
+    let sd = |v: f64| v.max(0.0).sqrt();
+    Estimate {
+        t,
+        r_right: theta[0],
+        r_left: theta[1],
+        wheel_base: theta[2],
+        std_r_right: sd(var[0]),
+        std_r_left: sd(var[1]),
+        std_wheel_base: sd(var[2]),
+        v: vw[0],
+        w: vw[1],
+        particles: 0,
+        process_sigma: q.sqrt(),
+        resampled: false,
+        weights_reset: false,
     }
 }
 
