@@ -176,7 +176,11 @@ fn expand(rest: &str) -> Vec<Vec<String>> {
             }
         }
         items.push(cur);
-        return items.iter().map(|s| segments(s)).filter(|s| !s.is_empty()).collect();
+        return items
+            .iter()
+            .map(|s| segments(s))
+            .filter(|s| !s.is_empty())
+            .collect();
     }
     vec![segments(rest)]
 }
@@ -276,7 +280,9 @@ fn cycles(g: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>) -> Vec<Vec<String>> 
         t.stack.push(v);
         t.on.insert(v);
         for w in t.g.get(v).into_iter().flatten() {
-            let Some((w, _)) = t.g.get_key_value(w) else { continue };
+            let Some((w, _)) = t.g.get_key_value(w) else {
+                continue;
+            };
             if !t.index.contains_key(w) {
                 visit(t, w);
                 let l = t.low[w].min(t.low[v]);
@@ -336,11 +342,19 @@ fn functions(file: &Path) -> Vec<(usize, String, usize, String)> {
     let mut out = Vec::new();
     for (i, l) in lines.iter().enumerate() {
         let t = l.trim_start();
-        let t = t.strip_prefix("pub(crate) ").or_else(|| t.strip_prefix("pub ")).unwrap_or(t);
+        let t = t
+            .strip_prefix("pub(crate) ")
+            .or_else(|| t.strip_prefix("pub "))
+            .unwrap_or(t);
         let t = t.strip_prefix("const ").unwrap_or(t);
         let t = t.strip_prefix("unsafe ").unwrap_or(t);
-        let Some(rest) = t.strip_prefix("fn ") else { continue };
-        let name: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+        let Some(rest) = t.strip_prefix("fn ") else {
+            continue;
+        };
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
         let (mut depth, mut started) = (0i64, false);
         for (j, m) in lines.iter().enumerate().skip(i) {
             for c in m.chars() {
@@ -362,11 +376,14 @@ fn functions(file: &Path) -> Vec<(usize, String, usize, String)> {
     out
 }
 
-
 #[test]
 fn the_binary_is_thin_and_no_function_is_over_100_lines() {
     let main = std::fs::read_to_string(Path::new(SRC).join("main.rs")).unwrap();
-    assert!(main.lines().count() < 300, "main.rs has {} lines", main.lines().count());
+    assert!(
+        main.lines().count() < 300,
+        "main.rs has {} lines",
+        main.lines().count()
+    );
     let mut files = Vec::new();
     rust_files(Path::new(SRC), &mut files);
     let long: Vec<String> = files
@@ -375,7 +392,11 @@ fn the_binary_is_thin_and_no_function_is_over_100_lines() {
         .filter(|f| f.0 > 100)
         .map(|(n, f, l, name)| format!("{f}:{l} {name}: {n} lines"))
         .collect();
-    assert!(long.is_empty(), "functions over 100 lines:\n{}", long.join("\n"));
+    assert!(
+        long.is_empty(),
+        "functions over 100 lines:\n{}",
+        long.join("\n")
+    );
     // The measure sees functions at all.
     let drive = functions(&Path::new(SRC).join("pipeline/drive.rs"));
     assert!(drive.iter().any(|f| f.3 == "run_calibration" && f.0 > 20));

@@ -33,7 +33,9 @@ fn motions(rec: &Recording, robot: &RobotConfig, stride: usize) -> Vec<Motion> {
         ..IcpParams::default()
     };
     let icp = pipeline::diagnose::icp_for_diagnosis(&icp);
-    pipeline::icp::match_recording(rec, robot, &icp).unwrap().motions
+    pipeline::icp::match_recording(rec, robot, &icp)
+        .unwrap()
+        .motions
 }
 
 fn cause<'a>(d: &'a Diagnosis, effect: &str) -> Option<&'a Cause> {

@@ -70,8 +70,8 @@ fn run(target: &str, data: &[u8]) -> Result<(), String> {
                 data.len()
             ));
             std::fs::write(&file, data).unwrap();
-            let streamed = odocal::io::McapStream::open(&file, &ReadOptions::default())
-                .and_then(|mut s| {
+            let streamed =
+                odocal::io::McapStream::open(&file, &ReadOptions::default()).and_then(|mut s| {
                     let mut n = 0usize;
                     while s.next_item()?.is_some() {
                         n += 1;

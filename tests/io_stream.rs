@@ -4,9 +4,9 @@
 //! `calibrate` on the bundled recording and on real data.
 
 use crate::support::{scratch, shared_data};
+use odocal::calib::{CalibSummary, Method};
 use odocal::io::cdr::CdrWriter;
 use odocal::io::ros_msgs::{Header, ImuMsg, JointStateMsg, RosMsg, Time, Vec3};
-use odocal::calib::{CalibSummary, Method};
 use odocal::io::{read_recording, Item, McapStream, ReadOptions, RecordingSource, SampleSource};
 use odocal::pipeline::calibrate::{CalibSource, CalibrateJob, CalibratorChoice};
 use odocal::pipeline::icp::IcpJob;
@@ -377,7 +377,10 @@ fn kalman_calibration_of_a_bag_matches_the_in_memory_run_without_and_with_gyro()
         let mut expect = Vec::new();
         let last = mem.history.last().unwrap().history_row();
         odocal::io::csv::write_history_row(&mut expect, &last).unwrap();
-        assert_eq!(rows.lines().last().unwrap(), String::from_utf8(expect).unwrap().trim_end());
+        assert_eq!(
+            rows.lines().last().unwrap(),
+            String::from_utf8(expect).unwrap().trim_end()
+        );
         assert_eq!(s.final_params, mem.summary.final_params);
         assert_eq!(s.iterations, mem.summary.iterations);
     }

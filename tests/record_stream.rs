@@ -13,7 +13,6 @@ use odocal::robot::RobotConfig;
 use odocal::viz::{CalibEstimate, Logger, Stamp, TrajectoryKind, VizError};
 use std::path::Path;
 
-
 const BUNDLED: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/scans/wheelchair-corridor.mcap"
@@ -69,13 +68,23 @@ fn setup() -> (Config, RobotConfig, ReadOptions) {
 }
 
 /// The recording of a calibration run over `source` (the command's driver).
-fn record(source: &mut dyn SampleSource, opts: RecorderOptions) -> (Tape, Vec<String>, usize, usize) {
+fn record(
+    source: &mut dyn SampleSource,
+    opts: RecorderOptions,
+) -> (Tape, Vec<String>, usize, usize) {
     let (cfg, robot, _) = setup();
     let params = pipeline::calibrate::params_for_robot(&cfg.calib, &robot);
     let mut tape = Tape::default();
     let mut rec = StreamRecorder::new(&mut tape, opts, robot.diff_drive(), robot.laser.pose());
-    let done = drive::run_calibration(source, &robot, &cfg.icp, &params, &cfg.measurements, &mut rec)
-        .unwrap();
+    let done = drive::run_calibration(
+        source,
+        &robot,
+        &cfg.icp,
+        &params,
+        &cfg.measurements,
+        &mut rec,
+    )
+    .unwrap();
     let every = rec.cloud_every();
     let notes = rec.finish().unwrap();
     assert_eq!(tape.estimates.len(), done.summary.iterations);
@@ -97,8 +106,7 @@ fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
 fn same_shape(a: &[Pose2], b: &[Pose2], tol: f64) -> bool {
     let (a0, b0) = (a[0].inverse(), b[0].inverse());
     a.len() == b.len()
-        && a
-            .iter()
+        && a.iter()
             .zip(b)
             .all(|(x, y)| close(&geom::xyt(&(a0 * x)), &geom::xyt(&(b0 * y)), tol))
 }
@@ -138,9 +146,17 @@ fn a_bag_and_the_same_recording_in_memory_are_recorded_alike_and_whole() {
     assert_eq!(st.trajectories.len(), 4);
     let get = |k: TrajectoryKind| &st.trajectories.iter().find(|(x, _)| *x == k).unwrap().1;
     let raw = odocal::robot::wheel_odometry(&robot.diff_drive(), &rec.wheels, Pose2::identity());
-    assert!(same_shape(get(TrajectoryKind::RawOdometry), &raw.poses, 1e-9));
+    assert!(same_shape(
+        get(TrajectoryKind::RawOdometry),
+        &raw.poses,
+        1e-9
+    ));
     let reference: Vec<Pose2> = rec.reference.iter().map(|p| p.pose).collect();
-    assert!(same_shape(get(TrajectoryKind::Reference), &reference, 1e-12));
+    assert!(same_shape(
+        get(TrajectoryKind::Reference),
+        &reference,
+        1e-12
+    ));
 }
 
 #[test]

@@ -114,4 +114,3 @@ impl Calibrator for DualKf {
         "dkf"
     }
 }
-

@@ -264,7 +264,6 @@ pub struct EvalArgs {
     pub common: Common,
 }
 
-
 impl Common {
     /// The pipeline's view of these options.
     pub fn files(&self) -> pipeline::Common {

@@ -4,7 +4,9 @@
 pub mod args;
 mod print;
 
-use args::{CalibrateArgs, Command, DemoArgs, DiagnoseArgs, EvalArgs, ExperimentArgs, IcpArgs, SimulateArgs};
+use args::{
+    CalibrateArgs, Command, DemoArgs, DiagnoseArgs, EvalArgs, ExperimentArgs, IcpArgs, SimulateArgs,
+};
 use odocal::pipeline::{self, Progress};
 use print::out;
 
@@ -65,7 +67,10 @@ fn eval(a: EvalArgs) -> anyhow::Result<()> {
 fn icp(a: IcpArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let pb = progress_bar("icp");
-    let run = pipeline::icp::run(&a.job(), &mut Progress::new(|f| pb.set_position((f * 1000.0) as u64)))?;
+    let run = pipeline::icp::run(
+        &a.job(),
+        &mut Progress::new(|f| pb.set_position((f * 1000.0) as u64)),
+    )?;
     pb.finish_and_clear();
     let mut stats = run.stats;
     // Wall time of the whole command (decoding included), as users time it.
@@ -80,7 +85,10 @@ fn icp(a: IcpArgs) -> anyhow::Result<()> {
 
 fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
     let pb = progress_bar("calibrate");
-    let done = pipeline::calibrate::run(&a.job(), &mut Progress::new(|f| pb.set_position((f * 1000.0) as u64)))?;
+    let done = pipeline::calibrate::run(
+        &a.job(),
+        &mut Progress::new(|f| pb.set_position((f * 1000.0) as u64)),
+    )?;
     pb.finish_and_clear();
     for n in &done.notes {
         eprintln!("note: {n}");

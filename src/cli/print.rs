@@ -90,7 +90,6 @@ pub fn calibration(s: &CalibSummary, out: &Path) {
     );
 }
 
-
 /// The demo's summary, and where its report and recording are.
 pub fn demo(summary: &DemoSummary, out: &Path, to_file: bool) {
     out!(

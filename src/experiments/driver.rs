@@ -1,8 +1,8 @@
 //! `odocal experiment NAME`: the experiment's name, settings and inputs in;
 //! `NAME.md`, `NAME.json` and `NAME.png` out.
 
-use super::inputs::{bad, ExperimentInputs};
 use super::heading_pf::{heading_pf_output, PfExperimentParams};
+use super::inputs::{bad, ExperimentInputs};
 use super::literature::{literature_output, LiteratureParams};
 use super::montecarlo::{monte_carlo, ScanMonteCarloParams};
 use super::output::ExperimentOutput;

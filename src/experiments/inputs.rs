@@ -40,4 +40,3 @@ impl ExperimentInputs<'_> {
 pub(crate) fn bad(e: impl std::fmt::Display) -> PipelineError {
     PipelineError::BadArgument(e.to_string())
 }
-

@@ -28,11 +28,11 @@ pub use compare::{
     ClassicMethod, ClassicResult, CompareParams, CompareScenario,
 };
 pub use driver::{run, run_experiment, ExperimentJob, ExperimentSettings, EXPERIMENTS};
-pub use inputs::ExperimentInputs;
 pub use heading_pf::{
     calibration_runs, ga_path_errors, heading_pf_experiment, path_error_markdown, PathErrorRow,
     PfExperimentParams, SeedPathError,
 };
+pub use inputs::ExperimentInputs;
 pub use literature::{
     literature, literature_run, LiteratureParams, LiteratureRow, LiteratureRun, LiteratureTable,
 };

@@ -4,8 +4,8 @@
 //! pairs (Table II) to see whether it brings right and left together.
 
 use super::inputs::{bad, ExperimentInputs};
-use super::square::SquareExperimentParams;
 use super::output::{comma_list, draw_lines, ExperimentOutput};
+use super::square::SquareExperimentParams;
 use crate::classic::{
     check_finite, fit_heading_gain, fit_tachometer, ClassicError, HeadingGain, HeadingTrial,
     TachoCalibration, TachoReading,
@@ -213,13 +213,8 @@ pub(super) fn tachometer_output(
     let rows = tachometer_table(&inp.seed_table("encoder_vs_tachometer.csv")?)?;
     let trials = heading_trials(&inp.seed_table("heading_trials.csv")?)?;
     let pairs = table_pairs(inp)?;
-    let e = tachometer_experiment(
-        &rows,
-        &trials,
-        &pairs,
-        Some(square.nominal.wheel_base),
-    )
-    .map_err(bad)?;
+    let e = tachometer_experiment(&rows, &trials, &pairs, Some(square.nominal.wheel_base))
+        .map_err(bad)?;
     draw_lines(png, &correction_chart(&rows, &e.tachometer))?;
     let title = "Seed 001: tachometer rpm correction and heading gain";
     Ok(ExperimentOutput::titled(title, e.markdown(&rows), &e))

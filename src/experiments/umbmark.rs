@@ -240,13 +240,7 @@ pub(super) fn umbmark_output(
     params: &UmbmarkParams,
     png: &Path,
 ) -> Result<ExperimentOutput, PipelineError> {
-    let c = umbmark_cycles(
-        &inp.robot.diff_drive(),
-        params,
-        inp.runs,
-        inp.seed,
-    )
-    .map_err(bad)?;
+    let c = umbmark_cycles(&inp.robot.diff_drive(), params, inp.runs, inp.seed).map_err(bad)?;
     let cats: Vec<String> = c
         .cycles
         .iter()

@@ -55,7 +55,10 @@ pub fn match_recording(
         wheel_base: 1.0,
     };
     let mut matcher = StreamMatcher::new(params, base_from_laser, kind, unused)?;
-    for (t, p) in odom_prior.iter().flat_map(|o| o.stamps.iter().zip(&o.poses)) {
+    for (t, p) in odom_prior
+        .iter()
+        .flat_map(|o| o.stamps.iter().zip(&o.poses))
+    {
         matcher.push_odom(&StampedPose {
             stamp: *t,
             pose: *p,
@@ -176,4 +179,3 @@ impl Tally {
         }
     }
 }
-

@@ -21,9 +21,8 @@ pub enum Format {
 
 /// Sniffs the format of `path`; an error when the file cannot be opened.
 pub fn sniff(path: &Path) -> Result<Format, InputError> {
-    let mut file = std::fs::File::open(path).map_err(|e| {
-        InputError::new(path.display().to_string(), format!("cannot read: {e}"))
-    })?;
+    let mut file = std::fs::File::open(path)
+        .map_err(|e| InputError::new(path.display().to_string(), format!("cannot read: {e}")))?;
     let mut head = [0u8; 8];
     let n = read_up_to(&mut file, &mut head);
     if head[..n].starts_with(mcap::MAGIC) {

@@ -94,9 +94,9 @@ pub fn open<'o>(
 ) -> Result<Box<dyn SampleSource + 'o>, InputError> {
     match sniff(path)? {
         Format::Mcap => Ok(Box::new(McapStream::open(path, opts)?)),
-        Format::Text | Format::CensiTuples => Ok(Box::new(RecordingSource::owned(
-            read_recording(path, opts)?,
-        ))),
+        Format::Text | Format::CensiTuples => Ok(Box::new(RecordingSource::owned(read_recording(
+            path, opts,
+        )?))),
     }
 }
 

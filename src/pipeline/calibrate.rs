@@ -155,13 +155,21 @@ pub struct CalibrateOutcome {
 /// Runs `odocal calibrate`: ICP (for a recording) and the calibrator, the
 /// history, trajectory and summary written into the output directory
 /// atomically, the run recorded for Rerun when asked; `watch` sees the run.
-pub fn run(job: &CalibrateJob, watch: &mut dyn RunObserver) -> Result<CalibrateOutcome, PipelineError> {
+pub fn run(
+    job: &CalibrateJob,
+    watch: &mut dyn RunObserver,
+) -> Result<CalibrateOutcome, PipelineError> {
     let (mut cfg, robot) = job.common.load()?;
     job.choice.apply(&mut cfg.calib);
     let params = params_for_robot(&cfg.calib, &robot);
     let mut logger = open_logger(job.viewer.as_ref())?;
     let mut recorder = logger.as_deref_mut().map(|l| {
-        StreamRecorder::new(l, RecorderOptions::default(), robot.diff_drive(), robot.laser.pose())
+        StreamRecorder::new(
+            l,
+            RecorderOptions::default(),
+            robot.diff_drive(),
+            robot.laser.pose(),
+        )
     });
     let mut quiet = NoObserver;
     let rec_obs: &mut dyn RunObserver = match recorder.as_mut() {
@@ -174,11 +182,26 @@ pub fn run(job: &CalibrateJob, watch: &mut dyn RunObserver) -> Result<CalibrateO
         CalibSource::Recording(path) => {
             let read = super::read_options(&cfg, &robot);
             let mut source = crate::io::open(path, &read)?;
-            drive::run_calibration(source.as_mut(), &robot, &cfg.icp, &params, &cfg.measurements, &mut obs)?
+            drive::run_calibration(
+                source.as_mut(),
+                &robot,
+                &cfg.icp,
+                &params,
+                &cfg.measurements,
+                &mut obs,
+            )?
         }
         CalibSource::Csv { motions, wheels } => {
             let input = read_csv_input(motions, wheels)?;
-            drive::calibrate_streams(&input.wheels, &input.observations, &input.gyro, &robot, &params, &cfg.measurements, &mut obs)?
+            drive::calibrate_streams(
+                &input.wheels,
+                &input.observations,
+                &input.gyro,
+                &robot,
+                &params,
+                &cfg.measurements,
+                &mut obs,
+            )?
         }
     }
     .summary;
@@ -196,7 +219,10 @@ pub fn run(job: &CalibrateJob, watch: &mut dyn RunObserver) -> Result<CalibrateO
 fn read_csv_input(motions: &Path, wheels: &Path) -> Result<CalibInput, PipelineError> {
     let motions = crate::io::csv::read_motions(motions)?;
     let input = CalibInput {
-        observations: motions.iter().filter_map(VelocityObs::from_motion).collect(),
+        observations: motions
+            .iter()
+            .filter_map(VelocityObs::from_motion)
+            .collect(),
         wheels: crate::io::csv::read_wheels(wheels)?,
         gyro: Vec::new(),
     };

@@ -121,7 +121,9 @@ pub fn run(job: &EvalJob) -> Result<EvalReport, PipelineError> {
         None => None,
     };
     if job.plot.is_some() && reference.is_none() {
-        return Err(PipelineError::BadArgument("--plot needs --reference".into()));
+        return Err(PipelineError::BadArgument(
+            "--plot needs --reference".into(),
+        ));
     }
     let report = evaluate(&est, reference.as_ref(), job.relations.as_deref(), &opts)?;
     if let Some(png) = &job.plot {

@@ -34,7 +34,10 @@ impl RowFile {
     }
 
     /// Writes with `f` unless an earlier write failed.
-    fn row(&mut self, f: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>) {
+    fn row(
+        &mut self,
+        f: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
+    ) {
         if self.error.is_none() {
             if let Err(e) = f(self.out.writer()) {
                 self.error = Some(e);
@@ -71,8 +74,7 @@ impl TumFile {
     fn pose(&mut self, t: f64, p: &Pose2) {
         if t.is_finite() && self.last.is_none_or(|l| t > l) {
             self.last = Some(t);
-            self.file
-                .row(|w| crate::io::tum::write_pose_2d(w, t, p));
+            self.file.row(|w| crate::io::tum::write_pose_2d(w, t, p));
         }
     }
 }
@@ -128,10 +130,7 @@ impl CalibFiles {
     pub fn create(dir: &Path) -> Result<Self, PipelineError> {
         Ok(Self {
             dir: dir.to_path_buf(),
-            history: RowFile::create(
-                &dir.join("calibration.csv"),
-                crate::io::csv::HISTORY_HEADER,
-            )?,
+            history: RowFile::create(&dir.join("calibration.csv"), crate::io::csv::HISTORY_HEADER)?,
             trajectory: TumFile::create(&dir.join("trajectory.tum"))?,
         })
     }
@@ -196,11 +195,7 @@ pub struct Collect {
 
 impl Collect {
     /// The calibration run these results make with its `summary`.
-    pub fn calibration(
-        &mut self,
-        summary: CalibSummary,
-        weight_resets: usize,
-    ) -> CalibrationRun {
+    pub fn calibration(&mut self, summary: CalibSummary, weight_resets: usize) -> CalibrationRun {
         CalibrationRun {
             summary,
             history: std::mem::take(&mut self.history),

@@ -59,7 +59,10 @@ pub struct SimulateJob {
 
 /// Runs `odocal simulate`: the configuration with the job's scenario, seed,
 /// duration and effects, into the bag and truth file.
-pub fn run(job: &SimulateJob, progress: &mut dyn FnMut(f64)) -> Result<SimulateSummary, PipelineError> {
+pub fn run(
+    job: &SimulateJob,
+    progress: &mut dyn FnMut(f64),
+) -> Result<SimulateSummary, PipelineError> {
     let (mut cfg, robot) = job.common.load()?;
     if let Some(s) = &job.scenario {
         set_scenario(&mut cfg.sim, s)?;
@@ -94,7 +97,8 @@ fn set_scenario(sim: &mut SimConfig, s: &str) -> Result<(), PipelineError> {
     if s.ends_with(".json") || p.is_file() {
         let text = std::fs::read_to_string(p)
             .map_err(|e| InputError::new(s, format!("cannot read: {e}")))?;
-        let spec = sim::ScenarioSpec::from_json(&text).map_err(|e| InputError::new(s, e.to_string()))?;
+        let spec =
+            sim::ScenarioSpec::from_json(&text).map_err(|e| InputError::new(s, e.to_string()))?;
         sim.scenario.custom = Some(spec);
     } else {
         sim.scenario.name = s.to_string();

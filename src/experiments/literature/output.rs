@@ -1,8 +1,8 @@
 //! `odocal experiment literature`: the comparison, a chart of its medians.
 
+use super::LiteratureParams;
 use super::{literature, LiteratureRow};
 use crate::experiments::inputs::{bad, ExperimentInputs};
-use super::LiteratureParams;
 use crate::experiments::output::{draw_bars, median_bars, ExperimentOutput, MedianPanel};
 use crate::pipeline::PipelineError;
 use std::path::Path;
@@ -24,14 +24,7 @@ pub(in crate::experiments) fn literature_output(
     png: &Path,
 ) -> Result<ExperimentOutput, PipelineError> {
     let nominal = inp.robot.diff_drive();
-    let t = literature(
-        &nominal,
-        inp.calib,
-        params,
-        inp.runs,
-        inp.seed,
-    )
-    .map_err(bad)?;
+    let t = literature(&nominal, inp.calib, params, inp.runs, inp.seed).map_err(bad)?;
     let labels = t.rows.iter().map(|r| r.method.name().to_string()).collect();
     let title = format!(
         "Literature methods on the same runs ({} repetitions, medians)",

@@ -1,6 +1,7 @@
 //! `odocal experiment resampling | montecarlo | montecarlo-scans | changing`:
 //! the table, a chart of its medians and, for `changing`, run 0 over time.
 
+use super::scans::ScanMonteCarloParams;
 use super::{
     changing_figure, montecarlo, scan_montecarlo, table1_configs, table2_configs, MonteCarloParams,
     MonteCarloTable, TableRow,
@@ -8,7 +9,6 @@ use super::{
 use crate::calib::synth::RadiusStep;
 use crate::calib::CalibParams;
 use crate::experiments::inputs::ExperimentInputs;
-use super::scans::ScanMonteCarloParams;
 use crate::experiments::output::{draw_bars, median_bars, ExperimentOutput, MedianPanel};
 use crate::pipeline::PipelineError;
 use std::path::Path;

@@ -97,7 +97,11 @@ fn radii_chart(
 }
 
 /// Fig. 5: particle count and process noise of the Adaptive-PF.
-fn particles_chart(adaptive: &CalibrationRun, t_start: f64, out: &Path) -> Result<(), PipelineError> {
+fn particles_chart(
+    adaptive: &CalibrationRun,
+    t_start: f64,
+    out: &Path,
+) -> Result<(), PipelineError> {
     let chart = LineChart::new("Adaptive-PF: particle count and process noise", "time (s)")
         .panel(
             "particles",
@@ -173,4 +177,3 @@ fn trajectory_charts(
     }
     Ok(())
 }
-

@@ -5,6 +5,11 @@
 mod figures;
 mod report;
 
+use crate::calib::{CalibrationRun, Method};
+use crate::error::InputError;
+use crate::eval::{self, Alignment, EvalOptions, Trajectory3, TrajectoryMetrics};
+use crate::geom::Pose2;
+use crate::io::RecordingSource;
 use crate::pipeline::calibrate::{self, CalibInput};
 use crate::pipeline::drive;
 use crate::pipeline::icp::IcpOutput;
@@ -13,15 +18,10 @@ use crate::pipeline::outputs::{CalibFiles, Collect, IcpFiles};
 use crate::pipeline::recorder::{RecorderOptions, StreamRecorder};
 use crate::pipeline::viewer::{open_logger, Viewer};
 use crate::pipeline::{Common, Config, PipelineError};
-use crate::calib::{CalibrationRun, Method};
-use crate::eval::{self, Alignment, EvalOptions, Trajectory3, TrajectoryMetrics};
-use crate::geom::Pose2;
 use crate::recording::Recording;
 use crate::robot::{wheel_odometry, RobotConfig};
 use crate::sim::Truth;
 use crate::traj::Trajectory;
-use crate::error::InputError;
-use crate::io::RecordingSource;
 use crate::viz::{Logger, NullLogger};
 use nalgebra::Point2;
 use serde::Serialize;
@@ -169,15 +169,20 @@ pub fn run(
         Some(p) => (p.clone(), job.truth.clone()),
         None => (
             PathBuf::from(DEMO_RECORDING),
-            Some(job.truth.clone().unwrap_or_else(|| PathBuf::from(DEMO_TRUTH))),
+            Some(
+                job.truth
+                    .clone()
+                    .unwrap_or_else(|| PathBuf::from(DEMO_TRUTH)),
+            ),
         ),
     };
     let truth = truth_path.as_deref().map(load_truth).transpose()?;
     let rec = crate::pipeline::read_recording(&input, &cfg, &robot)?;
     std::fs::create_dir_all(&job.out).map_err(|e| PipelineError::write(&job.out, e))?;
-    let viewer = job.viewer.clone().or_else(|| {
-        cfg!(feature = "rerun").then(|| Viewer::File(job.out.join("demo.rrd")))
-    });
+    let viewer = job
+        .viewer
+        .clone()
+        .or_else(|| cfg!(feature = "rerun").then(|| Viewer::File(job.out.join("demo.rrd"))));
     let mut logger = open_logger(viewer.as_ref())?.unwrap_or_else(|| Box::new(NullLogger));
     let name = input.display().to_string();
     let demo = DemoInput {
@@ -220,7 +225,8 @@ pub fn run_on(
     let reference3 = reference2.as_ref().map(Trajectory3::from_2d);
     let raw = wheel_odometry(&input.robot.diff_drive(), &rec.wheels, Pose2::identity());
     let raw_path = out.join("raw_odometry.tum");
-    crate::io::tum::write_tum_2d(&raw_path, &raw).map_err(|e| PipelineError::write(&raw_path, e))?;
+    crate::io::tum::write_tum_2d(&raw_path, &raw)
+        .map_err(|e| PipelineError::write(&raw_path, e))?;
     let mut summary = DemoSummary {
         input: input.name.to_string(),
         scans: rec.scans.len(),
@@ -231,7 +237,15 @@ pub fn run_on(
         methods: method_results(input, &runs, reference3.as_ref(), t_start),
         wall_s: 0.0,
     };
-    figures::plots(input, &icp_out.trajectory, &raw, &runs, reference2.as_ref(), t_start, out)?;
+    figures::plots(
+        input,
+        &icp_out.trajectory,
+        &raw,
+        &runs,
+        reference2.as_ref(),
+        t_start,
+        out,
+    )?;
     summary.wall_s = start.elapsed().as_secs_f64();
     report::report(input, &summary, out)?;
     let js = out.join("summary.json");
@@ -283,7 +297,12 @@ fn calibrate_all(
         &cfg.icp,
         &params_for(first),
         &cfg.measurements,
-        &mut Observers(vec![&mut collect, &mut recorder, &mut icp_files, &mut files]),
+        &mut Observers(vec![
+            &mut collect,
+            &mut recorder,
+            &mut icp_files,
+            &mut files,
+        ]),
     )?;
     icp_files.commit()?;
     files.commit(&done.summary)?;
@@ -345,4 +364,3 @@ fn method_results(
         })
         .collect()
 }
-

@@ -11,7 +11,11 @@ fn opt(v: Option<f64>, decimals: usize) -> String {
 }
 
 /// Writes `OUT/report.md`: settings, calibration and accuracy tables, plots.
-pub(super) fn report(input: &DemoInput<'_>, s: &DemoSummary, out: &Path) -> Result<(), PipelineError> {
+pub(super) fn report(
+    input: &DemoInput<'_>,
+    s: &DemoSummary,
+    out: &Path,
+) -> Result<(), PipelineError> {
     let mut r = Report::new();
     r.heading(1, "odocal demo");
     settings(input, s, &mut r);
