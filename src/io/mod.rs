@@ -24,7 +24,7 @@
 //! - **Gaps** of any length are kept as recorded. ICP matches across them
 //!   with its plausibility gates widened by the gap (max speed × dt); the
 //!   calibration fills time without observations with predict-only steps of
-//!   at most [`crate::calib::MAX_GAP_STEP`], wheel angles interpolated
+//!   at most 0.1 s (`calib::MAX_GAP_STEP`), wheel angles interpolated
 //!   linearly; wheel *rates* (joint states without positions) are integrated
 //!   across a gap by the trapezoid rule, i.e. at the mean of the two rates.
 //! - **Clocks at 0 or at Unix time.** Both read as they are. Unix stamps
