@@ -76,7 +76,7 @@ fn record(
     let params = pipeline::calibrate::params_for_robot(&cfg.calib, &robot);
     let mut tape = Tape::default();
     let mut rec = StreamRecorder::new(&mut tape, opts, robot.diff_drive(), robot.laser.pose());
-    let done = drive::run_calibration(
+    let (icp, done) = drive::run_calibration(
         source,
         &robot,
         &cfg.icp,
@@ -88,7 +88,7 @@ fn record(
     let every = rec.cloud_every();
     let notes = rec.finish().unwrap();
     assert_eq!(tape.estimates.len(), done.summary.iterations);
-    (tape, notes, every, done.icp.stats.pairs)
+    (tape, notes, every, icp.stats.pairs)
 }
 
 fn streamed(opts: RecorderOptions) -> (Tape, Vec<String>, usize) {

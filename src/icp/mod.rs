@@ -63,5 +63,5 @@ pub use matcher::{MatchInfo, PriorSource, ScanMatcher};
 pub use params::{IcpParams, IcpParamsError};
 pub use preprocess::{Preprocessor, ScanPoints};
 pub use run::{integrate, match_recording, summarise, IcpStats, Tally};
-pub use stream::{PoseWindow, PriorKind, StreamMatcher};
+pub use stream::{PoseWindow, Prior, StreamMatcher};
 pub use threshold::AdaptiveThreshold;

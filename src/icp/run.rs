@@ -7,11 +7,10 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::params::{IcpParams, IcpParamsError};
-use super::stream::{PriorKind, StreamMatcher};
+use super::stream::{Prior, StreamMatcher};
 use crate::geom::{self, Pose2};
 use crate::motion::Motion;
 use crate::recording::StampedPose;
-use crate::robot::DiffDrive;
 use crate::scan::LaserScan;
 use crate::traj::Trajectory;
 use serde::Serialize;
@@ -44,17 +43,11 @@ pub fn match_recording(
     params: &IcpParams,
 ) -> Result<(Vec<Motion>, IcpStats), IcpParamsError> {
     let start = std::time::Instant::now();
-    let kind = match odom_prior {
-        Some(_) => PriorKind::Odom,
-        None => PriorKind::None,
+    let prior = match odom_prior {
+        Some(_) => Prior::Odom,
+        None => Prior::None,
     };
-    // The nominal drive is unused: the prior comes as poses, not wheel samples.
-    let unused = DiffDrive {
-        r_right: 1.0,
-        r_left: 1.0,
-        wheel_base: 1.0,
-    };
-    let mut matcher = StreamMatcher::new(params, base_from_laser, kind, unused)?;
+    let mut matcher = StreamMatcher::new(params, base_from_laser, prior)?;
     for (t, p) in odom_prior
         .iter()
         .flat_map(|o| o.stamps.iter().zip(&o.poses))

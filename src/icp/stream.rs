@@ -64,23 +64,23 @@ impl PoseWindow {
 
 /// Where the ICP prior comes from: wheel odometry when the recording has
 /// encoders, else the recording's own odometry, else none.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PriorKind {
-    /// Wheel odometry with the nominal model.
-    Wheels,
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Prior {
+    /// Wheel odometry integrated with this (nominal) model.
+    Wheels(DiffDrive),
     /// The recording's own odometry.
     Odom,
     /// No prior.
     None,
 }
 
-impl PriorKind {
+impl Prior {
     /// The prior a recording with these many wheel and odometry samples
-    /// gets: wheel odometry from two wheel samples on, else the recording's
-    /// own odometry from two poses on.
-    pub fn choose(wheel_samples: usize, odom_poses: usize) -> Self {
+    /// gets: wheel odometry with `nominal` from two wheel samples on, else the
+    /// recording's own odometry from two poses on.
+    pub fn choose(wheel_samples: usize, odom_poses: usize, nominal: DiffDrive) -> Self {
         if wheel_samples >= 2 {
-            Self::Wheels
+            Self::Wheels(nominal)
         } else if odom_poses >= 2 {
             Self::Odom
         } else {
@@ -92,48 +92,50 @@ impl PriorKind {
 /// Scan matching over streamed samples (see the module doc).
 pub struct StreamMatcher {
     matcher: ScanMatcher,
-    kind: PriorKind,
-    wheels: WheelIntegrator,
+    /// Dead reckoning of the wheel samples, for a wheel-odometry prior.
+    wheels: Option<WheelIntegrator>,
+    /// Whether the recording's own odometry is the prior.
+    odom: bool,
     prior: PoseWindow,
     pending: VecDeque<LaserScan>,
     prev: Option<f64>,
 }
 
 impl StreamMatcher {
-    /// A matcher for a laser at `base_from_laser`, with the prior `kind`
-    /// (wheel odometry uses `nominal`).
+    /// A matcher for a laser at `base_from_laser` with the given prior.
     pub fn new(
         params: &IcpParams,
         base_from_laser: Pose2,
-        kind: PriorKind,
-        nominal: DiffDrive,
+        prior: Prior,
     ) -> Result<Self, IcpParamsError> {
-        let mut prior = PoseWindow::default();
-        if kind == PriorKind::None {
-            prior.end();
+        let mut window = PoseWindow::default();
+        if prior == Prior::None {
+            window.end();
         }
         Ok(Self {
             matcher: ScanMatcher::new(params.clone(), base_from_laser)?,
-            kind,
-            wheels: WheelIntegrator::new(nominal, Pose2::identity()),
-            prior,
+            wheels: match prior {
+                Prior::Wheels(nominal) => Some(WheelIntegrator::new(nominal, Pose2::identity())),
+                Prior::Odom | Prior::None => None,
+            },
+            odom: prior == Prior::Odom,
+            prior: window,
             pending: VecDeque::new(),
             prev: None,
         })
     }
 
-    /// A wheel sample (stamp order).
+    /// A wheel sample (stamp order); ignored unless the prior is wheel odometry.
     pub fn push_wheel(&mut self, s: &WheelSample) {
-        if self.kind == PriorKind::Wheels {
-            if let Some((t, p)) = self.wheels.push(s) {
-                self.prior.push(t, p);
-            }
+        if let Some((t, p)) = self.wheels.as_mut().and_then(|w| w.push(s)) {
+            self.prior.push(t, p);
         }
     }
 
-    /// A pose of the recording's own odometry (stamp order).
+    /// A pose of the recording's own odometry (stamp order); ignored unless
+    /// it is the prior.
     pub fn push_odom(&mut self, p: &StampedPose) {
-        if self.kind == PriorKind::Odom {
+        if self.odom {
             self.prior.push(p.stamp, p.pose);
         }
     }
@@ -160,9 +162,10 @@ impl StreamMatcher {
                 break;
             }
             let scan = self.pending.pop_front().expect("front exists");
-            let prior = match (self.kind, self.prev) {
-                (PriorKind::None, _) | (_, None) => None,
-                (_, Some(t0)) => self
+            let has_prior = self.odom || self.wheels.is_some();
+            let prior = match self.prev.filter(|_| has_prior) {
+                None => None,
+                Some(t0) => self
                     .prior
                     .pose_at(t0)
                     .zip(self.prior.pose_at(scan.stamp))

@@ -190,6 +190,7 @@ pub fn run(
                 &cfg.measurements,
                 &mut obs,
             )?
+            .1
         }
         CalibSource::Csv { motions, wheels } => {
             let input = read_csv_input(motions, wheels)?;

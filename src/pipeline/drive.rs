@@ -11,7 +11,7 @@ use super::observe::RunObserver;
 use super::PipelineError;
 use crate::calib::{self, CalibParams, CalibStep, CalibSummary, Calibrator, Runner, StepBuilder};
 use crate::error::InputError;
-use crate::icp::{self, IcpParams, IcpStats, PriorKind, StreamMatcher, Tally};
+use crate::icp::{IcpParams, IcpStats, Prior, StreamMatcher, Tally};
 use crate::io::{Item, SampleSource, StreamInfo};
 use crate::motion::{Motion, VelocityObs};
 use crate::recording::{GyroSample, WheelSample};
@@ -50,7 +50,7 @@ pub struct IcpRunSummary {
 /// tally that chains the motions into the ICP trajectory.
 struct IcpStage {
     matcher: StreamMatcher,
-    kind: PriorKind,
+    prior: Prior,
     tally: Tally,
     wheels_seen: usize,
     odom_seen: usize,
@@ -73,13 +73,13 @@ impl IcpStage {
             )
             .into());
         }
-        let kind = PriorKind::choose(info.wheels, info.odom);
+        let prior = Prior::choose(info.wheels, info.odom, robot.diff_drive());
         let base = info.base_from_laser.unwrap_or_else(|| robot.laser.pose());
-        let matcher = StreamMatcher::new(params, base, kind, robot.diff_drive())
+        let matcher = StreamMatcher::new(params, base, prior)
             .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
         Ok(Self {
             matcher,
-            kind,
+            prior,
             tally: Tally::default(),
             wheels_seen: 0,
             odom_seen: 0,
@@ -100,14 +100,14 @@ impl IcpStage {
             Item::Wheel(w) => {
                 self.matcher.push_wheel(w);
                 self.wheels_seen += 1;
-                if self.kind == PriorKind::Wheels && self.wheels_seen == info.wheels {
+                if matches!(self.prior, Prior::Wheels(_)) && self.wheels_seen == info.wheels {
                     self.matcher.end_prior();
                 }
             }
             Item::Odom(p) => {
                 self.matcher.push_odom(p);
                 self.odom_seen += 1;
-                if self.kind == PriorKind::Odom && self.odom_seen == info.odom {
+                if self.prior == Prior::Odom && self.odom_seen == info.odom {
                     self.matcher.end_prior();
                 }
             }
@@ -281,18 +281,17 @@ impl Ends {
     }
 }
 
-/// What a calibration run gives besides what its observers saw.
+/// What a calibration gives besides what its observers saw.
 #[derive(Debug, Clone)]
 pub struct CalibRunSummary {
     /// The calibration summary (design.md's keys).
     pub summary: CalibSummary,
-    /// The ICP part.
-    pub icp: IcpRunSummary,
     /// Steps whose weights all underflowed and were reset.
     pub weight_resets: usize,
 }
 
-/// Runs ICP and the calibrator `calib` names over `source`: each motion
+/// Runs ICP and the calibrator `calib` names over `source` and gives both
+/// summaries: each motion
 /// becomes a velocity observation, aligned with the wheels (and gyro) into
 /// filter steps as soon as they are final. `calib` is used as given (see
 /// [`super::calibrate::params_for_robot`]).
@@ -303,7 +302,7 @@ pub fn run_calibration(
     calib: &CalibParams,
     meas: &MeasurementConfig,
     obs: &mut dyn RunObserver,
-) -> Result<CalibRunSummary, PipelineError> {
+) -> Result<(IcpRunSummary, CalibRunSummary), PipelineError> {
     let info = source.info().clone();
     obs.start(&info);
     let mut icp_stage = IcpStage::new(&info, source.name(), robot, icp)?;
@@ -329,11 +328,11 @@ pub fn run_calibration(
     stage.end_wheels();
     stage.end_gyro();
     stage.poll(true, obs);
-    Ok(CalibRunSummary {
+    let calibration = CalibRunSummary {
         summary: stage.summary()?,
-        icp: icp_stage.summary(),
         weight_resets: stage.weight_resets(),
-    })
+    };
+    Ok((icp_stage.summary(), calibration))
 }
 
 /// Runs the calibrator `calib` names over given wheel angles, velocity
@@ -371,10 +370,6 @@ pub fn calibrate_streams(
     stage.poll(true, obs);
     Ok(CalibRunSummary {
         summary: stage.summary()?,
-        icp: IcpRunSummary {
-            stats: icp::summarise(&[], 0.0),
-            path_length: 0.0,
-        },
         weight_resets: stage.weight_resets(),
     })
 }

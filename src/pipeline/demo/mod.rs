@@ -291,7 +291,7 @@ fn calibrate_all(
     let mut icp_files = IcpFiles::create(&out.join("icp.tum"), Some(&out.join("motions.csv")))?;
     let first = DEMO_METHODS[0];
     let mut files = CalibFiles::create(&out.join(first.as_str()))?;
-    let done = drive::run_calibration(
+    let (icp_done, done) = drive::run_calibration(
         &mut RecordingSource::new(rec),
         robot,
         &cfg.icp,
@@ -307,7 +307,7 @@ fn calibrate_all(
     icp_files.commit()?;
     files.commit(&done.summary)?;
     recorder.finish().map_err(viz_err)?;
-    let icp_out = collect.icp(done.icp.stats);
+    let icp_out = collect.icp(icp_done.stats);
     let mut runs = vec![(first, collect.calibration(done.summary, done.weight_resets))];
     let cal_input = CalibInput {
         observations: icp_out.observations(),
