@@ -4,7 +4,9 @@
 //! may leave its temporary sibling `.NAME.tmp-PID`; the next write of `NAME`
 //! removes it. [`write_atomic`] fills a file in one go; a file written row by
 //! row goes through the same two steps, `begin` and `finish`, with its
-//! rows in between.
+//! rows in between. A write never replaces anything but a regular file: an
+//! output path that is a symbolic link is written through to its target, and
+//! one naming a directory, device or pipe is refused.
 
 use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
@@ -55,15 +57,56 @@ pub fn remove_stale_temps(path: &Path) {
     }
 }
 
-/// First step of a write of `path`: creates its directory, removes stale
-/// temporary siblings left by killed runs, and returns the temporary path
-/// to write to.
-pub(crate) fn begin(path: &Path) -> io::Result<PathBuf> {
-    if let Some(dir) = parent_dir(path) {
+/// Most symbolic links followed from an output path to the file it names.
+const MAX_LINKS: usize = 40;
+
+/// The file a write of `path` replaces: `path` itself, or, when `path` is a
+/// symbolic link, the file it points to (written through, so that the link
+/// stays a link and its target is the one updated). An existing target that
+/// is not a regular file (a directory, a device, a pipe, a socket) is
+/// refused: odocal replaces only regular files.
+pub fn target_of(path: &Path) -> io::Result<PathBuf> {
+    let mut target = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        let meta = match fs::symlink_metadata(&target) {
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(target),
+            other => other?,
+        };
+        if meta.is_file() {
+            return Ok(target);
+        }
+        if !meta.file_type().is_symlink() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "{} is not a regular file (odocal writes only regular files)",
+                    target.display()
+                ),
+            ));
+        }
+        let link = fs::read_link(&target)?;
+        target = match parent_dir(&target) {
+            Some(dir) if link.is_relative() => dir.join(link),
+            _ => link,
+        };
+    }
+    Err(io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!("{}: too many levels of symbolic links", path.display()),
+    ))
+}
+
+/// First step of a write of `path`: finds the file it replaces
+/// ([`target_of`]), creates its directory, removes stale temporary siblings
+/// left by killed runs, and returns the temporary path to write to and the
+/// target to rename it over.
+pub(crate) fn begin(path: &Path) -> io::Result<(PathBuf, PathBuf)> {
+    let target = target_of(path)?;
+    if let Some(dir) = parent_dir(&target) {
         fs::create_dir_all(dir)?;
     }
-    remove_stale_temps(path);
-    Ok(temp_path(path))
+    remove_stale_temps(&target);
+    Ok((temp_path(&target), target))
 }
 
 /// Last step of a write: syncs the written temporary file `f` at `tmp`,
@@ -87,13 +130,13 @@ pub fn write_atomic<F>(path: &Path, fill: F) -> io::Result<()>
 where
     F: FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 {
-    let tmp = begin(path)?;
+    let (tmp, target) = begin(path)?;
     let result = (|| {
         let mut w = BufWriter::new(File::create(&tmp)?);
         fill(&mut w)?;
         w.flush()?;
         let f = w.into_inner().map_err(|e| e.into_error())?;
-        finish(f, &tmp, path)
+        finish(f, &tmp, &target)
     })();
     if result.is_err() {
         let _ = fs::remove_file(&tmp);

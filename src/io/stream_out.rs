@@ -22,7 +22,7 @@ impl AtomicWriter {
     /// Starts writing `path` (creating its directory); removes stale
     /// temporary siblings of `path` left by killed runs.
     pub fn create(path: &Path) -> io::Result<Self> {
-        let tmp = atomic::begin(path)?;
+        let (tmp, target) = atomic::begin(path)?;
         // Readable too, so that a writer may patch what it wrote (an MCAP summary).
         let f = fs::OpenOptions::new()
             .read(true)
@@ -32,7 +32,7 @@ impl AtomicWriter {
             .open(&tmp)?;
         let w = BufWriter::with_capacity(1 << 16, f);
         Ok(Self {
-            path: path.to_path_buf(),
+            path: target,
             tmp,
             w: Some(w),
         })
@@ -46,8 +46,14 @@ impl AtomicWriter {
     /// Flushes, syncs and renames the temporary file over the target.
     pub fn commit(mut self) -> io::Result<()> {
         let w = self.w.take().expect("commit runs once");
-        let f = w.into_inner().map_err(|e| e.into_error())?;
-        atomic::finish(f, &self.tmp, &self.path)
+        let result = w
+            .into_inner()
+            .map_err(|e| e.into_error())
+            .and_then(|f| atomic::finish(f, &self.tmp, &self.path));
+        if result.is_err() {
+            let _ = fs::remove_file(&self.tmp);
+        }
+        result
     }
 }
 

@@ -6,7 +6,7 @@
 use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
-use super::outputs::{CalibFiles, Collect};
+use super::outputs::{check_outputs, CalibFiles, Collect};
 use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
 use super::{Common, PipelineError};
@@ -159,6 +159,7 @@ pub fn run(
     job: &CalibrateJob,
     watch: &mut dyn RunObserver,
 ) -> Result<CalibrateOutcome, PipelineError> {
+    check_job_outputs(job)?;
     let (mut cfg, robot) = job.common.load()?;
     job.choice.apply(&mut cfg.calib);
     let params = params_for_robot(&cfg.calib, &robot);
@@ -213,6 +214,20 @@ pub fn run(
         None => Vec::new(),
     };
     Ok(CalibrateOutcome { summary, notes })
+}
+
+/// `odocal calibrate`'s outputs against its inputs ([`check_outputs`]).
+fn check_job_outputs(job: &CalibrateJob) -> Result<(), PipelineError> {
+    let inputs: Vec<&Path> = match &job.input {
+        CalibSource::Recording(p) => vec![p],
+        CalibSource::Csv { motions, wheels } => vec![motions, wheels],
+    };
+    let files = CalibFiles::paths(&job.out);
+    let mut outputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    if let Some(Viewer::File(rrd)) = &job.viewer {
+        outputs.push(rrd);
+    }
+    check_outputs(&inputs, &outputs)
 }
 
 /// The calibration input of the CSV files: wheel angles and the motions'

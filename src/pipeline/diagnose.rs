@@ -39,6 +39,11 @@ pub struct DiagnoseJob {
 /// Runs `odocal diagnose`: reads the measurements by their format, diagnoses
 /// them, and writes the report when asked.
 pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
+    if let Some(dir) = &job.report {
+        let outputs = ["report.md", "residuals.png", "regressors.png"].map(|f| dir.join(f));
+        let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
+        super::outputs::check_outputs(&[&job.measured], &outputs)?;
+    }
     let (mut cfg, robot) = job.common.load()?;
     if let Some(h) = job.holdout {
         if !(h > 0.0 && h < 1.0) {

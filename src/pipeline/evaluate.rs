@@ -108,6 +108,18 @@ pub fn run(job: &EvalJob) -> Result<EvalReport, PipelineError> {
             "eval needs --reference, --relations, or both".into(),
         ));
     }
+    let inputs: Vec<&Path> = [
+        Some(job.estimate.as_path()),
+        job.reference.as_deref(),
+        job.relations.as_deref(),
+        job.estimate_times.as_deref(),
+        job.reference_times.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let outputs: Vec<&Path> = job.plot.iter().map(PathBuf::as_path).collect();
+    super::outputs::check_outputs(&inputs, &outputs)?;
     let (cfg, robot) = job.common.load()?;
     let mut opts = job.options(cfg.eval);
     let read = super::read_options(&cfg, &robot);

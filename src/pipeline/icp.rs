@@ -4,14 +4,14 @@
 
 use super::drive::{self, IcpRunSummary};
 use super::observe::{Observers, RunObserver};
-use super::outputs::{Collect, IcpFiles};
+use super::outputs::{check_outputs, Collect, IcpFiles};
 use super::{Common, PipelineError};
 use crate::geom::Pose2;
 use crate::icp::IcpParams;
 use crate::io::{RecordingSource, SampleSource};
 use crate::recording::Recording;
 use crate::robot::RobotConfig;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 pub use super::outputs::IcpOutput;
 
@@ -48,6 +48,10 @@ pub struct IcpJob {
 /// trajectory and motions atomically. `watch` sees the run (e.g. progress).
 /// The summary's timing is the matching loop's.
 pub fn run(job: &IcpJob, watch: &mut dyn RunObserver) -> Result<IcpRunSummary, PipelineError> {
+    let outputs: Vec<&Path> = std::iter::once(job.out.as_path())
+        .chain(job.motions.as_deref())
+        .collect();
+    check_outputs(&[&job.input], &outputs)?;
     let (cfg, robot) = job.common.load()?;
     let read = super::read_options(&cfg, &robot);
     let mut source = crate::io::open(&job.input, &read)?;

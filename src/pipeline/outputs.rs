@@ -1,6 +1,8 @@
 //! The observers that keep a run's results: the output files, written row by
 //! row as the run goes and committed atomically only when it succeeded
-//! ([`IcpFiles`], [`CalibFiles`]), and the results in memory ([`Collect`]).
+//! ([`IcpFiles`], [`CalibFiles`]), and the results in memory ([`Collect`]);
+//! and the check every command makes of its output paths before any work
+//! ([`check_outputs`]).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -13,6 +15,75 @@ use crate::icp::IcpStats;
 use crate::io::stream_out::AtomicWriter;
 use crate::motion::{Motion, VelocityObs};
 use crate::traj::Trajectory;
+
+/// Checks a command's output paths before it does any work: none may be
+/// (or link to) one of its inputs or another of its outputs, and none may name
+/// anything but a regular file (a directory, device or pipe is refused;
+/// a symbolic link is written through). Each refusal names the path.
+pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), PipelineError> {
+    let mut seen: Vec<(&Path, FileId)> = Vec::new();
+    for input in inputs {
+        if let Some(id) = FileId::of(input) {
+            seen.push((input, id));
+        }
+    }
+    let n_inputs = seen.len();
+    for out in outputs {
+        let target = crate::io::atomic::target_of(out)
+            .map_err(|e| PipelineError::BadArgument(format!("output {}: {e}", out.display())))?;
+        let Some(id) = FileId::of(&target) else {
+            continue;
+        };
+        if let Some((i, (other, _))) = seen.iter().enumerate().find(|(_, (_, s))| *s == id) {
+            let what = if i < n_inputs {
+                "the input"
+            } else {
+                "the output"
+            };
+            return Err(PipelineError::BadArgument(format!(
+                "output {} is {what} {}: odocal never writes over a file it reads or writes \
+                 twice; choose another output path",
+                out.display(),
+                other.display()
+            )));
+        }
+        seen.push((out, id));
+    }
+    Ok(())
+}
+
+/// What identifies a file whatever the path that names it: device and inode
+/// on Unix (the canonical path elsewhere) when it exists; when it does not
+/// yet, its canonical directory and name. `None` when neither can be told.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum FileId {
+    Existing(String),
+    ToBe(PathBuf),
+}
+
+impl FileId {
+    fn of(path: &Path) -> Option<Self> {
+        let Ok(meta) = std::fs::metadata(path) else {
+            let dir = match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                Some(d) => std::fs::canonicalize(d).ok()?,
+                None => std::env::current_dir().ok()?,
+            };
+            return Some(Self::ToBe(dir.join(path.file_name()?)));
+        };
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            Some(Self::Existing(format!("{}:{}", meta.dev(), meta.ino())))
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = meta;
+            Some(Self::Existing(
+                std::fs::canonicalize(path).ok()?.display().to_string(),
+            ))
+        }
+    }
+}
 
 /// A text file written line by line, keeping its first write error.
 struct RowFile {
@@ -126,12 +197,22 @@ pub struct CalibFiles {
 }
 
 impl CalibFiles {
+    /// The files written into `dir`: history, trajectory, summary.
+    pub fn paths(dir: &Path) -> [PathBuf; 3] {
+        [
+            dir.join("calibration.csv"),
+            dir.join("trajectory.tum"),
+            dir.join("summary.json"),
+        ]
+    }
+
     /// Starts writing the files of `dir`.
     pub fn create(dir: &Path) -> Result<Self, PipelineError> {
+        let [history, trajectory, _] = Self::paths(dir);
         Ok(Self {
             dir: dir.to_path_buf(),
-            history: RowFile::create(&dir.join("calibration.csv"), crate::io::csv::HISTORY_HEADER)?,
-            trajectory: TumFile::create(&dir.join("trajectory.tum"))?,
+            history: RowFile::create(&history, crate::io::csv::HISTORY_HEADER)?,
+            trajectory: TumFile::create(&trajectory)?,
         })
     }
 
@@ -139,7 +220,7 @@ impl CalibFiles {
     pub fn commit(self, summary: &CalibSummary) -> Result<(), PipelineError> {
         self.history.commit()?;
         self.trajectory.file.commit()?;
-        let js = self.dir.join("summary.json");
+        let [_, _, js] = Self::paths(&self.dir);
         let text = serde_json::to_string_pretty(summary).expect("summary serialises");
         crate::io::atomic::write_bytes_atomic(&js, text.as_bytes())
             .map_err(|e| PipelineError::write(&js, e))

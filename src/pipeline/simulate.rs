@@ -63,6 +63,10 @@ pub fn run(
     job: &SimulateJob,
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimulateSummary, PipelineError> {
+    let outputs: Vec<&Path> = std::iter::once(job.out.as_path())
+        .chain(job.truth.as_deref())
+        .collect();
+    super::outputs::check_outputs(&[], &outputs)?;
     let (mut cfg, robot) = job.common.load()?;
     if let Some(s) = &job.scenario {
         set_scenario(&mut cfg.sim, s)?;

@@ -14,7 +14,7 @@ use crate::pipeline::calibrate::{self, CalibInput};
 use crate::pipeline::drive;
 use crate::pipeline::icp::IcpOutput;
 use crate::pipeline::observe::Observers;
-use crate::pipeline::outputs::{CalibFiles, Collect, IcpFiles};
+use crate::pipeline::outputs::{check_outputs, CalibFiles, Collect, IcpFiles};
 use crate::pipeline::recorder::{RecorderOptions, StreamRecorder};
 use crate::pipeline::viewer::{open_logger, Viewer};
 use crate::pipeline::{Common, Config, PipelineError};
@@ -176,6 +176,12 @@ pub fn run(
             ),
         ),
     };
+    let inputs: Vec<&Path> = std::iter::once(input.as_path())
+        .chain(truth_path.as_deref())
+        .collect();
+    let outputs = output_files(&job.out);
+    let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
+    check_outputs(&inputs, &outputs)?;
     let truth = truth_path.as_deref().map(load_truth).transpose()?;
     let rec = crate::pipeline::read_recording(&input, &cfg, &robot)?;
     std::fs::create_dir_all(&job.out).map_err(|e| PipelineError::write(&job.out, e))?;
@@ -193,6 +199,26 @@ pub fn run(
         config: &cfg,
     };
     run_on(&demo, &job.out, logger.as_mut(), progress)
+}
+
+/// Every file the demo writes into `out`.
+fn output_files(out: &Path) -> Vec<PathBuf> {
+    let top = [
+        "report.md",
+        "summary.json",
+        "icp.tum",
+        "motions.csv",
+        "raw_odometry.tum",
+        "radii.png",
+        "particles.png",
+        "trajectories.png",
+        "errors.png",
+        "demo.rrd",
+    ];
+    let methods = DEMO_METHODS
+        .iter()
+        .flat_map(|m| CalibFiles::paths(&out.join(m.as_str())));
+    top.iter().map(|f| out.join(f)).chain(methods).collect()
 }
 
 /// Reads a simulator truth file.
