@@ -543,3 +543,73 @@ fn cli_bundled_recording_regenerates_byte_for_byte() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+#[test]
+fn calibrating_without_wheel_data_names_the_file() {
+    let d = scratch("no_wheels_named");
+    // A CARMEN log of three scans and no odometry: nothing to calibrate from.
+    let log = d.join("scans-only.clf");
+    let ranges = vec!["5.0"; 180].join(" ");
+    let text: String = (0..3)
+        .map(|k| {
+            let t = 1.0 + 0.1 * k as f64;
+            format!("FLASER 180 {ranges} 0 0 0 0 0 0 {t} host {t}\n")
+        })
+        .collect();
+    std::fs::write(&log, text).unwrap();
+    let out = d.join("cal");
+    let o = odocal(&[
+        "calibrate",
+        "--input",
+        log.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("scans-only.clf"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("no wheel encoder data"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("left_joint"),
+        "names the key to set: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // The CSV path: a wheels file of one sample.
+    let wheels = d.join("one-sample.csv");
+    std::fs::write(&wheels, "t,left,right\n0.0,0.0,0.0\n").unwrap();
+    let motions = d.join("motions.csv");
+    std::fs::write(&motions, format!("{}\n", odocal::io::csv::MOTIONS_HEADER)).unwrap();
+    let o = odocal(&[
+        "calibrate",
+        "--motions",
+        motions.to_str().unwrap(),
+        "--wheels",
+        wheels.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("one-sample.csv"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!out.join("summary.json").exists());
+}

@@ -11,6 +11,7 @@ use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
 use super::{Common, PipelineError};
 use crate::calib::{self, CalibParams, CalibSummary, CalibrationRun, Ranges};
+use crate::error::InputError;
 use crate::motion::VelocityObs;
 use crate::recording::{GyroSample, WheelSample};
 use crate::robot::RobotConfig;
@@ -243,9 +244,14 @@ fn read_csv_input(motions: &Path, wheels: &Path) -> Result<CalibInput, PipelineE
         gyro: Vec::new(),
     };
     if input.wheels.len() < 2 {
-        return Err(PipelineError::BadArgument(
-            "the input has no wheel encoder data (JointState) to calibrate".into(),
-        ));
+        return Err(InputError::new(
+            wheels.display().to_string(),
+            format!(
+                "{} wheel samples: calibration needs at least 2",
+                input.wheels.len()
+            ),
+        )
+        .into());
     }
     Ok(input)
 }

@@ -307,9 +307,16 @@ pub fn run_calibration(
     obs.start(&info);
     let mut icp_stage = IcpStage::new(&info, source.name(), robot, icp)?;
     if info.wheels < 2 {
-        return Err(PipelineError::BadArgument(
-            "the input has no wheel encoder data (JointState) to calibrate".into(),
-        ));
+        return Err(InputError::new(
+            source.name(),
+            format!(
+                "no wheel encoder data to calibrate: {} JointState samples with the wheel \
+                 joints '{}' and '{}' (the robot file's left_joint and right_joint name them; \
+                 [topics] joint_states in --config names the topic)",
+                info.wheels, robot.left_joint, robot.right_joint
+            ),
+        )
+        .into());
     }
     let mut cal = calib::build(calib, robot.diff_drive())
         .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
@@ -329,7 +336,10 @@ pub fn run_calibration(
     stage.end_gyro();
     stage.poll(true, obs);
     let calibration = CalibRunSummary {
-        summary: stage.summary()?,
+        summary: stage.summary().map_err(|e| match e {
+            PipelineError::BadArgument(m) => InputError::new(source.name(), m).into(),
+            other => other,
+        })?,
         weight_resets: stage.weight_resets(),
     };
     Ok((icp_stage.summary(), calibration))
