@@ -612,4 +612,22 @@ fn calibrating_without_wheel_data_names_the_file() {
         String::from_utf8_lossy(&o.stderr)
     );
     assert!(!out.join("summary.json").exists());
+    // Two wheel samples but a header-only motions file: no observation at all.
+    std::fs::write(&wheels, "t,left,right\n0.0,0.0,0.0\n1.0,1.0,1.0\n").unwrap();
+    let o = odocal(&[
+        "calibrate",
+        "--motions",
+        motions.to_str().unwrap(),
+        "--wheels",
+        wheels.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("motions.csv") && err.contains("no velocity observation"),
+        "{err}"
+    );
+    assert!(!out.join("summary.json").exists());
 }

@@ -232,9 +232,10 @@ fn check_job_outputs(job: &CalibrateJob) -> Result<(), PipelineError> {
 }
 
 /// The calibration input of the CSV files: wheel angles and the motions'
-/// velocity observations; at least two wheel samples.
-fn read_csv_input(motions: &Path, wheels: &Path) -> Result<CalibInput, PipelineError> {
-    let motions = crate::io::csv::read_motions(motions)?;
+/// velocity observations; at least two wheel samples and one observation
+/// (without any, the filters would only return their prior).
+fn read_csv_input(motions_csv: &Path, wheels: &Path) -> Result<CalibInput, PipelineError> {
+    let motions = crate::io::csv::read_motions(motions_csv)?;
     let input = CalibInput {
         observations: motions
             .iter()
@@ -249,6 +250,17 @@ fn read_csv_input(motions: &Path, wheels: &Path) -> Result<CalibInput, PipelineE
             format!(
                 "{} wheel samples: calibration needs at least 2",
                 input.wheels.len()
+            ),
+        )
+        .into());
+    }
+    if input.observations.is_empty() {
+        return Err(InputError::new(
+            motions_csv.display().to_string(),
+            format!(
+                "no velocity observation to calibrate from: {} motions, none valid \
+                 (failed pairs give none)",
+                motions.len()
             ),
         )
         .into());
