@@ -9,7 +9,7 @@ use odocal::pipeline::diagnose::DiagnoseJob;
 use odocal::pipeline::evaluate::EvalJob;
 use odocal::pipeline::icp::IcpJob;
 use odocal::pipeline::simulate::SimulateJob;
-use odocal::pipeline::{self, Viewer};
+use odocal::pipeline::{self, PipelineError, Viewer};
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -297,18 +297,22 @@ impl IcpArgs {
 }
 
 impl CalibrateArgs {
-    /// The job these arguments ask for.
-    pub fn job(&self) -> CalibrateJob {
+    /// The job these arguments ask for; an error when they name no input
+    /// (clap already requires --input, or --motions with --wheels).
+    pub fn job(&self) -> Result<CalibrateJob, PipelineError> {
         let input = match (&self.input, &self.motions_csv, &self.wheels_csv) {
             (Some(rec), _, _) => CalibSource::Recording(rec.clone()),
             (None, Some(m), Some(w)) => CalibSource::Csv {
                 motions: m.clone(),
                 wheels: w.clone(),
             },
-            // clap requires --input or both --motions and --wheels.
-            _ => unreachable!("clap enforces the input arguments"),
+            _ => {
+                return Err(PipelineError::BadArgument(
+                    "calibrate needs --input REC, or --motions and --wheels".into(),
+                ))
+            }
         };
-        CalibrateJob {
+        Ok(CalibrateJob {
             input,
             out: self.out.clone(),
             choice: CalibratorChoice {
@@ -320,7 +324,7 @@ impl CalibrateArgs {
             },
             viewer: viewer(self.rrd.as_ref(), self.connect.as_ref(), self.spawn),
             common: self.common.files(),
-        }
+        })
     }
 }
 

@@ -86,7 +86,7 @@ fn icp(a: IcpArgs) -> anyhow::Result<()> {
 fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
     let pb = progress_bar("calibrate");
     let done = pipeline::calibrate::run(
-        &a.job(),
+        &a.job()?,
         &mut Progress::new(|f| pb.set_position((f * 1000.0) as u64)),
     )?;
     pb.finish_and_clear();
