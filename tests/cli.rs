@@ -544,6 +544,14 @@ fn cli_bundled_recording_regenerates_byte_for_byte() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// Runs odocal, requires exit code 2, and gives what it said on stderr.
+fn refused(args: &[&str]) -> String {
+    let o = odocal(args);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    err
+}
+
 #[test]
 fn calibrating_without_wheel_data_names_the_file() {
     let d = scratch("no_wheels_named");
@@ -558,73 +566,30 @@ fn calibrating_without_wheel_data_names_the_file() {
         .collect();
     std::fs::write(&log, text).unwrap();
     let out = d.join("cal");
-    let o = odocal(&[
-        "calibrate",
-        "--input",
-        log.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("scans-only.clf"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("no wheel encoder data"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("left_joint"),
-        "names the key to set: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let err = refused(&["calibrate", "--input", s(&log), "--out", s(&out)]);
+    assert!(err.contains("scans-only.clf"), "{err}");
+    assert!(err.contains("no wheel encoder data"), "{err}");
+    assert!(err.contains("left_joint"), "names the key to set: {err}");
     // The CSV path: a wheels file of one sample.
     let wheels = d.join("one-sample.csv");
     std::fs::write(&wheels, "t,left,right\n0.0,0.0,0.0\n").unwrap();
     let motions = d.join("motions.csv");
     std::fs::write(&motions, format!("{}\n", odocal::io::csv::MOTIONS_HEADER)).unwrap();
-    let o = odocal(&[
+    let from_csv = [
         "calibrate",
         "--motions",
-        motions.to_str().unwrap(),
+        s(&motions),
         "--wheels",
-        wheels.to_str().unwrap(),
+        s(&wheels),
         "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("one-sample.csv"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+        s(&out),
+    ];
+    let err = refused(&from_csv);
+    assert!(err.contains("one-sample.csv"), "{err}");
     assert!(!out.join("summary.json").exists());
     // Two wheel samples but a header-only motions file: no observation at all.
     std::fs::write(&wheels, "t,left,right\n0.0,0.0,0.0\n1.0,1.0,1.0\n").unwrap();
-    let o = odocal(&[
-        "calibrate",
-        "--motions",
-        motions.to_str().unwrap(),
-        "--wheels",
-        wheels.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = refused(&from_csv);
     assert!(
         err.contains("motions.csv") && err.contains("no velocity observation"),
         "{err}"

@@ -7,7 +7,7 @@ use crate::support::{scratch, shared_data};
 use odocal::calib::{CalibSummary, Method};
 use odocal::io::cdr::CdrWriter;
 use odocal::io::ros_msgs::{Header, ImuMsg, JointStateMsg, RosMsg, Time, Vec3};
-use odocal::io::{read_recording, Item, McapStream, ReadOptions, RecordingSource, SampleSource};
+use odocal::io::{read_recording, McapStream, ReadOptions, RecordingSource, SampleSource};
 use odocal::pipeline::calibrate::{CalibSource, CalibrateJob, CalibratorChoice};
 use odocal::pipeline::icp::IcpJob;
 use odocal::pipeline::outputs::{CalibFiles, IcpFiles};
@@ -25,21 +25,7 @@ const BUNDLED: &str = concat!(
 /// Every item of the streamed bag, gathered per stream.
 fn streamed(path: &Path, opts: &ReadOptions) -> Recording {
     let mut s = McapStream::open(path, opts).unwrap();
-    let mut rec = Recording {
-        source: path.display().to_string(),
-        base_from_laser: s.info().base_from_laser,
-        ..Default::default()
-    };
-    while let Some(item) = s.next_item().unwrap() {
-        match item {
-            Item::Scan(x) => rec.scans.push(x),
-            Item::Wheel(x) => rec.wheels.push(x),
-            Item::Gyro(x) => rec.gyro.push(x),
-            Item::Odom(x) => rec.odom.push(x),
-            Item::Reference(x) => rec.reference.push(x),
-        }
-    }
-    rec
+    odocal::io::collect(&mut s).unwrap()
 }
 
 /// Equal streams (bit for bit: NaN ranges count as equal, so the Debug

@@ -79,11 +79,6 @@ impl<'c> Runner<'c> {
         self.resets
     }
 
-    /// The estimate after the last step.
-    pub fn last(&self) -> Option<&Estimate> {
-        self.last.as_ref()
-    }
-
     /// The summary after the steps so far (the nominal parameters before any).
     pub fn summary(&self) -> CalibSummary {
         CalibSummary::after(

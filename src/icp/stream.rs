@@ -150,11 +150,6 @@ impl StreamMatcher {
         self.prior.end();
     }
 
-    /// Scans waiting for the prior.
-    pub fn pending(&self) -> usize {
-        self.pending.len()
-    }
-
     /// Matches every scan the prior now covers, handing out the motions.
     pub fn poll(&mut self, out: &mut dyn FnMut(Motion)) {
         while let Some(scan) = self.pending.front() {
