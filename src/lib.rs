@@ -10,6 +10,7 @@
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod assumptions;
 pub mod calib;
 pub mod classic;
 pub mod diagnose;

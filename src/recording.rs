@@ -54,6 +54,11 @@ pub struct Recording {
     pub reference: Vec<StampedPose>,
     /// `base_from_laser`, when the recording states it (/tf_static).
     pub base_from_laser: Option<Pose2>,
+    /// Where `base_from_laser` came from.
+    pub mount_origin: Option<crate::assumptions::Origin>,
+    /// Why the recording states no mounting, when it could have (e.g. the
+    /// scans' frame is not linked to `base_link`).
+    pub mount_note: Option<String>,
 }
 
 impl Recording {

@@ -17,7 +17,9 @@ fn blind(effects: &[Effect], seed: u64) -> odocal::diagnose::Diagnosis {
     let robot = RobotConfig::default();
     let (rec, _truth) = simulate(&cfg, &robot, effects, &mut |_| {}).unwrap();
     // From here on only the recording and the nominal robot.
-    let mount = rec.base_from_laser.unwrap_or_else(|| robot.laser.pose());
+    let mount = rec
+        .base_from_laser
+        .unwrap_or_else(|| robot.laser.unwrap().pose());
     let (motions, _) = match_recording(&rec.scans, mount, None, &IcpParams::default()).unwrap();
     let m = Measured::new(&rec, &motions);
     diagnose(&robot, &m, &DiagnoseParams::default()).unwrap()

@@ -65,6 +65,7 @@ pub fn synthetic() -> Recording {
         odom: (0..120).map(|k| path(k, 0.1)).collect(),
         reference: (0..120).map(|k| path(k, 0.0)).collect(),
         base_from_laser: Some(geom::pose(-0.45, 0.02, PI)),
+        ..Default::default()
     }
 }
 

@@ -2,6 +2,7 @@
 
 mod architecture;
 mod calib_censi;
+mod calib_checks;
 mod calib_end_to_end;
 mod calib_filters;
 mod calib_resample;

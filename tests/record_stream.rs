@@ -75,7 +75,12 @@ fn record(
     let (cfg, robot, _) = setup();
     let params = pipeline::calibrate::params_for_robot(&cfg.calib, &robot);
     let mut tape = Tape::default();
-    let mut rec = StreamRecorder::new(&mut tape, opts, robot.diff_drive(), robot.laser.pose());
+    let mut rec = StreamRecorder::new(
+        &mut tape,
+        opts,
+        robot.diff_drive(),
+        robot.laser.unwrap().pose(),
+    );
     let (icp, done) = drive::run_calibration(
         source,
         &robot,

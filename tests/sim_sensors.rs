@@ -94,7 +94,7 @@ fn streams_have_their_rates_and_encoders_count_whole_ticks() {
     assert!((s.angle_increment - 0.5f64.to_radians()).abs() < 1e-12);
     assert!((s.scan_time - 0.02).abs() < 1e-12 && s.time_increment > 0.0);
     assert!(rec.reference.iter().all(|p| p.has_heading));
-    assert_eq!(rec.base_from_laser, Some(robot.laser.pose()));
+    assert_eq!(rec.base_from_laser, Some(robot.laser.unwrap().pose()));
     assert_eq!(truth.trajectory.len(), 601);
     assert_eq!(truth.world, "corridor-loop");
     assert_eq!(
@@ -135,12 +135,12 @@ fn laser_offset_moves_only_the_true_laser() {
     let (rec, truth) = simulate(&cfg, &robot, &[off], &mut |_| {}).unwrap();
     assert_eq!(
         rec.base_from_laser,
-        Some(robot.laser.pose()),
+        Some(robot.laser.unwrap().pose()),
         "the bag keeps the nominal mount"
     );
-    assert!((truth.laser_mount.x - (robot.laser.x + 0.1)).abs() < 1e-12);
-    assert!((truth.laser_mount.y - (robot.laser.y - 0.05)).abs() < 1e-12);
-    assert!((truth.laser_mount.yaw - (robot.laser.yaw + 0.03)).abs() < 1e-12);
+    assert!((truth.laser_mount.x - (robot.laser.unwrap().x + 0.1)).abs() < 1e-12);
+    assert!((truth.laser_mount.y - (robot.laser.unwrap().y - 0.05)).abs() < 1e-12);
+    assert!((truth.laser_mount.yaw - (robot.laser.unwrap().yaw + 0.03)).abs() < 1e-12);
     // The chair stands still at first: every beam is a ray from the true laser pose.
     let world = worlds::builtin("corridor-loop").unwrap();
     let p0 = truth.trajectory().poses[0];

@@ -194,6 +194,8 @@ pub struct CalibParams {
     pub neff_ratio: f64,
     /// Max-weight trigger threshold as a multiple of 1/N.
     pub max_weight_factor: f64,
+    /// Observability and plausibility checks before a result is reported.
+    pub checks: super::sanity::CheckParams,
 }
 
 impl Default for CalibParams {
@@ -210,6 +212,7 @@ impl Default for CalibParams {
             change: ChangeParams::default(),
             neff_ratio: 0.5,
             max_weight_factor: 2.0,
+            checks: Default::default(),
         }
     }
 }

@@ -3,6 +3,7 @@
 //! `diff_drive_controller`.
 
 use super::Estimate;
+use crate::assumptions::Assumptions;
 use crate::robot::DiffDrive;
 use crate::traj::Trajectory;
 use serde::Serialize;
@@ -34,6 +35,13 @@ pub struct CalibSummary {
     pub mean_iteration_ms: f64,
     /// Multipliers for ROS diff_drive_controller.
     pub multipliers: Multipliers,
+    /// Where every nominal value came from (set by the command that ran).
+    #[serde(skip_serializing_if = "Assumptions::is_empty")]
+    pub assumptions: Assumptions,
+    /// Whether the run's motion determines each parameter (set by the
+    /// command that ran, which refuses what it cannot).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub observability: Option<super::Observability>,
 }
 
 /// Result of [`run`].
@@ -90,6 +98,8 @@ impl CalibSummary {
             } else {
                 1e3 * total_s / iterations as f64
             },
+            assumptions: Assumptions::default(),
+            observability: None,
             multipliers: Multipliers {
                 left_wheel_radius: ratio(final_params.r_left, nominal.r_left),
                 right_wheel_radius: ratio(final_params.r_right, nominal.r_right),

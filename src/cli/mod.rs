@@ -77,8 +77,18 @@ fn icp(a: IcpArgs) -> anyhow::Result<()> {
     stats.wall_s = start.elapsed().as_secs_f64();
     stats.pairs_per_s = stats.pairs as f64 / stats.wall_s.max(1e-9);
     if a.json {
-        return print_json(&stats);
+        #[derive(serde::Serialize)]
+        struct IcpJson<'a> {
+            #[serde(flatten)]
+            stats: &'a odocal::icp::IcpStats,
+            assumptions: &'a odocal::assumptions::Assumptions,
+        }
+        return print_json(&IcpJson {
+            stats: &stats,
+            assumptions: &run.assumptions,
+        });
     }
+    print::assumptions(&run.assumptions);
     print::icp(&stats, run.path_length, &a.out);
     Ok(())
 }

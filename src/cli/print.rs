@@ -69,6 +69,10 @@ pub fn trajectory_metrics(t: &odocal::eval::TrajectoryMetrics) {
 }
 
 pub fn calibration(s: &CalibSummary, out: &Path) {
+    assumptions(&s.assumptions);
+    if let Some(o) = &s.observability {
+        observability(o);
+    }
     eprintln!(
         "{}: R_R {:.5} ± {:.5} m, R_L {:.5} ± {:.5} m, D {:.5} ± {:.5} m after {} steps ({:.3} ms/step)",
         s.method,
@@ -154,6 +158,31 @@ pub fn simulation(summary: &SimulateSummary) {
             .map(|t| format!("; truth in {t}"))
             .unwrap_or_default()
     );
+}
+
+/// Where each nominal value came from, one line each.
+pub fn assumptions(a: &odocal::assumptions::Assumptions) {
+    for line in a.lines() {
+        eprintln!("assuming {line}");
+    }
+}
+
+/// Each parameter's observability, and what the run's motion lacked.
+pub fn observability(o: &odocal::calib::Observability) {
+    let e = &o.excitation;
+    eprintln!(
+        "excitation: {} steps, {:.2} m driven ({:.2} m straight), turns {:.2} rad left / {:.2} rad right, up to {:.2} m/s",
+        e.steps, e.distance_m, e.straight_m, e.turn_left_rad, e.turn_right_rad, e.speed_max
+    );
+    for (name, p) in &o.parameters {
+        if p.weak {
+            eprintln!(
+                "warning: {name} is weakly observable ({}); its std is widened to {:.5} m",
+                p.missing.as_deref().unwrap_or(""),
+                p.std
+            );
+        }
+    }
 }
 
 /// What `odocal icp` matched and wrote.

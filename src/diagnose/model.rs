@@ -130,7 +130,7 @@ impl Replay {
         Self {
             r0: [robot.r_right, robot.r_left],
             base0: robot.wheel_base,
-            mount: robot.laser,
+            mount: robot.laser.unwrap_or_default(),
             origin,
             ts,
             right,
@@ -288,7 +288,7 @@ mod tests {
         let (t0, t1) = (0.3, 0.34);
         let (v, w) = r.body(&Departures::default(), t0, t1);
         let o = geom::arc_increment(v, w, t1 - t0);
-        let m = &robot.laser;
+        let m = robot.laser.unwrap();
         let l0 = geom::pose(m.x, m.y, m.yaw);
         let l = geom::pose(m.x + 0.05, m.y - 0.03, m.yaw + 0.04);
         let want = geom::xyt(&(l0 * (l.inverse() * o * l) * l0.inverse()));

@@ -239,8 +239,9 @@ fn icp_motions(
     truth: &TrueMotion,
     rng: &mut rand::rngs::StdRng,
 ) -> Vec<Motion> {
-    let l0 = nominal.laser.pose();
-    let l1 = x.laser_mount(&nominal.laser).pose();
+    let mount = nominal.laser.unwrap_or_default();
+    let l0 = mount.pose();
+    let l1 = x.laser_mount(&mount).pose();
     let e = l1 * l0.inverse();
     let nd = Normal::new(0.0, 1.0).unwrap();
     let n_scans = (spec.duration * spec.icp_rate) as usize;

@@ -9,6 +9,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use super::options::ReadOptions;
+use crate::assumptions::Origin;
 use crate::error::InputError;
 use crate::geom::{self, Pose2};
 use crate::recording::{Recording, StampedPose};
@@ -53,6 +54,7 @@ pub fn read_carmen_bytes(
         ..Default::default()
     };
     let mut known = 0usize;
+    let mut mount = MountFromLog::default();
     let mut latest_scan = f64::NEG_INFINITY;
     let mut latest_odom = f64::NEG_INFINITY;
     // The last line, when the log does not end with a newline, may be cut.
@@ -71,11 +73,12 @@ pub fn read_carmen_bytes(
         };
         let fields: Vec<&str> = tok.collect();
         let parsed = match kind {
-            "FLASER" => parse_flaser(&fields),
+            "FLASER" => parse_flaser(&fields).map(|(scan, odom, laser)| {
+                mount.see(&odom.pose, &laser, i + 1);
+                (Some(scan), odom)
+            }),
             "ROBOTLASER1" => parse_robotlaser(&fields).map(|(scan, odom, laser)| {
-                if rec.base_from_laser.is_none() {
-                    rec.base_from_laser = Some(geom::between(&odom.pose, &laser));
-                }
+                mount.see(&odom.pose, &laser, i + 1);
                 (Some(scan), odom)
             }),
             "ODOM" => parse_odom(&fields).map(|o| (None, o)),
@@ -101,8 +104,59 @@ pub fn read_carmen_bytes(
             "neither an MCAP file nor a CARMEN log (no FLASER, ROBOTLASER1 or ODOM line)",
         ));
     }
+    mount.finish(&mut rec);
     rec.sort_streams();
     Ok(rec)
+}
+
+/// The laser mounting a CARMEN log states: each laser line carries the
+/// laser's pose and the robot's odometry pose, so `odom⁻¹ ⊕ laser` is
+/// `base_from_laser` — when it is the same on every line. Logs whose laser
+/// pose was corrected (by SLAM) give no fixed offset and state no mounting.
+#[derive(Debug, Default)]
+struct MountFromLog {
+    first: Option<Pose2>,
+    /// The first line whose offset departs from the first one's.
+    departs: Option<usize>,
+}
+
+impl MountFromLog {
+    /// Largest departure from the first line's offset still taken as the
+    /// same mounting: the logs' 4–6 decimals.
+    const TOL_M: f64 = 1e-3;
+    const TOL_RAD: f64 = 1e-3;
+
+    fn see(&mut self, odom: &Pose2, laser: &Pose2, line: usize) {
+        let b = geom::between(odom, laser);
+        match &self.first {
+            None => self.first = Some(b),
+            Some(f) if self.departs.is_none() => {
+                let d = geom::between(f, &b);
+                if d.translation.vector.norm() > Self::TOL_M
+                    || d.rotation.angle().abs() > Self::TOL_RAD
+                {
+                    self.departs = Some(line);
+                }
+            }
+            Some(_) => {}
+        }
+    }
+
+    fn finish(self, rec: &mut Recording) {
+        match (self.first, self.departs) {
+            (Some(b), None) => {
+                rec.base_from_laser = Some(b);
+                rec.mount_origin = Some(Origin::Log);
+            }
+            (Some(_), Some(line)) => {
+                rec.mount_note = Some(format!(
+                    "the log's laser poses are not at a fixed offset from its odometry poses \
+                     (from line {line} on), so they state no mounting"
+                ));
+            }
+            (None, _) => {}
+        }
+    }
 }
 
 /// Checks that a stream's `stamp` goes back at most `tolerance` s behind the
@@ -174,12 +228,13 @@ fn pose_at(fields: &[&str], i: usize, what: &str) -> Result<Pose2, String> {
 }
 
 /// `FLASER n r… x y θ odom_x odom_y odom_θ ipc_timestamp host logger_timestamp`.
-fn parse_flaser(f: &[&str]) -> Result<(Option<LaserScan>, StampedPose), String> {
+fn parse_flaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), String> {
     let n = count(f, 0, "number of readings")?;
     if n == 0 {
         return Err("FLASER with zero beams".into());
     }
     let r = ranges(f, 1, n)?;
+    let laser = pose_at(f, n + 1, "laser pose")?;
     let odom = pose_at(f, n + 4, "odometry pose")?;
     let stamp = stamp(f, n + 7)?;
     complete(f, n + 7)?;
@@ -193,12 +248,13 @@ fn parse_flaser(f: &[&str]) -> Result<(Option<LaserScan>, StampedPose), String> 
         ..Default::default()
     };
     Ok((
-        Some(scan),
+        scan,
         StampedPose {
             stamp,
             pose: odom,
             has_heading: true,
         },
+        laser,
     ))
 }
 
@@ -262,7 +318,7 @@ mod tests {
     #[test]
     fn reads_all_three_kinds() {
         let log = "# comment\nPARAM x 1\n\
-            FLASER 3 1.0 2.0 3.0 0 0 0 1.5 2.5 0.1 10.5 host 10.6\n\
+            FLASER 3 1.0 2.0 3.0 1.699002 2.519967 0.1 1.5 2.5 0.1 10.5 host 10.6\n\
             ODOM 1.6 2.6 0.2 0 0 0 10.7 host 10.8\n\
             ROBOTLASER1 0 -1.0 2.0 0.5 30 0.01 0 5 1 1 1 1 1 0 1.2 2 0 1 2 0 0 0 0 0 0 11.0 host 11.1\n";
         let r = read(log).unwrap();
@@ -278,8 +334,19 @@ mod tests {
             (rl.angle_min, rl.angle_increment, rl.range_max),
             (-1.0, 0.5, 30.0)
         );
+        // Both laser lines put the laser 0.2 m ahead of the odometry pose.
         let b = r.base_from_laser.unwrap();
-        assert!((b.translation.vector.x - 0.2).abs() < 1e-12);
+        assert!((b.translation.vector.x - 0.2).abs() < 1e-5);
+        assert_eq!(r.mount_origin, Some(Origin::Log));
+    }
+
+    #[test]
+    fn laser_poses_off_a_fixed_offset_state_no_mounting() {
+        let log = "FLASER 3 1 2 3 0 0 0 0 0 0 1 h 1\n\
+            FLASER 3 1 2 3 5.0 0 0 0 0 0 2 h 2\n";
+        let r = read(log).unwrap();
+        assert_eq!((r.base_from_laser, r.mount_origin), (None, None));
+        assert!(r.mount_note.unwrap().contains("line 2"));
     }
 
     #[test]

@@ -316,7 +316,12 @@ impl<'o> McapStream<'o> {
     }
 
     fn decode(&mut self, raw: Raw) -> Result<(), Fail> {
-        for role in &raw.roles {
+        // Transforms were resolved in the first pass.
+        for role in raw
+            .roles
+            .iter()
+            .filter(|r| !matches!(r, Role::Tf | Role::TfStatic))
+        {
             self.state
                 .handle(*role, &raw.data, raw.log_time)
                 .map_err(|m| {
@@ -384,13 +389,18 @@ fn first_pass(path: &Path, opts: &ReadOptions) -> Result<StreamInfo, Fail> {
                 Role::Imu => info.gyro += 1,
                 Role::Odom => info.odom += 1,
                 Role::RefOdometry | Role::RefPose | Role::RefPoint => info.reference += 1,
-                Role::TfStatic => state.handle(*role, &raw.data, raw.log_time).map_err(|e| {
-                    Fail::Input(InputError::new(&name, e).topic(raw.topic.as_str()))
-                })?,
+                Role::TfStatic | Role::Tf => {
+                    state.handle(*role, &raw.data, raw.log_time).map_err(|e| {
+                        Fail::Input(InputError::new(&name, e).topic(raw.topic.as_str()))
+                    })?
+                }
             }
         }
     }
-    info.base_from_laser = state.finish().map_err(Fail::Input)?.base_from_laser;
+    let rec = state.finish().map_err(Fail::Input)?;
+    info.base_from_laser = rec.base_from_laser;
+    info.mount_origin = rec.mount_origin;
+    info.mount_note = rec.mount_note;
     Ok(info)
 }
 

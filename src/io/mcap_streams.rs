@@ -11,6 +11,7 @@ use super::ros_msgs::{
     TfMessage, Time,
 };
 use super::ros_schema::short_name;
+use crate::assumptions::Origin;
 use crate::error::InputError;
 use crate::geom::{self, Pose2};
 use crate::recording::{GyroSample, Recording, StampedPose, WheelSample};
@@ -35,6 +36,9 @@ pub(crate) enum Role {
     RefPoint,
     /// TFMessage → `base_from_laser`.
     TfStatic,
+    /// TFMessage on /tf → `base_from_laser` when /tf_static has none (the
+    /// first transform of each child frame).
+    Tf,
 }
 
 /// Wheel readings before sorting: angles, or rates to integrate.
@@ -55,6 +59,8 @@ pub(crate) struct State<'a> {
     laser_frame: Option<String>,
     /// child → (parent, parent_from_child).
     tf: HashMap<String, (String, Pose2)>,
+    /// The same from /tf: the first transform seen of each child frame.
+    tf_dynamic: HashMap<String, (String, Pose2)>,
 }
 
 /// The stamp (s) of a message: its header stamp, or its log time when the
@@ -115,6 +121,7 @@ impl<'a> State<'a> {
             wheel_mode: None,
             laser_frame: None,
             tf: HashMap::new(),
+            tf_dynamic: HashMap::new(),
         }
     }
 
@@ -203,13 +210,22 @@ impl<'a> State<'a> {
                 });
                 Ok(())
             }
-            Role::TfStatic => {
+            Role::TfStatic | Role::Tf => {
                 let m = TfMessage::decode(data).map_err(cdr)?;
+                let map = if role == Role::Tf {
+                    &mut self.tf_dynamic
+                } else {
+                    &mut self.tf
+                };
                 for tr in m.transforms {
                     let yaw = tr.rotation.yaw();
                     finite("transform", &[tr.translation.x, tr.translation.y, yaw])?;
-                    self.tf.insert(
-                        frame(&tr.child_frame_id).to_string(),
+                    let child = frame(&tr.child_frame_id).to_string();
+                    if role == Role::Tf && map.contains_key(&child) {
+                        continue;
+                    }
+                    map.insert(
+                        child,
                         (
                             frame(&tr.header.frame_id).to_string(),
                             geom::pose(tr.translation.x, tr.translation.y, yaw),
@@ -341,38 +357,72 @@ impl<'a> State<'a> {
                 .topic(&self.opts.topics.joint_states));
             }
         }
-        if let Some(laser) = &self.laser_frame {
-            self.rec.base_from_laser = self
-                .base_from(laser)
-                .map_err(|m| InputError::new(&self.file, m).topic(&self.opts.topics.tf_static))?;
+        if let Some(laser) = self.laser_frame.clone() {
+            self.resolve_mount(&laser)?;
         }
         Ok(self.rec)
     }
 
-    /// `base_link_from_<frame>` by walking the static transforms up from
-    /// `frame`; `None` when the chain does not reach `base_link`.
-    fn base_from(&self, laser: &str) -> Result<Option<Pose2>, String> {
-        if laser == "base_link" {
-            return Ok(Some(Pose2::identity()));
-        }
-        let mut acc = Pose2::identity();
-        let mut cur = laser;
-        for _ in 0..32 {
-            let Some((parent, p)) = self.tf.get(cur) else {
-                return Ok(None);
-            };
-            acc = p * acc;
-            let v = acc.translation.vector;
-            if !(v.x.is_finite() && v.y.is_finite()) {
-                return Err(format!("transform chain from '{laser}' overflows"));
+    /// `base_from_laser` for scans in frame `laser`: from /tf_static, else
+    /// from the first transforms on /tf; when neither links the frame to
+    /// `base_link`, a note says what the recording has instead.
+    fn resolve_mount(&mut self, laser: &str) -> Result<(), InputError> {
+        let topics = &self.opts.topics;
+        let sources = [
+            (&self.tf, Origin::TfStatic, &topics.tf_static),
+            (&self.tf_dynamic, Origin::Tf, &topics.tf),
+        ];
+        for (map, origin, topic) in sources {
+            let found = base_from(map, laser)
+                .map_err(|m| InputError::new(&self.file, m).topic(topic.as_str()))?;
+            if let Some(p) = found {
+                self.rec.base_from_laser = Some(p);
+                self.rec.mount_origin = Some(origin);
+                return Ok(());
             }
-            if parent == "base_link" {
-                return Ok(Some(acc));
-            }
-            cur = parent;
         }
-        Err(format!("transform chain from '{laser}' loops"))
+        let mut linked: Vec<&str> = self.tf.keys().map(String::as_str).collect();
+        linked.sort_unstable();
+        self.rec.mount_note = Some(if linked.is_empty() {
+            format!(
+                "the scans are in frame '{laser}' and neither {} nor {} links it to base_link",
+                topics.tf_static, topics.tf
+            )
+        } else {
+            format!(
+                "the scans are in frame '{laser}', which {} does not link to base_link \
+                 (it has frames: {})",
+                topics.tf_static,
+                linked.join(", ")
+            )
+        });
+        Ok(())
     }
+}
+
+/// `base_link_from_<frame>` by walking the transforms `tf` up from `frame`;
+/// `None` when the chain does not reach `base_link`.
+fn base_from(tf: &HashMap<String, (String, Pose2)>, laser: &str) -> Result<Option<Pose2>, String> {
+    if laser == "base_link" {
+        return Ok(Some(Pose2::identity()));
+    }
+    let mut acc = Pose2::identity();
+    let mut cur = laser;
+    for _ in 0..32 {
+        let Some((parent, p)) = tf.get(cur) else {
+            return Ok(None);
+        };
+        acc = p * acc;
+        let v = acc.translation.vector;
+        if !(v.x.is_finite() && v.y.is_finite()) {
+            return Err(format!("transform chain from '{laser}' overflows"));
+        }
+        if parent == "base_link" {
+            return Ok(Some(acc));
+        }
+        cur = parent;
+    }
+    Err(format!("transform chain from '{laser}' loops"))
 }
 
 /// Wheel angles from wheel rates (rad/s) by the trapezoidal rule, one sample
@@ -455,6 +505,7 @@ pub(crate) fn channel_roles(
         ],
     )?;
     want(&t.tf_static, &[(TfMessage::TYPE, Role::TfStatic)])?;
+    want(&t.tf, &[(TfMessage::TYPE, Role::Tf)])?;
     if !roles.is_empty() && ch.message_encoding != "cdr" {
         return Err(format!(
             "message encoding '{}' where cdr was expected",

@@ -106,6 +106,8 @@ pub fn collect(source: &mut dyn SampleSource) -> Result<Recording, InputError> {
     let mut rec = Recording {
         source: source.name().to_string(),
         base_from_laser: info.base_from_laser,
+        mount_origin: info.mount_origin,
+        mount_note: info.mount_note.clone(),
         ..Default::default()
     };
     while let Some(item) = source.next_item()? {

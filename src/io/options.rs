@@ -21,6 +21,9 @@ pub struct TopicConfig {
     pub reference: String,
     /// `tf2_msgs/msg/TFMessage` with `base_link` → laser.
     pub tf_static: String,
+    /// `tf2_msgs/msg/TFMessage`: dynamic transforms, read for `base_link` →
+    /// laser only when /tf_static does not link them.
+    pub tf: String,
 }
 
 impl Default for TopicConfig {
@@ -32,6 +35,7 @@ impl Default for TopicConfig {
             odom: "/odom".into(),
             reference: "/ground_truth".into(),
             tf_static: "/tf_static".into(),
+            tf: "/tf".into(),
         }
     }
 }

@@ -66,6 +66,10 @@ pub struct StreamInfo {
     pub reference: usize,
     /// `base_from_laser` from /tf_static, when the bag states it.
     pub base_from_laser: Option<Pose2>,
+    /// Where `base_from_laser` came from.
+    pub mount_origin: Option<crate::assumptions::Origin>,
+    /// Why the recording states no mounting, when it could have.
+    pub mount_note: Option<String>,
 }
 
 /// A recording as a stream of samples, each stream in stamp order.
@@ -108,6 +112,8 @@ impl<'r> RecordingSource<'r> {
             odom: rec.odom.len(),
             reference: rec.reference.len(),
             base_from_laser: rec.base_from_laser,
+            mount_origin: rec.mount_origin,
+            mount_note: rec.mount_note.clone(),
         };
         Self {
             rec,

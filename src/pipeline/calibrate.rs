@@ -161,16 +161,20 @@ pub fn run(
     watch: &mut dyn RunObserver,
 ) -> Result<CalibrateOutcome, PipelineError> {
     check_job_outputs(job)?;
-    let (mut cfg, robot) = job.common.load()?;
+    let (mut cfg, nominal) = job.common.load_nominal()?;
+    let robot = &nominal.robot;
     job.choice.apply(&mut cfg.calib);
-    let params = params_for_robot(&cfg.calib, &robot);
+    let params = params_for_robot(&cfg.calib, robot);
     let mut logger = open_logger(job.viewer.as_ref())?;
     let mut recorder = logger.as_deref_mut().map(|l| {
         StreamRecorder::new(
             l,
             RecorderOptions::default(),
             robot.diff_drive(),
-            robot.laser.pose(),
+            robot
+                .laser
+                .map(|l| l.pose())
+                .unwrap_or_else(crate::geom::Pose2::identity),
         )
     });
     let mut quiet = NoObserver;
@@ -180,41 +184,89 @@ pub fn run(
     };
     let mut files = CalibFiles::create(&job.out)?;
     let mut obs = Observers(vec![&mut files, rec_obs, watch]);
-    let summary = match &job.input {
+    let (done, assumptions, input) = match &job.input {
         CalibSource::Recording(path) => {
-            let read = super::read_options(&cfg, &robot);
+            let read = super::read_options(&cfg, robot);
             let mut source = crate::io::open(path, &read)?;
-            drive::run_calibration(
+            let (icp, done) = drive::run_calibration(
                 source.as_mut(),
-                &robot,
+                robot,
                 &cfg.icp,
                 &params,
                 &cfg.measurements,
                 &mut obs,
-            )?
-            .1
+            )?;
+            (done, nominal.assumptions_with(&icp.mount), path)
         }
         CalibSource::Csv { motions, wheels } => {
             let input = read_csv_input(motions, wheels)?;
-            drive::calibrate_streams(
+            let done = drive::calibrate_streams(
                 &input.wheels,
                 &input.observations,
                 &input.gyro,
-                &robot,
+                robot,
                 &params,
                 &cfg.measurements,
                 &mut obs,
-            )?
+            )?;
+            (done, nominal.assumptions(), motions)
         }
-    }
-    .summary;
+    };
     drop(obs);
+    let mut summary = done.summary;
+    summary.assumptions = assumptions;
+    vet(
+        &mut summary,
+        &done.evidence,
+        robot,
+        &params,
+        &input.display().to_string(),
+    )?;
     files.commit(&summary)?;
     let notes = match recorder {
         Some(r) => r.finish().map_err(super::viewer::viz_error)?,
         None => Vec::new(),
     };
     Ok(CalibrateOutcome { summary, notes })
+}
+
+/// Before a calibration is reported: the encoders' wiring, the parameters'
+/// observability (weak ones get a widened std) and the estimate's
+/// plausibility. What the data cannot support is an error naming `input`.
+fn vet(
+    summary: &mut CalibSummary,
+    evidence: &calib::Evidence,
+    robot: &RobotConfig,
+    params: &CalibParams,
+    input: &str,
+) -> Result<(), PipelineError> {
+    let refuse = |m: String| -> PipelineError { InputError::new(input, m).into() };
+    if let Some(fault) = evidence.wiring().fault() {
+        return Err(refuse(format!("wheel encoders wired wrongly: {fault}")));
+    }
+    if params.method == calib::Method::None {
+        return Ok(());
+    }
+    let nominal = robot.diff_drive();
+    let o = calib::observability(evidence, &summary.std, &nominal, &params.checks);
+    let missing = o.unobservable();
+    if !missing.is_empty() {
+        return Err(refuse(format!(
+            "the recording's motion cannot determine every parameter ({}); record a drive \
+             with straight runs and turns both ways",
+            missing.join("; ")
+        )));
+    }
+    let pf = matches!(params.method, calib::Method::AdaptivePf | calib::Method::Pf);
+    let ranges = pf.then(|| params.ranges.all());
+    if let Some(m) = calib::implausible(&summary.final_params, &nominal, ranges, &params.checks) {
+        return Err(refuse(format!("calibration refused: {m}")));
+    }
+    summary.std.r_right = o.parameters["r_right"].std;
+    summary.std.r_left = o.parameters["r_left"].std;
+    summary.std.wheel_base = o.parameters["wheel_base"].std;
+    summary.observability = Some(o);
+    Ok(())
 }
 
 /// `odocal calibrate`'s outputs against its inputs ([`check_outputs`]).

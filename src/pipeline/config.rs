@@ -86,14 +86,10 @@ impl Config {
     }
 }
 
-/// Loads a robot file, or the default wheelchair when `None`.
+/// Loads a robot file, or the wheelchair's kinematics (no laser mounting)
+/// when `None` ([`super::Nominal::load`]).
 pub fn load_robot(path: Option<&Path>) -> Result<RobotConfig, PipelineError> {
-    let Some(path) = path else {
-        return Ok(RobotConfig::default());
-    };
-    let text = read_text(path)?;
-    RobotConfig::from_toml(&text)
-        .map_err(|e| InputError::new(path.display().to_string(), e.to_string()).into())
+    Ok(super::Nominal::load(path)?.robot)
 }
 
 fn span_position(text: &str, span: Option<std::ops::Range<usize>>) -> String {

@@ -95,9 +95,8 @@ pub fn run_recording(
     measured.wheels = wheels;
     // The nominal mount is the one ICP used (the recording's /tf_static
     // when present), so `laser_offset` is relative to it.
-    let [x, y, yaw] = crate::geom::xyt(&icp::base_from_laser(rec, robot));
     let robot = RobotConfig {
-        laser: crate::robot::LaserMount { x, y, yaw },
+        laser: Some(icp::mount(rec, robot)?.laser()),
         ..robot.clone()
     };
     diagnose::diagnose(&robot, &measured, params)
@@ -115,7 +114,15 @@ pub fn run_tuples(
     robot: &RobotConfig,
     params: &DiagnoseParams,
 ) -> Result<Diagnosis, PipelineError> {
-    let (wheels, motions) = crate::io::censi::to_streams(tuples, &robot.laser.pose(), 1e-3, 1e-3);
+    let Some(laser) = robot.laser else {
+        return Err(PipelineError::BadArgument(
+            "the tuples' laser mounting is unknown: set [laser] x, y, yaw (the nominal \
+             base_from_laser, m, m, rad) in the robot file (--robot ROBOT.toml); the diagnosis \
+             estimates the mounting relative to it (laser_offset)"
+                .into(),
+        ));
+    };
+    let (wheels, motions) = crate::io::censi::to_streams(tuples, &laser.pose(), 1e-3, 1e-3);
     let measured = Measured {
         wheels: &wheels,
         motions: &motions,

@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use super::observe::RunObserver;
-use super::PipelineError;
+use super::{Mount, PipelineError};
 use crate::calib::{self, CalibParams, CalibStep, CalibSummary, Calibrator, Runner, StepBuilder};
 use crate::error::InputError;
 use crate::icp::{IcpParams, IcpStats, Prior, StreamMatcher, Tally};
@@ -44,12 +44,17 @@ pub struct IcpRunSummary {
     pub stats: IcpStats,
     /// Length (m) of the chained ICP trajectory.
     pub path_length: f64,
+    /// The laser mounting the scans were matched with, and its source.
+    pub mount: Mount,
+    /// Where every nominal value came from (filled by the command).
+    pub assumptions: crate::assumptions::Assumptions,
 }
 
 /// The ICP stage: the matcher fed the scans and the prior's samples, and the
 /// tally that chains the motions into the ICP trajectory.
 struct IcpStage {
     matcher: StreamMatcher,
+    mount: Mount,
     prior: Prior,
     tally: Tally,
     wheels_seen: usize,
@@ -74,11 +79,12 @@ impl IcpStage {
             .into());
         }
         let prior = Prior::choose(info.wheels, info.odom, robot.diff_drive());
-        let base = info.base_from_laser.unwrap_or_else(|| robot.laser.pose());
-        let matcher = StreamMatcher::new(params, base, prior)
+        let mount = Mount::resolve(info.into(), robot, source)?;
+        let matcher = StreamMatcher::new(params, mount.pose, prior)
             .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
         Ok(Self {
             matcher,
+            mount,
             prior,
             tally: Tally::default(),
             wheels_seen: 0,
@@ -139,6 +145,8 @@ impl IcpStage {
         IcpRunSummary {
             stats: self.tally.stats(self.matching_s),
             path_length: self.tally.path_length(),
+            mount: self.mount.clone(),
+            assumptions: Default::default(),
         }
     }
 }
@@ -167,6 +175,7 @@ pub fn run_icp(
 pub struct CalibStage<'c> {
     steps: StepBuilder,
     runner: Runner<'c>,
+    evidence: calib::Evidence,
 }
 
 impl<'c> CalibStage<'c> {
@@ -181,6 +190,7 @@ impl<'c> CalibStage<'c> {
         Self {
             steps: StepBuilder::new(meas.use_gyro && has_gyro, meas.gyro_sigma),
             runner: Runner::new(cal, robot.diff_drive()),
+            evidence: calib::Evidence::default(),
         }
     }
 
@@ -219,8 +229,16 @@ impl<'c> CalibStage<'c> {
     /// Runs every step that is now final (with `all_done`, every step left).
     pub fn poll(&mut self, all_done: bool, obs: &mut dyn RunObserver) {
         let runner = &mut self.runner;
-        self.steps
-            .poll(all_done, &mut |s: CalibStep| run_step(runner, &s, obs));
+        let evidence = &mut self.evidence;
+        self.steps.poll(all_done, &mut |s: CalibStep| {
+            evidence.add(&s);
+            run_step(runner, &s, obs)
+        });
+    }
+
+    /// What the steps so far show of the excitation and the wiring.
+    pub fn evidence(&self) -> &calib::Evidence {
+        &self.evidence
     }
 
     /// The summary after the steps so far; an error when there was none.
@@ -288,6 +306,8 @@ pub struct CalibRunSummary {
     pub summary: CalibSummary,
     /// Steps whose weights all underflowed and were reset.
     pub weight_resets: usize,
+    /// The excitation and wiring the steps showed.
+    pub evidence: calib::Evidence,
 }
 
 /// Runs ICP and the calibrator `calib` names over `source` and gives both
@@ -341,6 +361,7 @@ pub fn run_calibration(
             other => other,
         })?,
         weight_resets: stage.weight_resets(),
+        evidence: stage.evidence().clone(),
     };
     Ok((icp_stage.summary(), calibration))
 }
@@ -381,5 +402,6 @@ pub fn calibrate_streams(
     Ok(CalibRunSummary {
         summary: stage.summary()?,
         weight_resets: stage.weight_resets(),
+        evidence: stage.evidence().clone(),
     })
 }

@@ -5,8 +5,7 @@
 use super::drive::{self, IcpRunSummary};
 use super::observe::{Observers, RunObserver};
 use super::outputs::{check_outputs, Collect, IcpFiles};
-use super::{Common, PipelineError};
-use crate::geom::Pose2;
+use super::{Common, Mount, PipelineError};
 use crate::icp::IcpParams;
 use crate::io::{RecordingSource, SampleSource};
 use crate::recording::Recording;
@@ -15,9 +14,10 @@ use std::path::{Path, PathBuf};
 
 pub use super::outputs::IcpOutput;
 
-/// `base_from_laser`: the recording's /tf_static when present, else the robot file's.
-pub fn base_from_laser(rec: &Recording, robot: &RobotConfig) -> Pose2 {
-    rec.base_from_laser.unwrap_or_else(|| robot.laser.pose())
+/// The laser mounting of `rec`: the one it states (/tf_static, /tf, a log's
+/// laser pose), else the robot file's; neither is an error naming `[laser]`.
+pub fn mount(rec: &Recording, robot: &RobotConfig) -> Result<Mount, PipelineError> {
+    Mount::resolve(rec.into(), robot, &rec.source)
 }
 
 /// Matches every consecutive scan pair of a recording in memory.
@@ -52,10 +52,12 @@ pub fn run(job: &IcpJob, watch: &mut dyn RunObserver) -> Result<IcpRunSummary, P
         .chain(job.motions.as_deref())
         .collect();
     check_outputs(&[&job.input], &outputs)?;
-    let (cfg, robot) = job.common.load()?;
-    let read = super::read_options(&cfg, &robot);
+    let (cfg, nominal) = job.common.load_nominal()?;
+    let read = super::read_options(&cfg, &nominal.robot);
     let mut source = crate::io::open(&job.input, &read)?;
-    run_source(source.as_mut(), &robot, &cfg.icp, job, watch)
+    let mut summary = run_source(source.as_mut(), &nominal.robot, &cfg.icp, job, watch)?;
+    summary.assumptions = nominal.assumptions_with(&summary.mount);
+    Ok(summary)
 }
 
 fn run_source(

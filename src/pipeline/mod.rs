@@ -10,6 +10,7 @@ pub mod drive;
 mod error;
 pub mod evaluate;
 pub mod icp;
+pub mod nominal;
 pub mod observe;
 pub mod outputs;
 pub mod recorder;
@@ -18,6 +19,7 @@ pub mod viewer;
 
 pub use config::{load_robot, Config};
 pub use error::PipelineError;
+pub use nominal::{Mount, Nominal};
 pub use observe::{NoObserver, Observers, Progress, RunObserver};
 pub use viewer::Viewer;
 
@@ -36,11 +38,18 @@ pub struct Common {
 }
 
 impl Common {
-    /// Loads the configuration and the robot.
+    /// Loads the configuration and the robot (without a robot file, the
+    /// wheelchair's kinematics and no laser mounting: see [`Nominal`]).
     pub fn load(&self) -> Result<(Config, RobotConfig), PipelineError> {
+        let (cfg, nominal) = self.load_nominal()?;
+        Ok((cfg, nominal.robot))
+    }
+
+    /// Loads the configuration and the nominal robot with its sources.
+    pub fn load_nominal(&self) -> Result<(Config, Nominal), PipelineError> {
         Ok((
             Config::load(self.config.as_deref())?,
-            load_robot(self.robot.as_deref())?,
+            Nominal::load(self.robot.as_deref())?,
         ))
     }
 }

@@ -57,6 +57,24 @@ pub struct SimulateJob {
     pub common: Common,
 }
 
+/// The laser mounting to simulate: the robot file's `[laser]`; without a
+/// robot file, the wheelchair's (the simulator's default robot is the whole
+/// wheelchair). A robot file without `[laser]` is refused, naming the key.
+fn simulated_mount(
+    robot: &crate::robot::RobotConfig,
+    file: Option<&Path>,
+) -> Result<crate::robot::LaserMount, PipelineError> {
+    match (robot.laser, file) {
+        (Some(l), _) => Ok(l),
+        (None, None) => Ok(crate::robot::LaserMount::default()),
+        (None, Some(f)) => Err(crate::error::InputError::new(
+            f.display().to_string(),
+            "no [laser] table: the simulator needs the laser mounting (x, y, yaw: base_from_laser in m, m, rad)",
+        )
+        .into()),
+    }
+}
+
 /// Runs `odocal simulate`: the configuration with the job's scenario, seed,
 /// duration and effects, into the bag and truth file.
 pub fn run(
@@ -67,7 +85,8 @@ pub fn run(
         .chain(job.truth.as_deref())
         .collect();
     super::outputs::check_outputs(&[], &outputs)?;
-    let (mut cfg, robot) = job.common.load()?;
+    let (mut cfg, mut robot) = job.common.load()?;
+    robot.laser = Some(simulated_mount(&robot, job.common.robot.as_deref())?);
     if let Some(s) = &job.scenario {
         set_scenario(&mut cfg.sim, s)?;
     }

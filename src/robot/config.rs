@@ -52,8 +52,12 @@ pub struct RobotConfig {
     pub left_joint: String,
     /// JointState name of the right wheel joint.
     pub right_joint: String,
-    /// Laser mounting, used when the recording has no /tf_static.
-    pub laser: LaserMount,
+    /// Laser mounting, used when the recording states none (/tf_static, a
+    /// CARMEN log's laser pose). `None`: unknown — it is then estimated
+    /// (`calibrate --method batch`) or the run stops naming `[laser]`; a
+    /// file without a `[laser]` table never inherits the wheelchair's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub laser: Option<LaserMount>,
 }
 
 impl Default for RobotConfig {
@@ -67,7 +71,7 @@ impl Default for RobotConfig {
             ticks_per_rev: 8800.0,
             left_joint: "left_wheel".into(),
             right_joint: "right_wheel".into(),
-            laser: LaserMount::default(),
+            laser: Some(LaserMount::default()),
         }
     }
 }
@@ -75,6 +79,13 @@ impl Default for RobotConfig {
 /// A robot file that cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum RobotConfigError {
+    /// Keys without which the file describes no robot.
+    #[error(
+        "robot config: {} missing; a robot file must state the wheel radii and wheel base \
+         (r_right, r_left, wheel_base in m): they are never taken from another robot",
+        .0.join(", ")
+    )]
+    Missing(Vec<&'static str>),
     /// The TOML does not parse or has unknown keys.
     #[error("robot config: {0}")]
     Parse(#[from] toml::de::Error),
@@ -83,12 +94,34 @@ pub enum RobotConfigError {
     Invalid(String),
 }
 
+/// The keys a robot file must give: the nominal kinematics.
+pub const REQUIRED_KEYS: [&str; 3] = ["r_right", "r_left", "wheel_base"];
+
 impl RobotConfig {
-    /// Parses and validates a TOML robot description.
+    /// Parses and validates a TOML robot description. The wheel radii and
+    /// wheel base are required; other keys default (see [`Self::from_toml_keys`]
+    /// for which were given).
     pub fn from_toml(text: &str) -> Result<Self, RobotConfigError> {
+        Ok(Self::from_toml_keys(text)?.0)
+    }
+
+    /// Like [`Self::from_toml`], also returning the top-level keys the file
+    /// gave (`laser` for a `[laser]` table), so that every defaulted value
+    /// can be stated as an assumption.
+    pub fn from_toml_keys(
+        text: &str,
+    ) -> Result<(Self, std::collections::BTreeSet<String>), RobotConfigError> {
+        let table: toml::Table = toml::from_str(text)?;
         let c: Self = toml::from_str(text)?;
+        let missing: Vec<&'static str> = REQUIRED_KEYS
+            .into_iter()
+            .filter(|k| !table.contains_key(*k))
+            .collect();
+        if !missing.is_empty() {
+            return Err(RobotConfigError::Missing(missing));
+        }
         c.validate()?;
-        Ok(c)
+        Ok((c, table.keys().cloned().collect()))
     }
 
     /// Checks that every parameter is finite and physically meaningful.
@@ -110,13 +143,12 @@ impl RobotConfig {
                 self.ticks_per_rev
             )));
         }
-        if ![self.laser.x, self.laser.y, self.laser.yaw]
-            .iter()
-            .all(|v| v.is_finite())
-        {
-            return Err(RobotConfigError::Invalid(
-                "laser mount must be finite".into(),
-            ));
+        if let Some(l) = &self.laser {
+            if ![l.x, l.y, l.yaw].iter().all(|v| v.is_finite()) {
+                return Err(RobotConfigError::Invalid(
+                    "laser mount must be finite".into(),
+                ));
+            }
         }
         if self.left_joint == self.right_joint {
             return Err(RobotConfigError::Invalid(
@@ -153,15 +185,40 @@ mod tests {
     }
 
     #[test]
-    fn partial_file_keeps_defaults_and_unknown_keys_are_refused() {
-        let c = RobotConfig::from_toml("wheel_base = 0.7\n[laser]\nx = 0.1\n").unwrap();
+    fn kinematics_are_required_and_unknown_keys_are_refused() {
+        let base = "r_right = 0.05\nr_left = 0.05\nwheel_base = 0.7\n";
+        let (c, keys) = RobotConfig::from_toml_keys(&format!("{base}[laser]\nx = 0.1\n")).unwrap();
         assert_eq!(c.wheel_base, 0.7);
-        assert_eq!(c.laser.x, 0.1);
-        assert_eq!(c.r_right, 0.32);
-        assert!(RobotConfig::from_toml("wheelbase = 0.7").is_err());
-        assert!(RobotConfig::from_toml("r_left = -0.3").is_err());
-        assert!(RobotConfig::from_toml("r_left = nan").is_err());
-        assert!(RobotConfig::from_toml("ticks_per_rev = 0").is_err());
+        assert_eq!(c.laser.unwrap().x, 0.1);
+        assert!(keys.contains("laser") && !keys.contains("ticks_per_rev"));
+        // Without [laser] the mounting is unknown, not the wheelchair's.
+        assert_eq!(RobotConfig::from_toml(base).unwrap().laser, None);
+        for missing in [
+            "",
+            "wheel_base = 0.7\n",
+            "r_right = 0.05\nwheel_base = 0.7\n",
+        ] {
+            let e = RobotConfig::from_toml(missing).unwrap_err().to_string();
+            assert!(e.contains("missing") && e.contains("r_left"), "{e}");
+        }
+        assert!(RobotConfig::from_toml(&format!("{base}wheelbase = 0.7")).is_err());
+        let with = |key: &str, v: &str| {
+            let text = format!("{base}ticks_per_rev = 100\n")
+                .lines()
+                .map(|l| {
+                    if l.starts_with(key) {
+                        format!("{key} = {v}")
+                    } else {
+                        l.into()
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join("\n");
+            RobotConfig::from_toml(&text)
+        };
+        assert!(with("r_left", "0.3").is_ok());
+        assert!(with("r_left", "-0.3").is_err() && with("r_left", "nan").is_err());
+        assert!(with("ticks_per_rev", "0").is_err());
     }
 
     #[test]

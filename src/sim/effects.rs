@@ -14,12 +14,14 @@ pub struct TrueRobot {
 }
 
 impl TrueRobot {
-    /// The true robot for a nominal configuration and a list of effects.
+    /// The true robot for a nominal configuration and a list of effects (a
+    /// configuration without a laser mounting is simulated with the
+    /// wheelchair's; `pipeline::simulate` always states one).
     pub fn new(robot: &RobotConfig, effects: &[Effect]) -> Self {
         let departures = Departures::of(effects);
         Self {
             nominal: robot.diff_drive(),
-            laser: departures.laser_mount(&robot.laser),
+            laser: departures.laser_mount(&robot.laser.unwrap_or_default()),
             departures,
         }
     }

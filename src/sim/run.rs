@@ -138,7 +138,9 @@ fn recording(
         gyro,
         odom: Vec::new(),
         reference,
-        base_from_laser: Some(robot.laser.pose()),
+        base_from_laser: Some(robot.laser.unwrap_or_default().pose()),
+        mount_origin: Some(crate::assumptions::Origin::TfStatic),
+        mount_note: None,
     }
 }
 

@@ -311,7 +311,10 @@ fn calibrate_all(
         logger,
         RecorderOptions::default(),
         robot.diff_drive(),
-        robot.laser.pose(),
+        robot
+            .laser
+            .map(|l| l.pose())
+            .unwrap_or_else(crate::geom::Pose2::identity),
     );
     let mut collect = Collect::default();
     let mut icp_files = IcpFiles::create(&out.join("icp.tum"), Some(&out.join("motions.csv")))?;

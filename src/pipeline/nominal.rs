@@ -1,0 +1,253 @@
+//! The nominal robot of a run and where each of its values came from: the
+//! robot file, the recording (the laser mounting), or a default. No value of
+//! the wheelchair's is applied to a recording that did not ask for it: the
+//! laser mounting is taken from the recording or the robot file, or the run
+//! stops naming the key to set.
+
+use super::PipelineError;
+use crate::assumptions::{Assumptions, Origin};
+use crate::error::InputError;
+use crate::geom::{self, Pose2};
+use crate::robot::{LaserMount, RobotConfig};
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+/// The nominal robot, the file it came from and the keys that file gave.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Nominal {
+    /// The values used (the wheelchair's kinematics without a robot file,
+    /// but never its laser mounting).
+    pub robot: RobotConfig,
+    /// The robot file, when one was given.
+    pub file: Option<PathBuf>,
+    /// The top-level keys the robot file gave.
+    pub given: BTreeSet<String>,
+}
+
+impl Nominal {
+    /// Loads `path`, or, without one, the wheelchair's kinematics with an
+    /// unknown laser mounting.
+    pub fn load(path: Option<&Path>) -> Result<Self, PipelineError> {
+        let Some(path) = path else {
+            let robot = RobotConfig {
+                laser: None,
+                ..RobotConfig::default()
+            };
+            return Ok(Self {
+                robot,
+                file: None,
+                given: BTreeSet::new(),
+            });
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            InputError::new(path.display().to_string(), format!("cannot read: {e}"))
+        })?;
+        let (robot, given) = RobotConfig::from_toml_keys(&text)
+            .map_err(|e| InputError::new(path.display().to_string(), e.to_string()))?;
+        Ok(Self {
+            robot,
+            file: Some(path.to_path_buf()),
+            given,
+        })
+    }
+
+    /// Where `key` of the robot came from.
+    fn origin(&self, key: &str) -> Origin {
+        if self.given.contains(key) {
+            Origin::RobotFile
+        } else {
+            Origin::Default
+        }
+    }
+
+    /// The robot's values and the laser mounting `mount`, with their sources.
+    pub fn assumptions_with(&self, mount: &Mount) -> Assumptions {
+        let mut a = self.assumptions();
+        mount.state(&mut a);
+        a
+    }
+
+    /// The robot's values and their sources (the laser mounting is added by
+    /// [`Mount::state`] once the recording is known).
+    pub fn assumptions(&self) -> Assumptions {
+        let r = &self.robot;
+        let hint = |k: &str| match (&self.file, self.origin(k)) {
+            (None, _) => Some("the wheelchair's; give --robot ROBOT.toml for another robot".into()),
+            (Some(f), Origin::Default) => Some(format!("{} does not set `{k}`", f.display())),
+            _ => None,
+        };
+        let mut a = Assumptions::default();
+        for (k, v) in [
+            ("r_right", r.r_right),
+            ("r_left", r.r_left),
+            ("wheel_base", r.wheel_base),
+            ("ticks_per_rev", r.ticks_per_rev),
+        ] {
+            a.set(k, v, self.origin(k), hint(k));
+        }
+        for (k, v) in [
+            ("left_joint", &r.left_joint),
+            ("right_joint", &r.right_joint),
+        ] {
+            a.set(k, v, self.origin(k), hint(k));
+        }
+        a
+    }
+}
+
+/// The laser mounting a run uses (`base_from_laser`) and where it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mount {
+    /// `base_from_laser`.
+    pub pose: Pose2,
+    /// Its source.
+    pub origin: Origin,
+    /// What the user may want to know about it.
+    pub note: Option<String>,
+}
+
+/// What a recording says of the laser mounting.
+#[derive(Debug, Clone, Copy)]
+pub struct Stated<'a> {
+    /// The mounting it states.
+    pub pose: Option<Pose2>,
+    /// From where.
+    pub origin: Option<Origin>,
+    /// Why it states none, when it could have.
+    pub note: Option<&'a str>,
+}
+
+impl<'a> From<&'a crate::io::StreamInfo> for Stated<'a> {
+    fn from(i: &'a crate::io::StreamInfo) -> Self {
+        Self {
+            pose: i.base_from_laser,
+            origin: i.mount_origin,
+            note: i.mount_note.as_deref(),
+        }
+    }
+}
+
+impl<'a> From<&'a crate::recording::Recording> for Stated<'a> {
+    fn from(r: &'a crate::recording::Recording) -> Self {
+        Self {
+            pose: r.base_from_laser,
+            origin: r.mount_origin,
+            note: r.mount_note.as_deref(),
+        }
+    }
+}
+
+/// Largest difference between the robot file's mounting and the
+/// recording's that is not worth a note (m, rad).
+const SAME_MOUNT_M: f64 = 0.005;
+const SAME_MOUNT_RAD: f64 = 0.01;
+
+impl Mount {
+    /// The mounting for `input`: the recording's when it states one, else
+    /// the robot file's `[laser]`; neither → an error naming the key to set.
+    pub fn resolve(
+        stated: Stated,
+        robot: &RobotConfig,
+        input: &str,
+    ) -> Result<Self, PipelineError> {
+        if let Some(pose) = stated.pose {
+            let note = robot.laser.and_then(|l| differs(&l, &pose));
+            return Ok(Self {
+                pose,
+                origin: stated.origin.unwrap_or(Origin::TfStatic),
+                note,
+            });
+        }
+        match robot.laser {
+            Some(l) => Ok(Self {
+                pose: l.pose(),
+                origin: Origin::RobotFile,
+                note: stated
+                    .note
+                    .map(|n| format!("the recording states none: {n}")),
+            }),
+            None => Err(unknown(stated.note, input).into()),
+        }
+    }
+
+    /// Records the mounting in `a` under `laser`.
+    pub fn state(&self, a: &mut Assumptions) {
+        let [x, y, yaw] = geom::xyt(&self.pose);
+        a.set(
+            "laser",
+            LaserMount { x, y, yaw },
+            self.origin,
+            self.note.clone(),
+        );
+    }
+
+    /// The mounting as the robot file's table (−0 written as 0).
+    pub fn laser(&self) -> LaserMount {
+        let [x, y, yaw] = geom::xyt(&self.pose).map(|v| v + 0.0);
+        LaserMount { x, y, yaw }
+    }
+}
+
+/// A note when the robot file's `[laser]` differs from what the recording states.
+fn differs(file: &LaserMount, stated: &Pose2) -> Option<String> {
+    let d = geom::between(&file.pose(), stated);
+    (d.translation.vector.norm() > SAME_MOUNT_M || d.rotation.angle().abs() > SAME_MOUNT_RAD).then(
+        || {
+            let [x, y, yaw] = geom::xyt(stated);
+            format!(
+                "the recording's mounting (x {x:.3} m, y {y:.3} m, yaw {yaw:.3} rad) is used; \
+                 the robot file's [laser] (x {:.3}, y {:.3}, yaw {:.3}) differs",
+                file.x, file.y, file.yaw
+            )
+        },
+    )
+}
+
+/// The error of a run whose laser mounting nobody states.
+fn unknown(note: Option<&str>, input: &str) -> InputError {
+    let why = note.unwrap_or("the recording states no base_link → laser transform");
+    InputError::new(
+        input,
+        format!(
+            "the laser mounting is unknown: {why}, and the robot file gives no [laser] table \
+             (without --robot, no mounting is assumed). Set [laser] x, y, yaw (base_from_laser \
+             in m, m, rad) in the robot file (--robot ROBOT.toml), or let \
+             `odocal calibrate --method batch` estimate it"
+        ),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stated(pose: Option<Pose2>) -> Stated<'static> {
+        Stated {
+            pose,
+            origin: pose.map(|_| Origin::TfStatic),
+            note: None,
+        }
+    }
+
+    #[test]
+    fn without_robot_file_no_mounting_is_assumed() {
+        let n = Nominal::load(None).unwrap();
+        let e = Mount::resolve(stated(None), &n.robot, "x.clf")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("x.clf") && e.contains("[laser]"), "{e}");
+        let a = n.assumptions();
+        assert_eq!(a.source("wheel_base"), Some(Origin::Default));
+    }
+
+    #[test]
+    fn the_recording_wins_and_a_differing_file_is_noted() {
+        let robot = RobotConfig::default();
+        let m = Mount::resolve(stated(Some(Pose2::identity())), &robot, "b.mcap").unwrap();
+        assert_eq!(m.origin, Origin::TfStatic);
+        assert!(m.note.unwrap().contains("differs"));
+        let m = Mount::resolve(stated(None), &robot, "b.mcap").unwrap();
+        assert_eq!(m.origin, Origin::RobotFile);
+        assert_eq!(m.pose, robot.laser.unwrap().pose());
+    }
+}

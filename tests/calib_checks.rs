@@ -1,0 +1,275 @@
+//! No silent assumption, no absurd result: every nominal value a run used is
+//! stated with its source; a laser mounting nobody states, wheels wired the
+//! other way round, a motion that cannot determine a parameter and an
+//! estimate far from the nominal robot each end in exit 2 with a message
+//! saying what to fix — never in a number.
+
+use crate::support::{scratch, shared_data};
+use odocal::io::{read_recording, write_mcap, ReadOptions, WriteOptions};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn odocal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_odocal"))
+        .args(args)
+        .output()
+        .expect("run odocal")
+}
+
+fn bundled() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scans/wheelchair-corridor.mcap")
+}
+
+fn wheelchair_toml() -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scans/robots/wheelchair.toml"),
+    )
+    .unwrap()
+}
+
+/// Exit code 2 and the stderr message.
+fn refused(out: &Output) -> String {
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(out.status.code(), Some(2), "expected a refusal: {err}");
+    err
+}
+
+fn json(out: &Output) -> Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// The bundled recording rewritten without its /tf_static, cut to `seconds`.
+fn without_mount(d: &Path, seconds: f64) -> PathBuf {
+    let mut rec = read_recording(&bundled(), &ReadOptions::default()).unwrap();
+    let t0 = rec.scans[0].stamp;
+    let end = t0 + seconds;
+    rec.scans.retain(|s| s.stamp <= end);
+    rec.wheels.retain(|s| s.stamp <= end);
+    rec.gyro.retain(|s| s.stamp <= end);
+    rec.reference.retain(|s| s.stamp <= end);
+    rec.base_from_laser = None;
+    let out = d.join(format!("nomount-{seconds}.mcap"));
+    write_mcap(&out, &rec, &WriteOptions::default()).unwrap();
+    out
+}
+
+#[test]
+fn an_unstated_laser_mounting_is_never_assumed() {
+    let d = scratch("checks_mount");
+    let bag = without_mount(&d, 20.0);
+    let tum = d.join("t.tum");
+    let args = |robot: Option<&Path>| {
+        let mut a = vec![
+            "icp",
+            "--input",
+            bag.to_str().unwrap(),
+            "--out",
+            tum.to_str().unwrap(),
+            "--json",
+        ];
+        if let Some(r) = robot {
+            a.extend(["--robot", r.to_str().unwrap()]);
+        }
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let run = |robot: Option<&Path>| {
+        Command::new(env!("CARGO_BIN_EXE_odocal"))
+            .args(args(robot))
+            .output()
+            .unwrap()
+    };
+    // No robot file: the wheelchair's rear-facing mounting is not applied.
+    let err = refused(&run(None));
+    assert!(
+        err.contains("nomount-20.mcap") && err.contains("[laser]"),
+        "{err}"
+    );
+    assert!(!tum.exists());
+    // A robot file without [laser]: the same refusal, not a default.
+    let nolaser = d.join("nolaser.toml");
+    let text: String = wheelchair_toml()
+        .split("[laser]")
+        .next()
+        .unwrap()
+        .to_string();
+    std::fs::write(&nolaser, text).unwrap();
+    refused(&run(Some(&nolaser)));
+    // The robot file's [laser]: used, and said so.
+    let robot = d.join("wheelchair.toml");
+    std::fs::write(&robot, wheelchair_toml()).unwrap();
+    let j = json(&run(Some(&robot)));
+    assert_eq!(j["assumptions"]["laser"]["source"], "robot_file");
+    assert_eq!(
+        j["assumptions"]["laser"]["value"]["yaw"],
+        std::f64::consts::PI
+    );
+    assert_eq!(j["assumptions"]["wheel_base"]["source"], "robot_file");
+    assert_eq!(j["assumptions"]["ticks_per_rev"]["source"], "robot_file");
+}
+
+#[test]
+fn a_robot_file_must_state_the_kinematics() {
+    let d = scratch("checks_robot_keys");
+    let robot = d.join("partial.toml");
+    std::fs::write(&robot, "name = \"khepera\"\nr_left = 0.021\n").unwrap();
+    let out = odocal(&[
+        "icp",
+        "--input",
+        bundled().to_str().unwrap(),
+        "--robot",
+        robot.to_str().unwrap(),
+        "--out",
+        d.join("t.tum").to_str().unwrap(),
+    ]);
+    let err = refused(&out);
+    assert!(
+        err.contains("partial.toml") && err.contains("r_right") && err.contains("wheel_base"),
+        "{err}"
+    );
+    assert!(!err.contains("r_left,"), "r_left was given: {err}");
+}
+
+#[test]
+fn swapped_wheel_joints_are_named_not_calibrated() {
+    let d = scratch("checks_swapped");
+    let swapped = d.join("swapped.toml");
+    let text = wheelchair_toml()
+        .replace("left_joint = \"left_wheel\"", "left_joint = \"TMP\"")
+        .replace(
+            "right_joint = \"right_wheel\"",
+            "right_joint = \"left_wheel\"",
+        )
+        .replace("left_joint = \"TMP\"", "left_joint = \"right_wheel\"");
+    assert!(text.contains("left_joint = \"right_wheel\""));
+    std::fs::write(&swapped, text).unwrap();
+    let out_dir = d.join("cal");
+    let out = odocal(&[
+        "calibrate",
+        "--input",
+        bundled().to_str().unwrap(),
+        "--robot",
+        swapped.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let err = refused(&out);
+    assert!(err.contains("Swap left_joint and right_joint"), "{err}");
+    assert!(!out_dir.join("summary.json").exists());
+}
+
+#[test]
+fn a_run_without_turns_cannot_give_the_wheel_base() {
+    let d = scratch("checks_no_turns");
+    // The corridor's first 8 s are straight.
+    let bag = without_mount(&d, 8.0);
+    let robot = d.join("wheelchair.toml");
+    std::fs::write(&robot, wheelchair_toml()).unwrap();
+    let out = odocal(&[
+        "calibrate",
+        "--input",
+        bag.to_str().unwrap(),
+        "--robot",
+        robot.to_str().unwrap(),
+        "--out",
+        d.join("cal").to_str().unwrap(),
+    ]);
+    let err = refused(&out);
+    assert!(err.contains("wheel_base") && err.contains("turns"), "{err}");
+}
+
+#[test]
+fn an_estimate_far_from_the_nominal_robot_is_refused() {
+    let d = scratch("checks_far");
+    // The wheelchair's wheel base is 0.65 m; this file says 0.98 m.
+    let robot = d.join("wide.toml");
+    std::fs::write(
+        &robot,
+        wheelchair_toml().replace("wheel_base = 0.65", "wheel_base = 0.98"),
+    )
+    .unwrap();
+    let out = odocal(&[
+        "calibrate",
+        "--input",
+        bundled().to_str().unwrap(),
+        "--robot",
+        robot.to_str().unwrap(),
+        "--out",
+        d.join("cal").to_str().unwrap(),
+    ]);
+    let err = refused(&out);
+    assert!(
+        err.contains("calibration refused") && err.contains("wheel_base"),
+        "{err}"
+    );
+}
+
+#[test]
+fn calibrate_states_its_assumptions_and_observability() {
+    let d = scratch("checks_json");
+    let out = odocal(&[
+        "calibrate",
+        "--input",
+        bundled().to_str().unwrap(),
+        "--method",
+        "dkf",
+        "--out",
+        d.join("cal").to_str().unwrap(),
+        "--json",
+    ]);
+    let j = json(&out);
+    assert_eq!(j["assumptions"]["laser"]["source"], "tf_static");
+    assert_eq!(j["assumptions"]["r_right"]["source"], "default");
+    for p in ["r_right", "r_left", "wheel_base"] {
+        assert_eq!(
+            j["observability"]["parameters"][p]["observable"], true,
+            "{p}"
+        );
+    }
+    // The corridor loop turns left only: the wheel base is flagged weak.
+    assert_eq!(j["observability"]["parameters"]["wheel_base"]["weak"], true);
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("cal/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["assumptions"], j["assumptions"]);
+}
+
+/// A CARMEN log states its mounting in its laser lines (MIT-CSAIL: the laser
+/// pose is the odometry pose), so the log matches as well as its MCAP
+/// conversion with its identity /tf_static (relations, Kümmerle et al. 2009).
+#[test]
+fn a_carmen_log_states_its_own_mounting() {
+    let Some(data) = shared_data("a_carmen_log_states_its_own_mounting") else {
+        return;
+    };
+    let d = scratch("checks_carmen");
+    let bench = data.join("slam-benchmark");
+    let tum = d.join("m.tum");
+    let j = json(&odocal(&[
+        "icp",
+        "--input",
+        bench.join("mit-csail.clf").to_str().unwrap(),
+        "--out",
+        tum.to_str().unwrap(),
+        "--json",
+    ]));
+    assert_eq!(j["assumptions"]["laser"]["source"], "log");
+    assert!(j["failed_pairs"].as_u64().unwrap() < 40, "{j}");
+    let e = json(&odocal(&[
+        "eval",
+        "--estimate",
+        tum.to_str().unwrap(),
+        "--reference",
+        tum.to_str().unwrap(),
+        "--relations",
+        bench.join("mit-csail.relations").to_str().unwrap(),
+        "--json",
+    ]));
+    let local = e["relations"]["local"]["trans_mean"].as_f64().unwrap();
+    assert!(local < 0.032, "local relation error {local} m");
+}
