@@ -33,6 +33,14 @@ impl Normal2 {
         self.n += 1;
     }
 
+    /// The reduced χ² of the least-squares fit: ≈ 1 when the measurements
+    /// scatter about a fixed linear law as their σ say; `None` without a fit.
+    pub fn reduced_chi2(&self) -> Option<f64> {
+        let ([p, q], _) = self.solve()?;
+        let chi2 = (self.syy - p * self.sxy[0] - q * self.sxy[1]).max(0.0);
+        Some(chi2 / (self.n - 2) as f64)
+    }
+
     /// The least-squares (p, q) and their standard deviations, scaled by the
     /// residual's reduced χ² (so a wrong σ does not fake significance);
     /// `None` when the wheel rates never differ enough to separate them.
@@ -121,6 +129,12 @@ impl Evidence {
             }
         }
         self.steps += usize::from(any);
+    }
+
+    /// Reduced χ² of V and of W against the best fixed linear law of the
+    /// wheel rates (see [`Normal2::reduced_chi2`]).
+    pub fn fit_chi2(&self) -> [Option<f64>; 2] {
+        [self.v.reduced_chi2(), self.w.reduced_chi2()]
     }
 
     /// The wiring the rates show (see the module's note).

@@ -32,6 +32,9 @@ pub struct CheckParams {
     /// An estimate within this fraction of its search range's width from an
     /// edge has run into the range, not found the value.
     pub range_edge: f64,
+    /// Reduced χ² of V or W about the best fixed law of the wheel rates
+    /// above which the std is widened by √χ² (see [`observability`]).
+    pub max_fit_chi2: f64,
 }
 
 impl Default for CheckParams {
@@ -45,6 +48,7 @@ impl Default for CheckParams {
             weak_widening: 3.0,
             multiplier_bounds: [0.8, 1.25],
             range_edge: 0.01,
+            max_fit_chi2: 10.0,
         }
     }
 }
@@ -83,6 +87,77 @@ impl Observability {
     }
 }
 
+/// What the run's motion lacks, per kind of excitation (`None`: enough).
+struct Gaps {
+    few: Option<String>,
+    short: Option<String>,
+    no_turns: Option<String>,
+    one_sided: Option<String>,
+    no_straight: Option<String>,
+}
+
+fn gaps(ev: &Evidence, d0: f64, p: &CheckParams) -> Gaps {
+    let rotation = ev.turn_left_rad + ev.turn_right_rad;
+    let lesser = ev.turn_left_rad.min(ev.turn_right_rad);
+    Gaps {
+        few: (ev.steps < p.min_steps)
+            .then(|| format!("only {} steps with a measurement (need {})", ev.steps, p.min_steps)),
+        short: (ev.distance_m < p.min_distance_wheel_bases * d0).then(|| {
+            format!(
+                "the robot drove {:.2} m; the radii need ≥ {:.2} m of travel",
+                ev.distance_m,
+                p.min_distance_wheel_bases * d0
+            )
+        }),
+        no_turns: (rotation < p.min_rotation_rad).then(|| {
+            format!(
+                "the robot turned {rotation:.2} rad in all; the wheel base needs turns (≥ {:.2} rad)",
+                p.min_rotation_rad
+            )
+        }),
+        one_sided: (lesser < p.min_turn_balance * rotation).then(|| {
+            format!(
+                "turns in one direction only ({:.2} rad left, {:.2} rad right): a turn-dependent \
+                 error (e.g. the laser's offset) is confounded with the wheel base",
+                ev.turn_left_rad, ev.turn_right_rad
+            )
+        }),
+        no_straight: (ev.straight_m < p.min_straight_wheel_bases * d0).then(|| {
+            format!(
+                "{:.2} m of straight driving; the radius ratio is firm with ≥ {:.2} m",
+                ev.straight_m,
+                p.min_straight_wheel_bases * d0
+            )
+        }),
+    }
+}
+
+/// When V (for the radii) or V and W (for the wheel base) scatter about the
+/// best fixed law of the wheel rates far more than their σ allow, the
+/// filters' std, which trusts those σ, is too small: it is widened by
+/// √χ² (the Birge ratio of a least-squares fit) and the reason stated.
+fn misfit(ev: &Evidence, p: &CheckParams) -> [Option<(String, f64)>; 2] {
+    let [v, w] = ev.fit_chi2().map(|c| c.unwrap_or(1.0));
+    let why = |what: &str, chi2: f64| {
+        format!(
+            "{what} does not follow a fixed law of the wheel rates (χ² {chi2:.1} per \
+             measurement): the parameters changed during the run, or a time offset, slip or \
+             mounting error is left (`odocal diagnose` names it); the std is widened by √χ²"
+        )
+    };
+    let radii = (v > p.max_fit_chi2).then(|| (why("the measured speed V", v), v.sqrt()));
+    let worst = v.max(w);
+    let base = (worst > p.max_fit_chi2).then(|| {
+        let what = if w >= v {
+            "the measured turn rate W"
+        } else {
+            "the measured speed V"
+        };
+        (why(what, worst), worst.sqrt())
+    });
+    [radii, base]
+}
+
 /// The observability of R_R, R_L and D from `ev`, with `std` the filter's
 /// standard deviations (widened here where weak) and `nominal` the scale.
 pub fn observability(
@@ -91,72 +166,52 @@ pub fn observability(
     nominal: &DiffDrive,
     p: &CheckParams,
 ) -> Observability {
-    let d0 = nominal.wheel_base;
-    let few = (ev.steps < p.min_steps).then(|| {
-        format!(
-            "only {} steps with a measurement (need {})",
-            ev.steps, p.min_steps
-        )
-    });
-    let short = (ev.distance_m < p.min_distance_wheel_bases * d0).then(|| {
-        format!(
-            "the robot drove {:.2} m; the radii need ≥ {:.2} m of travel",
-            ev.distance_m,
-            p.min_distance_wheel_bases * d0
-        )
-    });
-    let rotation = ev.turn_left_rad + ev.turn_right_rad;
-    let no_turns = (rotation < p.min_rotation_rad).then(|| {
-        format!(
-            "the robot turned {:.2} rad in all; the wheel base needs turns (≥ {:.2} rad)",
-            rotation, p.min_rotation_rad
-        )
-    });
-    let lesser = ev.turn_left_rad.min(ev.turn_right_rad);
-    let one_sided = (lesser < p.min_turn_balance * rotation).then(|| {
-        format!(
-            "turns in one direction only ({:.2} rad left, {:.2} rad right): a turn-dependent \
-             error (e.g. the laser's offset) is confounded with the wheel base",
-            ev.turn_left_rad, ev.turn_right_rad
-        )
-    });
-    let no_straight = (ev.straight_m < p.min_straight_wheel_bases * d0).then(|| {
-        format!(
-            "{:.2} m of straight driving; the radius ratio is firm with ≥ {:.2} m",
-            ev.straight_m,
-            p.min_straight_wheel_bases * d0
-        )
-    });
-    let radius_missing = few
+    let g = gaps(ev, nominal.wheel_base, p);
+    let [fit_radii, fit_base] = misfit(ev, p);
+    let radius_missing = g
+        .few
         .clone()
-        .or(short)
-        .or(no_turns.clone().filter(|_| ev.straight_m == 0.0));
-    let entry = |std: f64, missing: Option<String>, weak: Option<String>| ParamObservability {
-        observable: missing.is_none(),
-        weak: missing.is_none() && weak.is_some(),
-        std: if missing.is_none() && weak.is_some() {
-            std * p.weak_widening
-        } else {
-            std
-        },
-        missing: missing.or(weak),
-    };
+        .or(g.short)
+        .or(g.no_turns.clone().filter(|_| ev.straight_m == 0.0));
+    let entry =
+        |std: f64, missing: Option<String>, weak: Option<String>, fit: &Option<(String, f64)>| {
+            let mut notes: Vec<String> = weak.iter().cloned().collect();
+            let mut factor = if weak.is_some() { p.weak_widening } else { 1.0 };
+            if let Some((why, k)) = fit {
+                notes.push(why.clone());
+                factor *= k;
+            }
+            let observable = missing.is_none();
+            ParamObservability {
+                observable,
+                weak: observable && !notes.is_empty(),
+                std: if observable { std * factor } else { std },
+                missing: missing.or((!notes.is_empty()).then(|| notes.join("; "))),
+            }
+        };
     let mut parameters = BTreeMap::new();
     parameters.insert(
         "r_right".into(),
-        entry(std.r_right, radius_missing.clone(), no_straight.clone()),
+        entry(
+            std.r_right,
+            radius_missing.clone(),
+            g.no_straight.clone(),
+            &fit_radii,
+        ),
     );
     parameters.insert(
         "r_left".into(),
-        entry(std.r_left, radius_missing.clone(), no_straight),
+        entry(
+            std.r_left,
+            radius_missing.clone(),
+            g.no_straight,
+            &fit_radii,
+        ),
     );
+    let base_missing = g.few.or(radius_missing).or(g.no_turns);
     parameters.insert(
         "wheel_base".into(),
-        entry(
-            std.wheel_base,
-            few.or(radius_missing).or(no_turns),
-            one_sided,
-        ),
+        entry(std.wheel_base, base_missing, g.one_sided, &fit_base),
     );
     Observability {
         parameters,
@@ -275,6 +330,33 @@ mod tests {
             evidence(&vec![(5.0, 5.0); 100], false).wiring(),
             Wiring::Inconclusive
         );
+    }
+
+    #[test]
+    fn measurements_scattering_beyond_their_sigma_widen_the_std() {
+        let p = CheckParams::default();
+        // The same course, V and W measured with errors of ~10 σ.
+        let mut ev = Evidence::default();
+        for (i, &(r, l)) in course().iter().enumerate() {
+            let (v, w) = (0.1 * (r + l) / 2.0, 0.1 * (r - l) / 0.5);
+            let e = 1e-2 * [1.0, -1.0, 0.5, -0.5][i % 4];
+            let t = i as f64 * 0.1;
+            ev.add(
+                &CalibStep::new(t, t + 0.1, r, l)
+                    .with(crate::calib::Kind::V, v + e, 1e-3)
+                    .with(crate::calib::Kind::W, w - e, 1e-3),
+            );
+        }
+        let [v, w] = ev.fit_chi2().map(Option::unwrap);
+        assert!(v > 30.0 && w > 30.0, "{v} {w}");
+        let o = observability(&ev, &drive(0.001), &drive(0.5), &p);
+        let r = &o.parameters["r_right"];
+        assert!(r.observable && r.weak && r.missing.as_ref().unwrap().contains("χ²"));
+        // `drive(0.001)` as the filter's std: 0.1 m for each radius.
+        assert!((r.std / 0.1 - v.sqrt()).abs() < 1e-9, "{}", r.std);
+        // Exact measurements: no widening.
+        let exact = observability(&evidence(&course(), false), &drive(0.001), &drive(0.5), &p);
+        assert_eq!(exact.parameters["r_right"].std, 0.1);
     }
 
     #[test]

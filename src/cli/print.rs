@@ -177,7 +177,7 @@ pub fn observability(o: &odocal::calib::Observability) {
     for (name, p) in &o.parameters {
         if p.weak {
             eprintln!(
-                "warning: {name} is weakly observable ({}); its std is widened to {:.5} m",
+                "warning: {name} is weakly determined ({}); its std is widened to {:.5} m",
                 p.missing.as_deref().unwrap_or(""),
                 p.std
             );
