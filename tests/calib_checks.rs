@@ -272,3 +272,21 @@ fn a_carmen_log_states_its_own_mounting() {
     let local = e["relations"]["local"]["trans_mean"].as_f64().unwrap();
     assert!(local < 0.032, "local relation error {local} m");
 }
+
+#[test]
+fn diagnose_states_its_assumptions_in_json_and_report() {
+    let d = scratch("checks_diagnose");
+    let report = d.join("rep");
+    let j = json(&odocal(&[
+        "diagnose",
+        "--measured",
+        bundled().to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--json",
+    ]));
+    assert_eq!(j["assumptions"]["laser"]["source"], "tf_static");
+    assert_eq!(j["assumptions"]["wheel_base"]["source"], "default");
+    let md = std::fs::read_to_string(report.join("report.md")).unwrap();
+    assert!(md.contains("## Assumptions") && md.contains("the recording's /tf_static"));
+}

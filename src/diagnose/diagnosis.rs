@@ -75,6 +75,9 @@ pub struct Diagnosis {
     pub noise_scale: BTreeMap<String, f64>,
     /// Rows used: training, held-out, rejected as outliers.
     pub rows: BTreeMap<String, usize>,
+    /// Where every nominal value came from (set by the command that ran).
+    #[serde(skip_serializing_if = "crate::assumptions::Assumptions::is_empty")]
+    pub assumptions: crate::assumptions::Assumptions,
     /// Residual series for plots (not in the JSON summary).
     #[serde(skip)]
     pub series: ResidualSeries,

@@ -67,6 +67,7 @@ pub fn run(
     let all_a = all.physical(&xm);
     let train_counts = train.counts();
     Ok(Diagnosis {
+        assumptions: Default::default(),
         verdict: verdict(&causes, &structure_before, p.structure_alpha),
         causes,
         gain,

@@ -2,6 +2,7 @@
 //! compare with ICP and the gyro, name what differs, and show it.
 
 use super::{icp, Common, PipelineError};
+use crate::assumptions::Origin;
 use crate::diagnose::{self, Cause, DiagnoseParams, Diagnosis, Measured, ResidualSeries};
 use crate::recording::Recording;
 use crate::robot::RobotConfig;
@@ -44,7 +45,8 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
         let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
         super::outputs::check_outputs(&[&job.measured], &outputs)?;
     }
-    let (mut cfg, robot) = job.common.load()?;
+    let (mut cfg, nominal) = job.common.load_nominal()?;
+    let robot = &nominal.robot;
     if let Some(h) = job.holdout {
         if !(h > 0.0 && h < 1.0) {
             return Err(PipelineError::BadArgument(format!(
@@ -53,13 +55,24 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
         }
         cfg.diagnose.holdout = h;
     }
-    let d = if crate::io::sniff(&job.measured)? == crate::io::Format::CensiTuples {
+    let mut d = if crate::io::sniff(&job.measured)? == crate::io::Format::CensiTuples {
         let tuples = crate::io::censi::read(&job.measured)?;
-        run_tuples(&tuples, &robot, &cfg.diagnose)?
+        let mut d = run_tuples(&tuples, robot, &cfg.diagnose)?;
+        d.assumptions = nominal.assumptions();
+        if let Some(l) = robot.laser {
+            let note = "the nominal mounting; laser_offset is the departure from it".to_string();
+            d.assumptions.set("laser", l, Origin::RobotFile, Some(note));
+        }
+        d
     } else {
-        let rec = super::read_recording(&job.measured, &cfg, &robot)?;
-        run_recording(&rec, &robot, &cfg.icp, &cfg.diagnose)?
+        let rec = super::read_recording(&job.measured, &cfg, robot)?;
+        let mut d = run_recording(&rec, robot, &cfg.icp, &cfg.diagnose)?;
+        d.assumptions = nominal.assumptions_with(&icp::mount(&rec, robot)?);
+        d
     };
+    if d.assumptions.is_empty() {
+        d.assumptions = nominal.assumptions();
+    }
     if let Some(dir) = &job.report {
         write_report(dir, &job.measured.display().to_string(), &d)?;
     }
@@ -191,6 +204,7 @@ pub fn write_report(dir: &Path, name: &str, d: &Diagnosis) -> Result<(), Pipelin
     ]);
     r.heading(2, "Causes");
     write_causes(&mut r, &d.causes)?;
+    super::nominal::report_assumptions(&mut r, &d.assumptions)?;
     r.heading(2, "Gain on held-out data");
     write_gain(&mut r, d);
     r.image("residuals.png", "Residuals before and after the extension.");

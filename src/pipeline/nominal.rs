@@ -188,6 +188,36 @@ impl Mount {
     }
 }
 
+/// The report's "Assumptions" section: every nominal value, its source and
+/// what to know about it.
+pub fn report_assumptions(
+    r: &mut crate::viz::report::Report,
+    a: &Assumptions,
+) -> Result<(), PipelineError> {
+    if a.is_empty() {
+        return Ok(());
+    }
+    r.heading(2, "Assumptions");
+    let rows: Vec<Vec<String>> =
+        a.0.iter()
+            .map(|(k, v)| {
+                let note = v.note.clone().unwrap_or_default();
+                vec![
+                    format!("`{k}`"),
+                    v.value.to_string(),
+                    v.source.describe().into(),
+                    note,
+                ]
+            })
+            .collect();
+    r.table(&["value", "as used", "source", "note"], &rows)
+        .map_err(|e| PipelineError::Write {
+            path: "report".into(),
+            message: e.to_string(),
+        })?;
+    Ok(())
+}
+
 /// A note when the robot file's `[laser]` differs from what the recording states.
 fn differs(file: &LaserMount, stated: &Pose2) -> Option<String> {
     let d = geom::between(&file.pose(), stated);
