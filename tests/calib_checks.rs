@@ -290,3 +290,51 @@ fn diagnose_states_its_assumptions_in_json_and_report() {
     let md = std::fs::read_to_string(report.join("report.md")).unwrap();
     assert!(md.contains("## Assumptions") && md.contains("the recording's /tf_static"));
 }
+
+/// Bags written by another tool (the Python `mcap` library): the mounting
+/// only on /tf is read from there and said so; without any transform the
+/// run stops naming the frames it looked for.
+#[test]
+fn a_mounting_on_tf_only_is_found_and_none_is_refused() {
+    let test = "a_mounting_on_tf_only_is_found_and_none_is_refused";
+    let Some(py) = crate::support::python_with(test, &["mcap"]) else {
+        return;
+    };
+    let d = scratch("checks_tf_only");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/retopic_mcap.py");
+    let rewrite = |out: &Path, args: &[&str]| {
+        let s = Command::new(&py)
+            .arg(&script)
+            .arg(bundled())
+            .arg(out)
+            .args(args)
+            .status()
+            .unwrap();
+        assert!(s.success());
+    };
+    let tf_only = d.join("tf-only.mcap");
+    rewrite(&tf_only, &["--move", "/tf_static=/tf"]);
+    let j = json(&odocal(&[
+        "icp",
+        "--input",
+        tf_only.to_str().unwrap(),
+        "--out",
+        d.join("a.tum").to_str().unwrap(),
+        "--json",
+    ]));
+    assert_eq!(j["assumptions"]["laser"]["source"], "tf");
+    assert_eq!(j["assumptions"]["laser"]["value"]["x"], -0.45);
+    let none = d.join("none.mcap");
+    rewrite(&none, &["--drop", "/tf_static"]);
+    let err = refused(&odocal(&[
+        "icp",
+        "--input",
+        none.to_str().unwrap(),
+        "--out",
+        d.join("b.tum").to_str().unwrap(),
+    ]));
+    assert!(
+        err.contains("none.mcap") && err.contains("frame 'laser'") && err.contains("[laser]"),
+        "{err}"
+    );
+}
