@@ -260,7 +260,13 @@ fn vet(
     let pf = matches!(params.method, calib::Method::AdaptivePf | calib::Method::Pf);
     let ranges = pf.then(|| params.ranges.all());
     if let Some(m) = calib::implausible(&summary.final_params, &nominal, ranges, &params.checks) {
-        return Err(refuse(format!("calibration refused: {m}")));
+        let whose = match summary.assumptions.source("wheel_base") {
+            Some(crate::assumptions::Origin::Default) => {
+                " (the nominal values are the wheelchair's: give --robot ROBOT.toml)"
+            }
+            _ => "",
+        };
+        return Err(refuse(format!("calibration refused: {m}{whose}")));
     }
     summary.std.r_right = o.parameters["r_right"].std;
     summary.std.r_left = o.parameters["r_left"].std;
