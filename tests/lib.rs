@@ -31,6 +31,7 @@ mod icp_sim;
 mod io_bad_input;
 mod io_crosscheck;
 mod io_kill;
+mod io_output_sets;
 mod io_outputs;
 mod io_props;
 mod io_read;

@@ -49,6 +49,7 @@ pub mod mcap_stream;
 mod mcap_streams;
 pub mod mcap_write;
 mod options;
+pub mod out_lock;
 pub mod relations;
 pub mod ros_msgs;
 pub mod ros_schema;

@@ -6,12 +6,13 @@
 use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
-use super::outputs::{check_outputs, CalibFiles, Collect};
+use super::outputs::{check_outputs, lock_outputs, CalibFiles, Collect};
 use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
 use super::{Common, PipelineError};
 use crate::calib::{self, CalibParams, CalibSummary, CalibrationRun, Ranges};
 use crate::error::InputError;
+use crate::io::out_lock::OutputLock;
 use crate::motion::VelocityObs;
 use crate::recording::{GyroSample, WheelSample};
 use crate::robot::RobotConfig;
@@ -160,7 +161,7 @@ pub fn run(
     job: &CalibrateJob,
     watch: &mut dyn RunObserver,
 ) -> Result<CalibrateOutcome, PipelineError> {
-    check_job_outputs(job)?;
+    let _lock = check_job_outputs(job)?;
     let (mut cfg, robot) = job.common.load()?;
     job.choice.apply(&mut cfg.calib);
     let params = params_for_robot(&cfg.calib, &robot);
@@ -217,8 +218,9 @@ pub fn run(
     Ok(CalibrateOutcome { summary, notes })
 }
 
-/// `odocal calibrate`'s outputs against its inputs ([`check_outputs`]).
-fn check_job_outputs(job: &CalibrateJob) -> Result<(), PipelineError> {
+/// `odocal calibrate`'s outputs against its inputs ([`check_outputs`]),
+/// then locked for the run ([`lock_outputs`]: the directory and the `.rrd`).
+fn check_job_outputs(job: &CalibrateJob) -> Result<Vec<OutputLock>, PipelineError> {
     let inputs: Vec<&Path> = match &job.input {
         CalibSource::Recording(p) => vec![p],
         CalibSource::Csv { motions, wheels } => vec![motions, wheels],
@@ -228,7 +230,12 @@ fn check_job_outputs(job: &CalibrateJob) -> Result<(), PipelineError> {
     if let Some(Viewer::File(rrd)) = &job.viewer {
         outputs.push(rrd);
     }
-    check_outputs(&inputs, &outputs)
+    check_outputs(&inputs, &outputs)?;
+    let mut sets = vec![job.out.as_path()];
+    if let Some(Viewer::File(rrd)) = &job.viewer {
+        sets.push(rrd);
+    }
+    lock_outputs(&sets)
 }
 
 /// The calibration input of the CSV files: wheel angles and the motions'

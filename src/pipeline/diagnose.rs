@@ -44,6 +44,8 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
         let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
         super::outputs::check_outputs(&[&job.measured], &outputs)?;
     }
+    let report_dir: Vec<&Path> = job.report.iter().map(PathBuf::as_path).collect();
+    let _lock = super::outputs::lock_outputs(&report_dir)?;
     let (mut cfg, robot) = job.common.load()?;
     if let Some(h) = job.holdout {
         if !(h > 0.0 && h < 1.0) {

@@ -2,7 +2,8 @@
 //! row as the run goes and committed atomically only when it succeeded
 //! ([`IcpFiles`], [`CalibFiles`]), and the results in memory ([`Collect`]);
 //! and the check every command makes of its output paths before any work
-//! ([`check_outputs`]).
+//! ([`check_outputs`]) and the lock it holds on them while it runs
+//! ([`lock_outputs`]).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -12,6 +13,7 @@ use super::PipelineError;
 use crate::calib::{CalibSummary, CalibrationRun, CloudView, Estimate};
 use crate::geom::Pose2;
 use crate::icp::IcpStats;
+use crate::io::out_lock::{LockError, OutputLock};
 use crate::io::stream_out::AtomicWriter;
 use crate::motion::{Motion, VelocityObs};
 use crate::traj::Trajectory;
@@ -50,6 +52,26 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), Pipeline
         seen.push((out, id));
     }
     Ok(())
+}
+
+/// Locks each output (a file, or the directory of an output set) for the
+/// run: while the returned guards live, another odocal run on the same output
+/// is refused with exit 2 naming the lock, so the files of two runs never
+/// mix. Call after [`check_outputs`], before anything is written.
+pub fn lock_outputs(outputs: &[&Path]) -> Result<Vec<OutputLock>, PipelineError> {
+    outputs
+        .iter()
+        .map(|out| {
+            OutputLock::acquire(out).map_err(|e| match e {
+                LockError::Busy { .. } => PipelineError::BadArgument(format!(
+                    "output {} is being written: {e}; wait for that run to end or choose \
+                     another output",
+                    out.display()
+                )),
+                LockError::Io(..) => PipelineError::write(out, e),
+            })
+        })
+        .collect()
 }
 
 /// What identifies a file whatever the path that names it: device and inode

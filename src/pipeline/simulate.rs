@@ -67,6 +67,7 @@ pub fn run(
         .chain(job.truth.as_deref())
         .collect();
     super::outputs::check_outputs(&[], &outputs)?;
+    let _lock = super::outputs::lock_outputs(&outputs)?;
     let (mut cfg, robot) = job.common.load()?;
     if let Some(s) = &job.scenario {
         set_scenario(&mut cfg.sim, s)?;

@@ -182,6 +182,7 @@ pub fn run(
     let outputs = output_files(&job.out);
     let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
     check_outputs(&inputs, &outputs)?;
+    let _lock = crate::pipeline::outputs::lock_outputs(&[&job.out])?;
     let truth = truth_path.as_deref().map(load_truth).transpose()?;
     let rec = crate::pipeline::read_recording(&input, &cfg, &robot)?;
     std::fs::create_dir_all(&job.out).map_err(|e| PipelineError::write(&job.out, e))?;
