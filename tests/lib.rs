@@ -36,6 +36,7 @@ mod io_outputs;
 mod io_props;
 mod io_read;
 mod io_roundtrip;
+mod io_sense;
 mod io_stream;
 mod io_time;
 mod record_stream;
