@@ -41,6 +41,7 @@ pub mod censi;
 mod columns;
 pub mod csv;
 pub mod format;
+pub mod input;
 pub mod kitti;
 pub mod mcap_canon;
 mod mcap_guard;

@@ -196,7 +196,7 @@ pub fn run(
             .1
         }
         CalibSource::Csv { motions, wheels } => {
-            let input = read_csv_input(motions, wheels)?;
+            let input = read_csv_input(motions, wheels, &cfg.icp)?;
             drive::calibrate_streams(
                 &input.wheels,
                 &input.observations,
@@ -205,7 +205,8 @@ pub fn run(
                 &params,
                 &cfg.measurements,
                 &mut obs,
-            )?
+            )
+            .map_err(|e| name_csv_inputs(e, motions, wheels))?
         }
     }
     .summary;
@@ -238,15 +239,31 @@ fn check_job_outputs(job: &CalibrateJob) -> Result<Vec<OutputLock>, PipelineErro
     lock_outputs(&sets)
 }
 
+/// A calibration from CSV files that found nothing to calibrate names both
+/// files (the motions and the wheels did not overlap in time).
+fn name_csv_inputs(e: PipelineError, motions: &Path, wheels: &Path) -> PipelineError {
+    match e {
+        PipelineError::BadArgument(m) => {
+            InputError::new(format!("{} and {}", motions.display(), wheels.display()), m).into()
+        }
+        other => other,
+    }
+}
+
 /// The calibration input of the CSV files: wheel angles and the motions'
 /// velocity observations; at least two wheel samples and one observation
 /// (without any, the filters would only return their prior).
-fn read_csv_input(motions_csv: &Path, wheels: &Path) -> Result<CalibInput, PipelineError> {
-    let motions = crate::io::csv::read_motions(motions_csv)?;
+fn read_csv_input(
+    motions_csv: &Path,
+    wheels: &Path,
+    icp: &crate::icp::IcpParams,
+) -> Result<CalibInput, PipelineError> {
+    let motions = crate::io::csv::read_motions_numbered(motions_csv)?;
+    super::sense::check_motions(motions_csv, &motions, icp)?;
     let input = CalibInput {
         observations: motions
             .iter()
-            .filter_map(VelocityObs::from_motion)
+            .filter_map(|(_, m)| VelocityObs::from_motion(m))
             .collect(),
         wheels: crate::io::csv::read_wheels(wheels)?,
         gyro: Vec::new(),

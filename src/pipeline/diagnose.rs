@@ -57,11 +57,18 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
     }
     let d = if crate::io::sniff(&job.measured)? == crate::io::Format::CensiTuples {
         let tuples = crate::io::censi::read(&job.measured)?;
-        run_tuples(&tuples, &robot, &cfg.diagnose)?
+        run_tuples(&tuples, &robot, &cfg.diagnose)
     } else {
         let rec = super::read_recording(&job.measured, &cfg, &robot)?;
-        run_recording(&rec, &robot, &cfg.icp, &cfg.diagnose)?
+        run_recording(&rec, &robot, &cfg.icp, &cfg.diagnose)
     };
+    // "Not enough data" and the like are about the measured file: name it.
+    let d = d.map_err(|e| match e {
+        PipelineError::BadArgument(m) => {
+            crate::error::InputError::new(job.measured.display().to_string(), m).into()
+        }
+        other => other,
+    })?;
     if let Some(dir) = &job.report {
         write_report(dir, &job.measured.display().to_string(), &d)?;
     }

@@ -135,6 +135,31 @@ impl IcpStage {
         self.poll(obs, out);
     }
 
+    /// An error when the recording had scan pairs and every one failed:
+    /// nothing usable came out of the stage, which must not pass as a run.
+    fn check_usable(&self, source: &str, topic: &str) -> Result<(), PipelineError> {
+        let stats = self.tally.stats(0.0);
+        if stats.pairs == 0 || stats.failed_pairs < stats.pairs {
+            return Ok(());
+        }
+        let reasons: Vec<String> = stats
+            .failures
+            .iter()
+            .map(|(why, n)| format!("{why} {n}"))
+            .collect();
+        Err(InputError::new(
+            source,
+            format!(
+                "every scan pair failed: {} of {} ({}); no motion to use",
+                stats.failed_pairs,
+                stats.pairs,
+                reasons.join(", ")
+            ),
+        )
+        .topic(topic)
+        .into())
+    }
+
     fn summary(&self) -> IcpRunSummary {
         IcpRunSummary {
             stats: self.tally.stats(self.matching_s),
@@ -159,6 +184,7 @@ pub fn run_icp(
         stage.feed(&item, &info, obs, &mut |_| {});
     }
     stage.finish(obs, &mut |_| {});
+    stage.check_usable(source.name(), source.scan_topic())?;
     Ok(stage.summary())
 }
 
@@ -332,6 +358,7 @@ pub fn run_calibration(
         stage.poll(false, obs);
     }
     icp_stage.finish(obs, &mut |m| stage.push_motion(m));
+    icp_stage.check_usable(source.name(), source.scan_topic())?;
     stage.end_wheels();
     stage.end_gyro();
     stage.poll(true, obs);

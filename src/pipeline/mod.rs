@@ -13,6 +13,7 @@ pub mod icp;
 pub mod observe;
 pub mod outputs;
 pub mod recorder;
+pub mod sense;
 pub mod simulate;
 pub mod viewer;
 

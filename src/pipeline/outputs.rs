@@ -18,11 +18,16 @@ use crate::io::stream_out::AtomicWriter;
 use crate::motion::{Motion, VelocityObs};
 use crate::traj::Trajectory;
 
-/// Checks a command's output paths before it does any work: none may be
-/// (or link to) one of its inputs or another of its outputs, and none may name
-/// anything but a regular file (a directory, device or pipe is refused;
-/// a symbolic link is written through). Each refusal names the path.
+/// Checks a command's inputs and output paths before it does any work: every
+/// input must be a regular file ([`crate::io::input::check_regular`]); no
+/// output may be (or link to) one of its inputs or another of its outputs,
+/// and none may name anything but a regular file (a directory, device or
+/// pipe is refused; a symbolic link is written through). Each refusal names
+/// the path.
 pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), PipelineError> {
+    for input in inputs {
+        crate::io::input::check_regular(input)?;
+    }
     let mut seen: Vec<(&Path, FileId)> = Vec::new();
     for input in inputs {
         if let Some(id) = FileId::of(input) {
