@@ -13,6 +13,13 @@ use std::path::Path;
 
 const KIND: &str = "TUM";
 
+/// Largest coordinate (m) a pose may have: 10,000 km, beyond any robot's
+/// map (Earth-centred coordinates stay below 6,400 km); larger values are a
+/// corrupt file, and their squares would overflow the error statistics.
+pub const MAX_COORDINATE: f64 = 1e7;
+/// Largest stamp magnitude (s): about year 2286 in Unix time.
+pub const MAX_STAMP: f64 = 1e10;
+
 /// Reads a TUM file as a 3D trajectory.
 pub fn read_tum(path: &Path) -> Result<Trajectory3, InputError> {
     parse_tum(&read_text(path)?, &path.display().to_string())
@@ -24,8 +31,9 @@ pub fn read_tum_2d(path: &Path) -> Result<Trajectory, InputError> {
 }
 
 /// Parses TUM text; `file` names the source in errors. Errors name the line:
-/// wrong field count, non-numbers, NaN/inf, a zero quaternion, stamps that do
-/// not strictly increase; also fewer than two poses.
+/// wrong field count, non-numbers, NaN/inf, coordinates beyond
+/// [`MAX_COORDINATE`] or stamps beyond [`MAX_STAMP`], a zero quaternion,
+/// stamps that do not strictly increase; also fewer than two poses.
 pub fn parse_tum(text: &str, file: &str) -> Result<Trajectory3, InputError> {
     let mut stamps: Vec<f64> = Vec::new();
     let mut poses = Vec::new();
@@ -33,6 +41,25 @@ pub fn parse_tum(text: &str, file: &str) -> Result<Trajectory3, InputError> {
     for (line_no, line) in data_lines(text) {
         let [t, x, y, z, qx, qy, qz, qw] = fields::<8>(file, KIND, line_no, line)?;
         let at = || format!("line {line_no}");
+        if t.abs() > MAX_STAMP {
+            return Err(InputError::new(
+                file,
+                format!("timestamp {t:e} s is beyond ±{MAX_STAMP:e} s: not a time"),
+            )
+            .topic(KIND)
+            .at(at()));
+        }
+        if let Some(v) = [x, y, z].into_iter().find(|v| v.abs() > MAX_COORDINATE) {
+            return Err(InputError::new(
+                file,
+                format!(
+                    "coordinate {v:e} m is beyond ±{MAX_COORDINATE:e} m (10,000 km): not a \
+                     position"
+                ),
+            )
+            .topic(KIND)
+            .at(at()));
+        }
         let q = Quaternion::new(qw, qx, qy, qz);
         if !(q.norm() > 1e-9 && q.norm().is_finite()) {
             let what = if q.norm().is_finite() {

@@ -193,6 +193,8 @@ pub fn run_icp(
 pub struct CalibStage<'c> {
     steps: StepBuilder,
     runner: Runner<'c>,
+    /// Steps that carried at least one measurement (not predict-only).
+    measured: usize,
 }
 
 impl<'c> CalibStage<'c> {
@@ -207,6 +209,7 @@ impl<'c> CalibStage<'c> {
         Self {
             steps: StepBuilder::new(meas.use_gyro && has_gyro, meas.gyro_sigma),
             runner: Runner::new(cal, robot.diff_drive()),
+            measured: 0,
         }
     }
 
@@ -245,16 +248,22 @@ impl<'c> CalibStage<'c> {
     /// Runs every step that is now final (with `all_done`, every step left).
     pub fn poll(&mut self, all_done: bool, obs: &mut dyn RunObserver) {
         let runner = &mut self.runner;
-        self.steps
-            .poll(all_done, &mut |s: CalibStep| run_step(runner, &s, obs));
+        let measured = &mut self.measured;
+        self.steps.poll(all_done, &mut |s: CalibStep| {
+            *measured += usize::from(!s.measurements().is_empty());
+            run_step(runner, &s, obs)
+        });
     }
 
-    /// The summary after the steps so far; an error when there was none.
+    /// The summary after the steps so far; an error when no step carried a
+    /// measurement (the filter would only return its prior).
     pub fn summary(&self) -> Result<CalibSummary, PipelineError> {
-        if self.runner.steps() == 0 {
-            return Err(PipelineError::BadArgument(
-                "nothing to calibrate: no wheel data overlapping the velocity observations".into(),
-            ));
+        if self.measured == 0 {
+            return Err(PipelineError::BadArgument(format!(
+                "nothing to calibrate: {} filter steps, none with a measurement (no velocity \
+                 observation overlaps the wheel data)",
+                self.runner.steps()
+            )));
         }
         Ok(self.runner.summary())
     }
