@@ -372,4 +372,23 @@ fn a_damaged_mcap_magic_and_absurd_tum_values_are_named() {
         let err = refused(&o, &["est.tum", needle]);
         assert!(err.contains("line 2") || err.contains("line 3"), "{err}");
     }
+    // The same bound in a KITTI file.
+    let kitti = d.join("est.kitti");
+    std::fs::write(
+        &kitti,
+        "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1e300 0 1 0 0 0 0 1 0\n1 0 0 2 0 1 0 0 0 0 1 0\n",
+    )
+    .unwrap();
+    let times = d.join("times.txt");
+    std::fs::write(&times, "0\n1\n2\n").unwrap();
+    let o = odocal(&[
+        "eval",
+        "--estimate",
+        s(&kitti),
+        "--estimate-times",
+        s(&times),
+        "--reference",
+        s(&good),
+    ]);
+    refused(&o, &["est.kitti", "line 2", "coordinate"]);
 }

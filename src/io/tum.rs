@@ -20,6 +20,22 @@ pub const MAX_COORDINATE: f64 = 1e7;
 /// Largest stamp magnitude (s): about year 2286 in Unix time.
 pub const MAX_STAMP: f64 = 1e10;
 
+/// Whether a stamp (s) and coordinates (m) are within [`MAX_STAMP`] and
+/// [`MAX_COORDINATE`]; `Err` says which value is not.
+pub(crate) fn check_bounds(t: Option<f64>, xyz: &[f64]) -> Result<(), String> {
+    if let Some(t) = t.filter(|t| t.abs() > MAX_STAMP) {
+        return Err(format!(
+            "timestamp {t:e} s is beyond ±{MAX_STAMP:e} s: not a time"
+        ));
+    }
+    match xyz.iter().find(|v| v.abs() > MAX_COORDINATE) {
+        Some(v) => Err(format!(
+            "coordinate {v:e} m is beyond ±{MAX_COORDINATE:e} m (10,000 km): not a position"
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Reads a TUM file as a 3D trajectory.
 pub fn read_tum(path: &Path) -> Result<Trajectory3, InputError> {
     parse_tum(&read_text(path)?, &path.display().to_string())
@@ -41,25 +57,8 @@ pub fn parse_tum(text: &str, file: &str) -> Result<Trajectory3, InputError> {
     for (line_no, line) in data_lines(text) {
         let [t, x, y, z, qx, qy, qz, qw] = fields::<8>(file, KIND, line_no, line)?;
         let at = || format!("line {line_no}");
-        if t.abs() > MAX_STAMP {
-            return Err(InputError::new(
-                file,
-                format!("timestamp {t:e} s is beyond ±{MAX_STAMP:e} s: not a time"),
-            )
-            .topic(KIND)
-            .at(at()));
-        }
-        if let Some(v) = [x, y, z].into_iter().find(|v| v.abs() > MAX_COORDINATE) {
-            return Err(InputError::new(
-                file,
-                format!(
-                    "coordinate {v:e} m is beyond ±{MAX_COORDINATE:e} m (10,000 km): not a \
-                     position"
-                ),
-            )
-            .topic(KIND)
-            .at(at()));
-        }
+        check_bounds(Some(t), &[x, y, z])
+            .map_err(|m| InputError::new(file, m).topic(KIND).at(at()))?;
         let q = Quaternion::new(qw, qx, qy, qz);
         if !(q.norm() > 1e-9 && q.norm().is_finite()) {
             let what = if q.norm().is_finite() {
