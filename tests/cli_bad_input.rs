@@ -140,6 +140,9 @@ fn every_scan_pair_failing_is_an_error_and_a_few_are_not() {
     let stats: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let failed = stats["failed_pairs"].as_u64().unwrap();
     assert!((1..19).contains(&failed), "{stats}");
+    // Two seconds are too few to diagnose: the message names the file.
+    let o = odocal(&["diagnose", "--measured", s(&some)]);
+    refused(&o, &["some.mcap", "not enough data to diagnose"]);
 }
 
 #[test]
