@@ -123,8 +123,22 @@ pub struct Param {
     pub default: f64,
     /// Whether a SPEC must give it ≥ 0.
     pub non_negative: bool,
+    /// The physical range a SPEC may give (in `unit`), and why.
+    pub bounds: Bounds,
     /// How the diagnosis estimates it.
     pub estimate: Estimate,
+}
+
+/// The range of values a SPEC may give a parameter, and why beyond it the
+/// departure is not a calibration effect any more.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    /// Lowest value.
+    pub lo: f64,
+    /// Highest value.
+    pub hi: f64,
+    /// Why, for the refusal message.
+    pub why: &'static str,
 }
 
 impl Param {
@@ -135,6 +149,11 @@ impl Param {
             unit,
             default,
             non_negative: false,
+            bounds: Bounds {
+                lo: f64::NEG_INFINITY,
+                hi: f64::INFINITY,
+                why: "",
+            },
             estimate: Estimate::Fitted(step),
         }
     }
@@ -146,6 +165,11 @@ impl Param {
             unit,
             default,
             non_negative: false,
+            bounds: Bounds {
+                lo: f64::NEG_INFINITY,
+                hi: f64::INFINITY,
+                why: "",
+            },
             estimate: Estimate::Searched,
         }
     }
@@ -158,11 +182,41 @@ impl Param {
         }
     }
 
+    /// The same parameter, limited to [`lo`, `hi`] for the reason `why`.
+    const fn within(self, lo: f64, hi: f64, why: &'static str) -> Self {
+        Self {
+            bounds: Bounds { lo, hi, why },
+            ..self
+        }
+    }
+
     /// Whether the diagnosis fits it by least squares (a free parameter).
     pub fn is_free(&self) -> bool {
         matches!(self.estimate, Estimate::Fitted(_))
     }
 }
+
+/// Why the radius and wheel-base scales stop at ±50 %.
+const WHY_SCALE: &str = "a wheel 50 % larger or smaller than nominal is another robot, not a \
+     calibration error";
+/// Why a step's time stops at one day.
+const WHY_TIME: &str = "beyond the longest simulation (one day, 86400 s)";
+/// Why a radius step stops at ±10 cm.
+const WHY_STEP: &str = "a radius change over 10 cm is a wheel swap, not a calibration effect";
+/// Why a radius drift stops at ±10 cm/h.
+const WHY_DRIFT: &str = "tyre wear or inflation loss beyond 10 cm per hour is a failure, not drift";
+/// Why the encoder gain and turn slip stop at ±1 s/rad.
+const WHY_GAIN: &str = "at 1 rad/s the encoders would already read double";
+/// Why the latency stops at 1 s.
+const WHY_LATENCY: &str = "a delay over a second is a clock error, not a sensor latency";
+/// Why a laser offset stops at ±1 m.
+const WHY_MOUNT: &str = "a laser a metre off its nominal mount means a wrong robot file";
+/// Why a laser yaw offset stops at ±π.
+const WHY_YAW: &str = "an angle beyond ±π wraps around";
+/// Why a gyro bias stops at ±0.5 rad/s.
+const WHY_BIAS: &str = "MEMS gyros specify biases well below 0.5 rad/s (≈ 29°/s)";
+/// Why turn slip stops at ±1 s/rad.
+const WHY_SLIP: &str = "at 1 rad/s the effective wheel base would already double";
 
 impl EffectKind {
     /// Every kind, in table order.
@@ -199,42 +253,62 @@ impl EffectKind {
             Self::RadiusScale => {
                 const {
                     &[
-                        Param::fitted("right", "1", 0.01, 1e-5),
-                        Param::fitted("left", "1", -0.01, 1e-5),
+                        Param::fitted("right", "1", 0.01, 1e-5).within(-0.5, 0.5, WHY_SCALE),
+                        Param::fitted("left", "1", -0.01, 1e-5).within(-0.5, 0.5, WHY_SCALE),
                     ]
                 }
             }
-            Self::WheelBaseScale => const { &[Param::fitted("scale", "1", 0.03, 1e-5)] },
+            Self::WheelBaseScale => {
+                const { &[Param::fitted("scale", "1", 0.03, 1e-5).within(-0.5, 0.5, WHY_SCALE)] }
+            }
             Self::RadiusStep => {
                 const {
                     &[
-                        Param::searched("time", "s", 55.0).non_negative(),
-                        Param::fitted("right", "m", 0.004, 1e-6),
-                        Param::fitted("left", "m", 0.002, 1e-6),
+                        Param::searched("time", "s", 55.0)
+                            .non_negative()
+                            .within(0.0, 86400.0, WHY_TIME),
+                        Param::fitted("right", "m", 0.004, 1e-6).within(-0.1, 0.1, WHY_STEP),
+                        Param::fitted("left", "m", 0.002, 1e-6).within(-0.1, 0.1, WHY_STEP),
                     ]
                 }
             }
             Self::RadiusDrift => {
                 const {
                     &[
-                        Param::fitted("right", "m/h", -0.01, 1e-4),
-                        Param::fitted("left", "m/h", -0.005, 1e-4),
+                        Param::fitted("right", "m/h", -0.01, 1e-4).within(-0.1, 0.1, WHY_DRIFT),
+                        Param::fitted("left", "m/h", -0.005, 1e-4).within(-0.1, 0.1, WHY_DRIFT),
                     ]
                 }
             }
-            Self::EncoderGain => const { &[Param::fitted("k", "s/rad", 0.02, 1e-5)] },
-            Self::Latency => const { &[Param::fitted("delay", "s", 0.04, 1e-4).non_negative()] },
+            Self::EncoderGain => {
+                const { &[Param::fitted("k", "s/rad", 0.02, 1e-5).within(-1.0, 1.0, WHY_GAIN)] }
+            }
+            Self::Latency => {
+                const {
+                    &[Param::fitted("delay", "s", 0.04, 1e-4)
+                        .non_negative()
+                        .within(0.0, 1.0, WHY_LATENCY)]
+                }
+            }
             Self::LaserOffset => {
                 const {
                     &[
-                        Param::fitted("x", "m", 0.05, 1e-5),
-                        Param::fitted("y", "m", 0.02, 1e-5),
-                        Param::fitted("yaw", "rad", 0.02, 1e-5),
+                        Param::fitted("x", "m", 0.05, 1e-5).within(-1.0, 1.0, WHY_MOUNT),
+                        Param::fitted("y", "m", 0.02, 1e-5).within(-1.0, 1.0, WHY_MOUNT),
+                        Param::fitted("yaw", "rad", 0.02, 1e-5).within(
+                            -std::f64::consts::PI,
+                            std::f64::consts::PI,
+                            WHY_YAW,
+                        ),
                     ]
                 }
             }
-            Self::GyroBias => const { &[Param::fitted("bias", "rad/s", 0.005, 1e-6)] },
-            Self::TurnSlip => const { &[Param::fitted("k", "s/rad", 0.1, 1e-5)] },
+            Self::GyroBias => {
+                const { &[Param::fitted("bias", "rad/s", 0.005, 1e-6).within(-0.5, 0.5, WHY_BIAS)] }
+            }
+            Self::TurnSlip => {
+                const { &[Param::fitted("k", "s/rad", 0.1, 1e-5).within(-1.0, 1.0, WHY_SLIP)] }
+            }
         }
     }
 
@@ -351,8 +425,8 @@ impl Effect {
     }
 
     /// Parses `NAME` or `NAME:key=value,key=value`; keys not given keep their
-    /// default. Values must be finite; `latency` delay must be ≥ 0 and
-    /// `radius_step` time ≥ 0.
+    /// default. Values must be finite and within each parameter's
+    /// [`Bounds`] (e.g. `latency` delay in [0, 1] s, `radius_scale` ±50 %).
     pub fn parse(spec: &str) -> Result<Self, EffectSpecError> {
         let err = |m: String| EffectSpecError {
             spec: spec.to_string(),
@@ -397,6 +471,13 @@ impl Effect {
         for (p, v) in params.iter().zip(&values) {
             if p.non_negative && *v < 0.0 {
                 return Err(err(format!("{} must be ≥ 0 {}", p.key, p.unit)));
+            }
+            let b = p.bounds;
+            if !(b.lo <= *v && *v <= b.hi) {
+                return Err(err(format!(
+                    "{name} {} = {v} is outside the physical range [{}, {}] ({}): {}",
+                    p.key, b.lo, b.hi, p.unit, b.why
+                )));
             }
         }
         Ok(kind.effect(&values))

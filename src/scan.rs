@@ -81,6 +81,73 @@ impl LaserScan {
             }
         }
     }
+
+    /// Whether the scan's geometry makes physical sense, as a reader checks
+    /// it after parsing: at least [`MIN_BEAMS`] beams, finite angles,
+    /// `0 ≤ range_min < range_max`, and, when the message states its
+    /// `angle_max` (rad), `angle_min + (n − 1)·angle_increment ≈ angle_max`
+    /// within [`angle_tolerance`] with the increment's sign pointing from
+    /// `angle_min` to `angle_max`. `Err` says what disagrees, with the values.
+    pub fn check_geometry(&self, angle_max: Option<f64>) -> Result<(), String> {
+        let n = self.ranges.len();
+        if n < MIN_BEAMS {
+            return Err(format!(
+                "LaserScan with {n} beam(s): at least {MIN_BEAMS} are needed to match a scan"
+            ));
+        }
+        if !(self.angle_min.is_finite() && self.angle_increment.is_finite()) {
+            return Err(format!(
+                "LaserScan angle_min {} or angle_increment {} is not finite",
+                self.angle_min, self.angle_increment
+            ));
+        }
+        if self.angle_increment == 0.0 {
+            return Err(format!("LaserScan angle_increment is 0 with {n} beams"));
+        }
+        if !(self.range_min >= 0.0 && self.range_max > self.range_min) {
+            return Err(format!(
+                "LaserScan range limits make no sense: range_min {} m, range_max {} m \
+                 (need 0 ≤ range_min < range_max)",
+                self.range_min, self.range_max
+            ));
+        }
+        let Some(angle_max) = angle_max else {
+            return Ok(());
+        };
+        if !angle_max.is_finite() {
+            return Err(format!("LaserScan angle_max is {angle_max}"));
+        }
+        if (angle_max - self.angle_min) * self.angle_increment < 0.0 {
+            return Err(format!(
+                "LaserScan angle_increment {} rad points away from angle_max: angle_min {} \
+                 rad, angle_max {angle_max} rad",
+                self.angle_increment, self.angle_min
+            ));
+        }
+        let last = self.beam_angle(n - 1);
+        let tol = angle_tolerance(self.angle_increment);
+        if (last - angle_max).abs() > tol {
+            return Err(format!(
+                "LaserScan angles disagree with its {n} ranges: angle_min {} + ({n} − 1)·{} = \
+                 {last:.6} rad, but angle_max = {angle_max:.6} rad (tolerance {tol:.6} rad: one \
+                 increment, for CARMEN's π/n convention, + 1 mrad)",
+                self.angle_min, self.angle_increment
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Fewest beams a scan may have: a line fitted through neighbouring beams
+/// (the ICP's normals) needs three.
+pub const MIN_BEAMS: usize = 3;
+
+/// How far (rad) the last beam's angle may be from a stated `angle_max`:
+/// one increment, because logs converted from CARMEN use increment = π/n
+/// with the last beam one increment short of +90° while some state +90°,
+/// plus 1 mrad for `f32` rounding of the angles.
+pub fn angle_tolerance(increment: f64) -> f64 {
+    increment.abs() + 1e-3
 }
 
 #[cfg(test)]

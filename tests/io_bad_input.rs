@@ -35,6 +35,7 @@ fn scan(stamp: f64, beams: usize) -> LaserScanMsg {
             frame_id: "laser".into(),
         },
         angle_min: -1.0,
+        angle_max: -1.0 + 0.01 * beams.saturating_sub(1) as f32,
         angle_increment: 0.01,
         range_min: 0.1,
         range_max: 10.0,

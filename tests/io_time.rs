@@ -60,6 +60,7 @@ fn scan_msg(stamp: Time, log_ns: u64) -> Msg {
     let m = LaserScanMsg {
         header: header(stamp),
         angle_min: -1.5,
+        angle_max: 1.5,
         angle_increment: 3.0 / 180.0,
         range_min: 0.1,
         range_max: 30.0,

@@ -34,7 +34,7 @@ pub use dkf::DualKf;
 pub use evidence::{Evidence, Wiring};
 pub use nominal::Nominal;
 pub use normal::{erfc, inverse_normal_cdf};
-pub use params::{CalibParams, Method, NoiseParams, Ranges};
+pub use params::{CalibParams, Method, NoiseParams, Ranges, MAX_PARTICLES};
 pub use pf::{ParticleFilter, Particles};
 pub use pool::NormalPool;
 pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};

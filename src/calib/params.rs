@@ -7,6 +7,9 @@ use super::resample::Scheme;
 use super::trigger::Trigger;
 use serde::{Deserialize, Serialize};
 
+/// Most particles a filter may be asked for (`--particles`, `adaptive.n_max`).
+pub const MAX_PARTICLES: usize = 1_000_000;
+
 /// Calibration method (the words of `odocal calibrate --method`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -257,6 +260,15 @@ impl CalibParams {
         }
         if self.initial_particles() == 0 {
             return bad("particles must be ≥ 1");
+        }
+        if self.initial_particles() > MAX_PARTICLES || self.adaptive.n_max > MAX_PARTICLES {
+            return bad(&format!(
+                "particles {} (adaptive.n_max {}) is over the cap of {MAX_PARTICLES}: each \
+                 particle costs memory and time at every step, and 10⁶ already resolve the \
+                 radii far below their noise",
+                self.initial_particles(),
+                self.adaptive.n_max
+            ));
         }
         if !(self.neff_ratio > 0.0 && self.neff_ratio <= 1.0) {
             return bad("neff_ratio must be in (0, 1]");

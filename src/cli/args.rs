@@ -49,10 +49,10 @@ pub struct ExperimentArgs {
     /// literature (every method side by side), square, umbmark, heading-pf, tachometer.
     pub name: String,
     /// Monte Carlo runs (literature: repetitions; umbmark: robots; heading-pf: trials).
-    #[arg(long, default_value_t = 30)]
+    #[arg(long, default_value_t = 30, allow_negative_numbers = true)]
     pub runs: usize,
     /// Seed of run 0 (run k uses seed + k).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Output directory (NAME.md, NAME.json, NAME.png).
     #[arg(long, value_name = "DIR", default_value = "odocal-experiments")]
@@ -77,7 +77,7 @@ pub struct DiagnoseArgs {
     #[arg(long, value_name = "REC")]
     pub measured: PathBuf,
     /// Fraction of the recording (at its end) held out to measure the gain.
-    #[arg(long, value_name = "FRACTION")]
+    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true)]
     pub holdout: Option<f64>,
     /// Directory for report.md and the residual plots.
     #[arg(long, value_name = "DIR")]
@@ -157,10 +157,10 @@ pub struct CalibrateArgs {
     #[arg(long)]
     pub trigger: Option<odocal::calib::Trigger>,
     /// Initial particle count.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = particle_count)]
     pub particles: Option<usize>,
     /// Seed of every random draw.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// Output directory: calibration.csv, trajectory.tum, summary.json.
     #[arg(long, value_name = "DIR")]
@@ -198,10 +198,10 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "NAME|FILE")]
     pub scenario: Option<String>,
     /// Seed of every random process.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// Length of the run (s).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub duration: Option<f64>,
     /// Effect injected into the true robot, `NAME` or `NAME:key=value,...` (repeatable).
     #[arg(long = "effect", value_name = "SPEC")]
@@ -240,7 +240,7 @@ pub struct EvalArgs {
     #[arg(long, value_name = "KIND")]
     pub align: Option<Alignment>,
     /// Maximum time difference for association (s).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub t_max_diff: Option<f64>,
     /// Time offset added to the estimate's stamps (s).
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
@@ -249,7 +249,7 @@ pub struct EvalArgs {
     #[arg(long)]
     pub interpolate: bool,
     /// RPE step.
-    #[arg(long, value_name = "X")]
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
     pub rpe_delta: Option<f64>,
     /// RPE step unit: frames, m or s.
     #[arg(long, value_name = "UNIT")]
@@ -401,5 +401,17 @@ impl ExperimentArgs {
             tables: self.tables.clone(),
             common: self.common.files(),
         }
+    }
+}
+
+/// `--particles N`: a whole number from 1 to the cap
+/// ([`odocal::calib::MAX_PARTICLES`]); anything else is refused naming the cap.
+fn particle_count(text: &str) -> Result<usize, String> {
+    let cap = odocal::calib::MAX_PARTICLES;
+    match text.trim().parse::<i128>() {
+        Ok(n) if n >= 1 && n <= cap as i128 => Ok(n as usize),
+        _ => Err(format!(
+            "{text} particles: the count must be a whole number from 1 to the cap of {cap}"
+        )),
     }
 }

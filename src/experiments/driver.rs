@@ -86,6 +86,7 @@ pub struct ExperimentJob {
 pub fn run(job: &ExperimentJob) -> Result<ExperimentOutput, PipelineError> {
     let (cfg, robot) = job.common.load()?;
     let settings = ExperimentSettings::load(job.settings.as_deref())?;
+    let _lock = crate::pipeline::outputs::lock_outputs(&[&job.out])?;
     let inputs = ExperimentInputs {
         runs: job.runs,
         seed: job.seed,

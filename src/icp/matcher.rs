@@ -629,12 +629,8 @@ impl ScanMatcher {
     /// Whether a matched motion is within the robot's speed and turn-rate
     /// limits over `dt`, allowing 3σ of its covariance plus a small slack.
     fn within_limits(&self, motion: &Pose2, cov: &Matrix3<f64>, dt: f64) -> bool {
-        let p = &self.params;
         let [x, y, th] = geom::xyt(motion);
-        let st = (cov[(0, 0)] + cov[(1, 1)]).max(0.0).sqrt();
-        let sr = cov[(2, 2)].max(0.0).sqrt();
-        (x * x + y * y).sqrt() <= p.max_speed * dt + 3.0 * st + p.speed_slack
-            && th.abs() <= p.max_turn_rate * dt + 3.0 * sr + p.turn_slack
+        self.params.within_limits([x, y, th], cov, dt)
     }
 
     /// Whether a matched motion agrees with an informative prior.

@@ -185,6 +185,18 @@ pub struct IcpParamsError {
 }
 
 impl IcpParams {
+    /// Whether a motion (dx, dy, dθ in m, m, rad) over `dt` s is within the
+    /// robot's speed and turn-rate limits, allowing 3σ of its covariance
+    /// `cov` plus the slacks: the plausibility gate of every match, and the
+    /// check of motions read from a file.
+    pub fn within_limits(&self, motion: [f64; 3], cov: &nalgebra::Matrix3<f64>, dt: f64) -> bool {
+        let [x, y, th] = motion;
+        let st = (cov[(0, 0)] + cov[(1, 1)]).max(0.0).sqrt();
+        let sr = cov[(2, 2)].max(0.0).sqrt();
+        (x * x + y * y).sqrt() <= self.max_speed * dt + 3.0 * st + self.speed_slack
+            && th.abs() <= self.max_turn_rate * dt + 3.0 * sr + self.turn_slack
+    }
+
     /// Checks ranges and orderings once, before any matching.
     pub fn validate(&self) -> Result<(), IcpParamsError> {
         self.check_positive()?;

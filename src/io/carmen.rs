@@ -2,8 +2,10 @@
 //! datasets: `FLASER`, `ROBOTLASER1` and `ODOM` lines; other lines are skipped.
 //! The stamp of every record is its `ipc_timestamp`. A record must be
 //! complete up to its `logger_timestamp`, so that a line cut inside a number
-//! is never read as a shorter number; a log cut short (its last line without
-//! a newline and incomplete) is read up to its last complete record.
+//! is never read as a shorter number, and no longer than its counts say (a
+//! `FLASER n` line holds exactly n + 10 values after its keyword). A log cut
+//! short (its last line without a newline and incomplete) is refused as
+//! truncated, naming the line; so is a line longer than [`MAX_LINE_BYTES`].
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -21,6 +23,13 @@ pub const FLASER_RANGE_MIN: f64 = 0.1;
 /// Largest valid range (m) of `FLASER` scans; readings of 81.83/81.91 m mark
 /// "no return" and fall outside it.
 pub const FLASER_RANGE_MAX: f64 = 80.0;
+
+/// Longest line (bytes) read as a record: a `FLASER` line of the largest
+/// beam count taken (10⁶ readings of up to 10 characters) fits well within it.
+pub const MAX_LINE_BYTES: usize = 16 << 20;
+
+/// Most readings a record may announce.
+const MAX_READINGS: f64 = 1e6;
 
 /// Reads a CARMEN log file.
 pub fn read_carmen(path: &Path, opts: &ReadOptions) -> Result<Recording, InputError> {
@@ -64,6 +73,17 @@ pub fn read_carmen_bytes(
         text.lines().count().saturating_sub(1)
     };
     for (i, line) in text.lines().enumerate() {
+        if line.len() > MAX_LINE_BYTES {
+            return Err(InputError::new(
+                file,
+                format!(
+                    "line of {} bytes, over the cap of {} MiB for one CARMEN record",
+                    line.len(),
+                    MAX_LINE_BYTES >> 20
+                ),
+            )
+            .at(format!("line {}", i + 1)));
+        }
         let mut tok = line.split_ascii_whitespace();
         let Some(kind) = tok.next() else { continue };
         let err = |m: String| {
@@ -86,7 +106,12 @@ pub fn read_carmen_bytes(
         };
         let (scan, odom) = match parsed {
             Ok(p) => p,
-            Err(_) if i == cut_tail => break,
+            Err(m) if i == cut_tail => {
+                return Err(err(format!(
+                    "the log is truncated: its last line ends without a newline inside the \
+                     record ({m})"
+                )))
+            }
             Err(m) => return Err(err(m)),
         };
         known += 1;
@@ -202,13 +227,27 @@ fn complete(fields: &[&str], i: usize) -> Result<(), String> {
     if fields.get(i + 1).is_none() {
         return Err(format!("line ends before the host name (field {})", i + 3));
     }
-    num(fields, i + 2, "logger_timestamp").map(|_| ())
+    num(fields, i + 2, "logger_timestamp")?;
+    if fields.len() > i + 3 {
+        return Err(format!(
+            "{} values after the logger_timestamp (field {}): the line is longer than its \
+             counts say",
+            fields.len() - i - 3,
+            i + 4
+        ));
+    }
+    Ok(())
 }
 
 fn count(fields: &[&str], i: usize, what: &str) -> Result<usize, String> {
     let v = num(fields, i, what)?;
-    if v < 0.0 || v.fract() != 0.0 || v > 1e6 {
+    if v < 0.0 || v.fract() != 0.0 {
         return Err(format!("{what} {v} is not a count"));
+    }
+    if v > MAX_READINGS {
+        return Err(format!(
+            "{what} {v} is over the cap of {MAX_READINGS:e} readings per record"
+        ));
     }
     Ok(v as usize)
 }
@@ -233,6 +272,14 @@ fn parse_flaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), String> {
     if n == 0 {
         return Err("FLASER with zero beams".into());
     }
+    if f.len() > n + 10 {
+        return Err(format!(
+            "FLASER {n} makes {} values after the keyword (n readings, two poses, three \
+             stamps and host), but the line has {}",
+            n + 10,
+            f.len()
+        ));
+    }
     let r = ranges(f, 1, n)?;
     let laser = pose_at(f, n + 1, "laser pose")?;
     let odom = pose_at(f, n + 4, "odometry pose")?;
@@ -247,6 +294,7 @@ fn parse_flaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), String> {
         ranges: r,
         ..Default::default()
     };
+    scan.check_geometry(None)?;
     Ok((
         scan,
         StampedPose {
@@ -264,6 +312,7 @@ fn parse_flaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), String> {
 /// Returns the scan, the robot's odometry pose and the laser's pose.
 fn parse_robotlaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), String> {
     let start = num(f, 1, "start_angle")?;
+    let fov = num(f, 2, "fov")?;
     let res = num(f, 3, "angular_resolution")?;
     let max_range = num(f, 4, "maximum_range")?;
     let n = count(f, 7, "number of readings")?;
@@ -289,6 +338,7 @@ fn parse_robotlaser(f: &[&str]) -> Result<(LaserScan, StampedPose, Pose2), Strin
         ranges: r,
         ..Default::default()
     };
+    scan.check_geometry(Some(start + fov))?;
     let odom = StampedPose {
         stamp,
         pose: robot,
@@ -362,16 +412,16 @@ mod tests {
     }
 
     #[test]
-    fn a_cut_last_line_is_dropped_and_a_cut_inner_line_refused() {
+    fn a_cut_line_is_refused_naming_it() {
         let full = "ODOM 0 0 0 0 0 0 1.25 h 1.3\nODOM 1 0 0 0 0 0 2.125 h 2.2\n";
         // Cut inside the second ipc_timestamp: "2.1" must not become a stamp.
         let cut = &full[..full.find("2.125").unwrap() + 3];
-        let r = read(cut).unwrap();
-        assert_eq!(r.odom.len(), 1);
-        assert_eq!(r.odom[0].stamp, 1.25);
+        let e = read(cut).unwrap_err();
+        assert_eq!(e.position.as_deref(), Some("line 2"));
+        assert!(e.message.contains("truncated"), "{e}");
         // Cut after the host: still incomplete.
-        let r = read(&full[..full.rfind(" 2.2").unwrap()]).unwrap();
-        assert_eq!(r.odom.len(), 1);
+        let e = read(&full[..full.rfind(" 2.2").unwrap()]).unwrap_err();
+        assert!(e.message.contains("truncated"), "{e}");
         // The same short record inside the log is an error naming its line.
         let e = read("ODOM 0 0 0 0 0 0 1.25\nODOM 1 0 0 0 0 0 2.125 h 2.2\n").unwrap_err();
         assert_eq!(e.position.as_deref(), Some("line 1"));

@@ -90,6 +90,15 @@ fn read_text(path: &Path) -> Result<(String, String), InputError> {
 /// Reads a motions CSV written by [`write_motions`] (or by another tool in the
 /// same layout). Invalid rows come back flagged, never as observations.
 pub fn read_motions(path: &Path) -> Result<Vec<Motion>, InputError> {
+    Ok(read_motions_numbered(path)?
+        .into_iter()
+        .map(|(_, m)| m)
+        .collect())
+}
+
+/// Like [`read_motions`], each motion with its line number in the file (for
+/// the messages of checks made after parsing).
+pub fn read_motions_numbered(path: &Path) -> Result<Vec<(usize, Motion)>, InputError> {
     let (file, text) = read_text(path)?;
     let mut lines = data_lines(&text);
     match lines.next() {
@@ -106,24 +115,30 @@ pub fn read_motions(path: &Path) -> Result<Vec<Motion>, InputError> {
     for (n, l) in lines {
         let v = numbers(l, 14, &file, n)?;
         let cov = Matrix3::new(v[5], v[6], v[7], v[6], v[8], v[9], v[7], v[9], v[10]);
-        if out.last().is_some_and(|m: &Motion| v[0] < m.t0) {
+        if out
+            .last()
+            .is_some_and(|(_, m): &(usize, Motion)| v[0] < m.t0)
+        {
             return Err(InputError::new(&file, "t0 goes backwards").at(format!("line {n}")));
         }
-        out.push(Motion {
-            t0: v[0],
-            t1: v[1],
-            dx: v[2],
-            dy: v[3],
-            dtheta: v[4],
-            cov,
-            iterations: v[11] as u32,
-            inliers: v[12] as u32,
-            failure: if v[13] != 0.0 {
-                None
-            } else {
-                Some(PairFailure::Implausible)
+        out.push((
+            n,
+            Motion {
+                t0: v[0],
+                t1: v[1],
+                dx: v[2],
+                dy: v[3],
+                dtheta: v[4],
+                cov,
+                iterations: v[11] as u32,
+                inliers: v[12] as u32,
+                failure: if v[13] != 0.0 {
+                    None
+                } else {
+                    Some(PairFailure::Implausible)
+                },
             },
-        });
+        ));
     }
     Ok(out)
 }

@@ -28,10 +28,43 @@ pub fn sniff(path: &Path) -> Result<Format, InputError> {
     if head[..n].starts_with(mcap::MAGIC) {
         return Ok(Format::Mcap);
     }
+    if let Some(byte) = damaged_magic(&head[..n]) {
+        return Err(InputError::new(
+            path.display().to_string(),
+            format!(
+                "not an MCAP (bad magic at byte {byte}: {:02x?} instead of {:02x?}); the file \
+                 starts like one but is damaged",
+                &head[..n],
+                mcap::MAGIC
+            ),
+        ));
+    }
     if path.extension().is_some_and(|e| e == "tuple") {
         return Ok(Format::CensiTuples);
     }
     Ok(Format::Text)
+}
+
+/// Most flipped bits for which a start that differs from the MCAP magic is
+/// still taken for a damaged MCAP rather than another format (no text
+/// format starts within 3 bits of `\x89MCAP0\r\n`).
+const MAGIC_BIT_SLACK: u32 = 3;
+
+/// The first byte at which `head` (8 bytes read) departs from the MCAP magic,
+/// when it departs by at most [`MAGIC_BIT_SLACK`] bits in all.
+fn damaged_magic(head: &[u8]) -> Option<usize> {
+    if head.len() < mcap::MAGIC.len() {
+        return None;
+    }
+    let bits: u32 = head
+        .iter()
+        .zip(mcap::MAGIC)
+        .map(|(a, b)| (a ^ b).count_ones())
+        .sum();
+    if bits > MAGIC_BIT_SLACK {
+        return None;
+    }
+    head.iter().zip(mcap::MAGIC).position(|(a, b)| a != b)
 }
 
 /// Reads as many bytes as the file has, up to `buf.len()`.

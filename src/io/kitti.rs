@@ -24,6 +24,7 @@ pub fn read_kitti(poses: &Path, times: &Path) -> Result<Trajectory3, InputError>
 
 /// Parses KITTI pose text and timestamp text. Errors name the file and line:
 /// wrong field count, non-numbers, NaN/inf, a matrix that is not a rotation,
+/// a coordinate or stamp beyond the TUM reader's bounds,
 /// stamps that do not strictly increase, unequal counts, fewer than 2 poses.
 pub fn parse_kitti(
     poses: &str,
@@ -47,6 +48,11 @@ pub fn parse_kitti(
             .topic(KIND)
             .at(format!("line {line_no}")));
         }
+        super::tum::check_bounds(None, &[v[3], v[7], v[11]]).map_err(|m| {
+            InputError::new(poses_file, m)
+                .topic(KIND)
+                .at(format!("line {line_no}"))
+        })?;
         let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
         out.push(Isometry3::from_parts(
             Translation3::new(v[3], v[7], v[11]),
@@ -56,6 +62,11 @@ pub fn parse_kitti(
     let mut stamps: Vec<f64> = Vec::new();
     for (line_no, line) in data_lines(times) {
         let [t] = fields::<1>(times_file, "timestamps", line_no, line)?;
+        super::tum::check_bounds(Some(t), &[]).map_err(|m| {
+            InputError::new(times_file, m)
+                .topic("timestamps")
+                .at(format!("line {line_no}"))
+        })?;
         if stamps.last().is_some_and(|&p| t <= p) {
             return Err(
                 InputError::new(times_file, format!("timestamp {t} does not increase"))

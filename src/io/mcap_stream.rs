@@ -257,6 +257,8 @@ pub struct McapStream<'o> {
     /// Items decoded per stream, and how many the first pass counted.
     decoded: [usize; 5],
     expected: [usize; 5],
+    /// The configured scan topic.
+    scan_topic: String,
 }
 
 impl<'o> McapStream<'o> {
@@ -283,6 +285,7 @@ impl<'o> McapStream<'o> {
                 info.odom,
                 info.reference,
             ],
+            scan_topic: opts.topics.scan.clone(),
         })
     }
 
@@ -428,5 +431,9 @@ impl SampleSource for McapStream<'_> {
 
     fn next_item(&mut self) -> Result<Option<Item>, InputError> {
         self.next_decoded()
+    }
+
+    fn scan_topic(&self) -> &str {
+        &self.scan_topic
     }
 }

@@ -256,10 +256,7 @@ impl<'a> State<'a> {
         if m.angle_increment == 0.0 && m.ranges.len() > 1 {
             return Err("LaserScan angle_increment is 0 with several beams".into());
         }
-        if self.laser_frame.is_none() {
-            self.laser_frame = Some(frame(&m.header.frame_id).to_string());
-        }
-        self.rec.scans.push(LaserScan {
+        let scan = LaserScan {
             stamp: t,
             angle_min: m.angle_min as f64,
             angle_increment: m.angle_increment as f64,
@@ -276,7 +273,12 @@ impl<'a> State<'a> {
             range_min: m.range_min as f64,
             range_max: m.range_max as f64,
             ranges: m.ranges,
-        });
+        };
+        scan.check_geometry(Some(m.angle_max as f64))?;
+        if self.laser_frame.is_none() {
+            self.laser_frame = Some(frame(&m.header.frame_id).to_string());
+        }
+        self.rec.scans.push(scan);
         Ok(())
     }
 

@@ -82,6 +82,10 @@ pub trait SampleSource {
     /// The next sample; `None` at the end. Each stream's samples come in
     /// stamp order; streams are interleaved roughly by time.
     fn next_item(&mut self) -> Result<Option<Item>, InputError>;
+    /// The topic (or record kind) the scans come from, for messages.
+    fn scan_topic(&self) -> &str {
+        "laser scans"
+    }
 }
 
 /// A recording in memory (borrowed or owned) as a [`SampleSource`]: the

@@ -13,6 +13,29 @@ use std::path::Path;
 
 const KIND: &str = "TUM";
 
+/// Largest coordinate (m) a pose may have: 10,000 km, beyond any robot's
+/// map (Earth-centred coordinates stay below 6,400 km); larger values are a
+/// corrupt file, and their squares would overflow the error statistics.
+pub const MAX_COORDINATE: f64 = 1e7;
+/// Largest stamp magnitude (s): about year 2286 in Unix time.
+pub const MAX_STAMP: f64 = 1e10;
+
+/// Whether a stamp (s) and coordinates (m) are within [`MAX_STAMP`] and
+/// [`MAX_COORDINATE`]; `Err` says which value is not.
+pub(crate) fn check_bounds(t: Option<f64>, xyz: &[f64]) -> Result<(), String> {
+    if let Some(t) = t.filter(|t| t.abs() > MAX_STAMP) {
+        return Err(format!(
+            "timestamp {t:e} s is beyond ±{MAX_STAMP:e} s: not a time"
+        ));
+    }
+    match xyz.iter().find(|v| v.abs() > MAX_COORDINATE) {
+        Some(v) => Err(format!(
+            "coordinate {v:e} m is beyond ±{MAX_COORDINATE:e} m (10,000 km): not a position"
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Reads a TUM file as a 3D trajectory.
 pub fn read_tum(path: &Path) -> Result<Trajectory3, InputError> {
     parse_tum(&read_text(path)?, &path.display().to_string())
@@ -24,8 +47,9 @@ pub fn read_tum_2d(path: &Path) -> Result<Trajectory, InputError> {
 }
 
 /// Parses TUM text; `file` names the source in errors. Errors name the line:
-/// wrong field count, non-numbers, NaN/inf, a zero quaternion, stamps that do
-/// not strictly increase; also fewer than two poses.
+/// wrong field count, non-numbers, NaN/inf, coordinates beyond
+/// [`MAX_COORDINATE`] or stamps beyond [`MAX_STAMP`], a zero quaternion,
+/// stamps that do not strictly increase; also fewer than two poses.
 pub fn parse_tum(text: &str, file: &str) -> Result<Trajectory3, InputError> {
     let mut stamps: Vec<f64> = Vec::new();
     let mut poses = Vec::new();
@@ -33,6 +57,8 @@ pub fn parse_tum(text: &str, file: &str) -> Result<Trajectory3, InputError> {
     for (line_no, line) in data_lines(text) {
         let [t, x, y, z, qx, qy, qz, qw] = fields::<8>(file, KIND, line_no, line)?;
         let at = || format!("line {line_no}");
+        check_bounds(Some(t), &[x, y, z])
+            .map_err(|m| InputError::new(file, m).topic(KIND).at(at()))?;
         let q = Quaternion::new(qw, qx, qy, qz);
         if !(q.norm() > 1e-9 && q.norm().is_finite()) {
             let what = if q.norm().is_finite() {

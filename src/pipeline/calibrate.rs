@@ -6,12 +6,13 @@
 use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
-use super::outputs::{check_outputs, CalibFiles, Collect};
+use super::outputs::{check_outputs, lock_outputs, CalibFiles, Collect};
 use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
 use super::{Common, PipelineError};
 use crate::calib::{self, CalibParams, CalibSummary, CalibrationRun, Ranges};
 use crate::error::InputError;
+use crate::io::out_lock::OutputLock;
 use crate::motion::VelocityObs;
 use crate::recording::{GyroSample, WheelSample};
 use crate::robot::RobotConfig;
@@ -160,7 +161,7 @@ pub fn run(
     job: &CalibrateJob,
     watch: &mut dyn RunObserver,
 ) -> Result<CalibrateOutcome, PipelineError> {
-    check_job_outputs(job)?;
+    let _lock = check_job_outputs(job)?;
     let (mut cfg, nominal) = job.common.load_nominal()?;
     let robot = &nominal.robot;
     job.choice.apply(&mut cfg.calib);
@@ -199,7 +200,7 @@ pub fn run(
             (done, nominal.assumptions_with(&icp.mount), path)
         }
         CalibSource::Csv { motions, wheels } => {
-            let input = read_csv_input(motions, wheels)?;
+            let input = read_csv_input(motions, wheels, &cfg.icp)?;
             let done = drive::calibrate_streams(
                 &input.wheels,
                 &input.observations,
@@ -208,7 +209,8 @@ pub fn run(
                 &params,
                 &cfg.measurements,
                 &mut obs,
-            )?;
+            )
+            .map_err(|e| name_csv_inputs(e, motions, wheels))?;
             (done, nominal.assumptions(), motions)
         }
     };
@@ -275,8 +277,9 @@ fn vet(
     Ok(())
 }
 
-/// `odocal calibrate`'s outputs against its inputs ([`check_outputs`]).
-fn check_job_outputs(job: &CalibrateJob) -> Result<(), PipelineError> {
+/// `odocal calibrate`'s outputs against its inputs ([`check_outputs`]),
+/// then locked for the run ([`lock_outputs`]: the directory and the `.rrd`).
+fn check_job_outputs(job: &CalibrateJob) -> Result<Vec<OutputLock>, PipelineError> {
     let inputs: Vec<&Path> = match &job.input {
         CalibSource::Recording(p) => vec![p],
         CalibSource::Csv { motions, wheels } => vec![motions, wheels],
@@ -286,18 +289,39 @@ fn check_job_outputs(job: &CalibrateJob) -> Result<(), PipelineError> {
     if let Some(Viewer::File(rrd)) = &job.viewer {
         outputs.push(rrd);
     }
-    check_outputs(&inputs, &outputs)
+    check_outputs(&inputs, &outputs)?;
+    let mut sets = vec![job.out.as_path()];
+    if let Some(Viewer::File(rrd)) = &job.viewer {
+        sets.push(rrd);
+    }
+    lock_outputs(&sets)
+}
+
+/// A calibration from CSV files that found nothing to calibrate names both
+/// files (the motions and the wheels did not overlap in time).
+fn name_csv_inputs(e: PipelineError, motions: &Path, wheels: &Path) -> PipelineError {
+    match e {
+        PipelineError::BadArgument(m) => {
+            InputError::new(format!("{} and {}", motions.display(), wheels.display()), m).into()
+        }
+        other => other,
+    }
 }
 
 /// The calibration input of the CSV files: wheel angles and the motions'
 /// velocity observations; at least two wheel samples and one observation
 /// (without any, the filters would only return their prior).
-fn read_csv_input(motions_csv: &Path, wheels: &Path) -> Result<CalibInput, PipelineError> {
-    let motions = crate::io::csv::read_motions(motions_csv)?;
+fn read_csv_input(
+    motions_csv: &Path,
+    wheels: &Path,
+    icp: &crate::icp::IcpParams,
+) -> Result<CalibInput, PipelineError> {
+    let motions = crate::io::csv::read_motions_numbered(motions_csv)?;
+    super::sense::check_motions(motions_csv, &motions, icp)?;
     let input = CalibInput {
         observations: motions
             .iter()
-            .filter_map(VelocityObs::from_motion)
+            .filter_map(|(_, m)| VelocityObs::from_motion(m))
             .collect(),
         wheels: crate::io::csv::read_wheels(wheels)?,
         gyro: Vec::new(),

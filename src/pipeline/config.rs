@@ -35,6 +35,7 @@ pub struct Config {
 }
 
 fn read_text(path: &Path) -> Result<String, PipelineError> {
+    crate::io::input::check_regular(path)?;
     std::fs::read_to_string(path).map_err(|e| {
         InputError::new(path.display().to_string(), format!("cannot read: {e}")).into()
     })

@@ -45,6 +45,8 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
         let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
         super::outputs::check_outputs(&[&job.measured], &outputs)?;
     }
+    let report_dir: Vec<&Path> = job.report.iter().map(PathBuf::as_path).collect();
+    let _lock = super::outputs::lock_outputs(&report_dir)?;
     let (mut cfg, nominal) = job.common.load_nominal()?;
     let robot = &nominal.robot;
     if let Some(h) = job.holdout {
@@ -55,24 +57,31 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
         }
         cfg.diagnose.holdout = h;
     }
-    let mut d = if crate::io::sniff(&job.measured)? == crate::io::Format::CensiTuples {
+    let d = if crate::io::sniff(&job.measured)? == crate::io::Format::CensiTuples {
         let tuples = crate::io::censi::read(&job.measured)?;
-        let mut d = run_tuples(&tuples, robot, &cfg.diagnose)?;
-        d.assumptions = nominal.assumptions();
-        if let Some(l) = robot.laser {
-            let note = "the nominal mounting; laser_offset is the departure from it".to_string();
-            d.assumptions.set("laser", l, Origin::RobotFile, Some(note));
-        }
-        d
+        run_tuples(&tuples, robot, &cfg.diagnose).map(|mut d| {
+            d.assumptions = nominal.assumptions();
+            if let Some(l) = robot.laser {
+                let note = "the nominal mounting; laser_offset is the departure from it".into();
+                d.assumptions.set("laser", l, Origin::RobotFile, Some(note));
+            }
+            d
+        })
     } else {
         let rec = super::read_recording(&job.measured, &cfg, robot)?;
-        let mut d = run_recording(&rec, robot, &cfg.icp, &cfg.diagnose)?;
-        d.assumptions = nominal.assumptions_with(&icp::mount(&rec, robot)?);
-        d
+        icp::mount(&rec, robot).and_then(|mount| {
+            let mut d = run_recording(&rec, robot, &cfg.icp, &cfg.diagnose)?;
+            d.assumptions = nominal.assumptions_with(&mount);
+            Ok(d)
+        })
     };
-    if d.assumptions.is_empty() {
-        d.assumptions = nominal.assumptions();
-    }
+    // "Not enough data" and the like are about the measured file: name it.
+    let d = d.map_err(|e| match e {
+        PipelineError::BadArgument(m) => {
+            crate::error::InputError::new(job.measured.display().to_string(), m).into()
+        }
+        other => other,
+    })?;
     if let Some(dir) = &job.report {
         write_report(dir, &job.measured.display().to_string(), &d)?;
     }

@@ -141,6 +141,31 @@ impl IcpStage {
         self.poll(obs, out);
     }
 
+    /// An error when the recording had scan pairs and every one failed:
+    /// nothing usable came out of the stage, which must not pass as a run.
+    fn check_usable(&self, source: &str, topic: &str) -> Result<(), PipelineError> {
+        let stats = self.tally.stats(0.0);
+        if stats.pairs == 0 || stats.failed_pairs < stats.pairs {
+            return Ok(());
+        }
+        let reasons: Vec<String> = stats
+            .failures
+            .iter()
+            .map(|(why, n)| format!("{why} {n}"))
+            .collect();
+        Err(InputError::new(
+            source,
+            format!(
+                "every scan pair failed: {} of {} ({}); no motion to use",
+                stats.failed_pairs,
+                stats.pairs,
+                reasons.join(", ")
+            ),
+        )
+        .topic(topic)
+        .into())
+    }
+
     fn summary(&self) -> IcpRunSummary {
         IcpRunSummary {
             stats: self.tally.stats(self.matching_s),
@@ -167,6 +192,7 @@ pub fn run_icp(
         stage.feed(&item, &info, obs, &mut |_| {});
     }
     stage.finish(obs, &mut |_| {});
+    stage.check_usable(source.name(), source.scan_topic())?;
     Ok(stage.summary())
 }
 
@@ -176,6 +202,8 @@ pub struct CalibStage<'c> {
     steps: StepBuilder,
     runner: Runner<'c>,
     evidence: calib::Evidence,
+    /// Steps that carried at least one measurement (not predict-only).
+    measured: usize,
 }
 
 impl<'c> CalibStage<'c> {
@@ -191,6 +219,7 @@ impl<'c> CalibStage<'c> {
             steps: StepBuilder::new(meas.use_gyro && has_gyro, meas.gyro_sigma),
             runner: Runner::new(cal, robot.diff_drive()),
             evidence: calib::Evidence::default(),
+            measured: 0,
         }
     }
 
@@ -230,8 +259,10 @@ impl<'c> CalibStage<'c> {
     pub fn poll(&mut self, all_done: bool, obs: &mut dyn RunObserver) {
         let runner = &mut self.runner;
         let evidence = &mut self.evidence;
+        let measured = &mut self.measured;
         self.steps.poll(all_done, &mut |s: CalibStep| {
             evidence.add(&s);
+            *measured += usize::from(!s.measurements().is_empty());
             run_step(runner, &s, obs)
         });
     }
@@ -241,12 +272,15 @@ impl<'c> CalibStage<'c> {
         &self.evidence
     }
 
-    /// The summary after the steps so far; an error when there was none.
+    /// The summary after the steps so far; an error when no step carried a
+    /// measurement (the filter would only return its prior).
     pub fn summary(&self) -> Result<CalibSummary, PipelineError> {
-        if self.runner.steps() == 0 {
-            return Err(PipelineError::BadArgument(
-                "nothing to calibrate: no wheel data overlapping the velocity observations".into(),
-            ));
+        if self.measured == 0 {
+            return Err(PipelineError::BadArgument(format!(
+                "nothing to calibrate: {} filter steps, none with a measurement (no velocity \
+                 observation overlaps the wheel data)",
+                self.runner.steps()
+            )));
         }
         Ok(self.runner.summary())
     }
@@ -352,6 +386,7 @@ pub fn run_calibration(
         stage.poll(false, obs);
     }
     icp_stage.finish(obs, &mut |m| stage.push_motion(m));
+    icp_stage.check_usable(source.name(), source.scan_topic())?;
     stage.end_wheels();
     stage.end_gyro();
     stage.poll(true, obs);

@@ -120,6 +120,7 @@ pub fn run(job: &EvalJob) -> Result<EvalReport, PipelineError> {
     .collect();
     let outputs: Vec<&Path> = job.plot.iter().map(PathBuf::as_path).collect();
     super::outputs::check_outputs(&inputs, &outputs)?;
+    let _lock = super::outputs::lock_outputs(&outputs)?;
     let (cfg, robot) = job.common.load()?;
     let mut opts = job.options(cfg.eval);
     let read = super::read_options(&cfg, &robot);

@@ -4,7 +4,7 @@
 
 use super::drive::{self, IcpRunSummary};
 use super::observe::{Observers, RunObserver};
-use super::outputs::{check_outputs, Collect, IcpFiles};
+use super::outputs::{check_outputs, lock_outputs, Collect, IcpFiles};
 use super::{Common, Mount, PipelineError};
 use crate::icp::IcpParams;
 use crate::io::{RecordingSource, SampleSource};
@@ -52,6 +52,7 @@ pub fn run(job: &IcpJob, watch: &mut dyn RunObserver) -> Result<IcpRunSummary, P
         .chain(job.motions.as_deref())
         .collect();
     check_outputs(&[&job.input], &outputs)?;
+    let _lock = lock_outputs(&outputs)?;
     let (cfg, nominal) = job.common.load_nominal()?;
     let read = super::read_options(&cfg, &nominal.robot);
     let mut source = crate::io::open(&job.input, &read)?;

@@ -14,6 +14,7 @@ pub mod nominal;
 pub mod observe;
 pub mod outputs;
 pub mod recorder;
+pub mod sense;
 pub mod simulate;
 pub mod viewer;
 

@@ -2,7 +2,8 @@
 //! row as the run goes and committed atomically only when it succeeded
 //! ([`IcpFiles`], [`CalibFiles`]), and the results in memory ([`Collect`]);
 //! and the check every command makes of its output paths before any work
-//! ([`check_outputs`]).
+//! ([`check_outputs`]) and the lock it holds on them while it runs
+//! ([`lock_outputs`]).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -12,15 +13,21 @@ use super::PipelineError;
 use crate::calib::{CalibSummary, CalibrationRun, CloudView, Estimate};
 use crate::geom::Pose2;
 use crate::icp::IcpStats;
+use crate::io::out_lock::{LockError, OutputLock};
 use crate::io::stream_out::AtomicWriter;
 use crate::motion::{Motion, VelocityObs};
 use crate::traj::Trajectory;
 
-/// Checks a command's output paths before it does any work: none may be
-/// (or link to) one of its inputs or another of its outputs, and none may name
-/// anything but a regular file (a directory, device or pipe is refused;
-/// a symbolic link is written through). Each refusal names the path.
+/// Checks a command's inputs and output paths before it does any work: every
+/// input must be a regular file ([`crate::io::input::check_regular`]); no
+/// output may be (or link to) one of its inputs or another of its outputs,
+/// and none may name anything but a regular file (a directory, device or
+/// pipe is refused; a symbolic link is written through). Each refusal names
+/// the path.
 pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), PipelineError> {
+    for input in inputs {
+        crate::io::input::check_regular(input)?;
+    }
     let mut seen: Vec<(&Path, FileId)> = Vec::new();
     for input in inputs {
         if let Some(id) = FileId::of(input) {
@@ -50,6 +57,26 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), Pipeline
         seen.push((out, id));
     }
     Ok(())
+}
+
+/// Locks each output (a file, or the directory of an output set) for the
+/// run: while the returned guards live, another odocal run on the same output
+/// is refused with exit 2 naming the lock, so the files of two runs never
+/// mix. Call after [`check_outputs`], before anything is written.
+pub fn lock_outputs(outputs: &[&Path]) -> Result<Vec<OutputLock>, PipelineError> {
+    outputs
+        .iter()
+        .map(|out| {
+            OutputLock::acquire(out).map_err(|e| match e {
+                LockError::Busy { .. } => PipelineError::BadArgument(format!(
+                    "output {} is being written: {e}; wait for that run to end or choose \
+                     another output",
+                    out.display()
+                )),
+                LockError::Io(..) => PipelineError::write(out, e),
+            })
+        })
+        .collect()
 }
 
 /// What identifies a file whatever the path that names it: device and inode

@@ -85,6 +85,7 @@ pub fn run(
         .chain(job.truth.as_deref())
         .collect();
     super::outputs::check_outputs(&[], &outputs)?;
+    let _lock = super::outputs::lock_outputs(&outputs)?;
     let (mut cfg, mut robot) = job.common.load()?;
     robot.laser = Some(simulated_mount(&robot, job.common.robot.as_deref())?);
     if let Some(s) = &job.scenario {

@@ -76,6 +76,19 @@ impl Default for RobotConfig {
     }
 }
 
+/// The physical range of each robot-file number: key, lowest, highest, unit.
+/// Wheel radii from 1 mm (micro robots) to 2 m; a wheel base from 1 cm to
+/// 10 m; 1 to 10⁸ encoder ticks per revolution; a laser within 10 m of the
+/// base origin.
+pub const PHYSICAL_BOUNDS: [(&str, f64, f64, &str); 6] = [
+    ("r_right", 1e-3, 2.0, " m"),
+    ("r_left", 1e-3, 2.0, " m"),
+    ("wheel_base", 1e-2, 10.0, " m"),
+    ("ticks_per_rev", 1.0, 1e8, ""),
+    ("laser.x", -10.0, 10.0, " m"),
+    ("laser.y", -10.0, 10.0, " m"),
+];
+
 /// A robot file that cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum RobotConfigError {
@@ -124,31 +137,35 @@ impl RobotConfig {
         Ok((c, table.keys().cloned().collect()))
     }
 
-    /// Checks that every parameter is finite and physically meaningful.
+    /// Checks that every parameter is finite and within [`PHYSICAL_BOUNDS`]
+    /// (a value outside is a typo or a unit slip, e.g. mm for m); the error
+    /// names the key, its value and its range.
     pub fn validate(&self) -> Result<(), RobotConfigError> {
-        for (name, v) in [
-            ("r_right", self.r_right),
-            ("r_left", self.r_left),
-            ("wheel_base", self.wheel_base),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
+        let laser = self.laser.unwrap_or(LaserMount {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        });
+        let values = [
+            self.r_right,
+            self.r_left,
+            self.wheel_base,
+            self.ticks_per_rev,
+            laser.x,
+            laser.y,
+        ];
+        for ((key, lo, hi, unit), v) in PHYSICAL_BOUNDS.iter().zip(values) {
+            if !(v.is_finite() && *lo <= v && v <= *hi) {
                 return Err(RobotConfigError::Invalid(format!(
-                    "{name} must be a positive length in m, got {v}"
+                    "{key} = {v} is outside the physical range [{lo}, {hi}]{unit}"
                 )));
             }
         }
-        if !(self.ticks_per_rev.is_finite() && self.ticks_per_rev >= 1.0) {
+        if !laser.yaw.is_finite() {
             return Err(RobotConfigError::Invalid(format!(
-                "ticks_per_rev must be a number ≥ 1, got {}",
-                self.ticks_per_rev
+                "laser.yaw = {} must be finite (rad)",
+                laser.yaw
             )));
-        }
-        if let Some(l) = &self.laser {
-            if ![l.x, l.y, l.yaw].iter().all(|v| v.is_finite()) {
-                return Err(RobotConfigError::Invalid(
-                    "laser mount must be finite".into(),
-                ));
-            }
         }
         if self.left_joint == self.right_joint {
             return Err(RobotConfigError::Invalid(

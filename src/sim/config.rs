@@ -293,7 +293,10 @@ impl SimConfig {
             }
         }
         if self.duration_s > 24.0 * 3600.0 {
-            return bad(format!("duration_s {} exceeds one day", self.duration_s));
+            return bad(format!(
+                "duration_s {} s is over the cap of one day (86400 s)",
+                self.duration_s
+            ));
         }
         if self.integration_hz < 200.0 {
             return bad("integration_hz must be ≥ 200".into());

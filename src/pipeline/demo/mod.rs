@@ -182,8 +182,12 @@ pub fn run(
     let outputs = output_files(&job.out);
     let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
     check_outputs(&inputs, &outputs)?;
+    let _lock = crate::pipeline::outputs::lock_outputs(&[&job.out])?;
     let truth = truth_path.as_deref().map(load_truth).transpose()?;
     let rec = crate::pipeline::read_recording(&input, &cfg, &robot)?;
+    if let (Some(t), Some(p)) = (&truth, &truth_path) {
+        crate::pipeline::sense::check_truth(p, t, &input, &rec)?;
+    }
     std::fs::create_dir_all(&job.out).map_err(|e| PipelineError::write(&job.out, e))?;
     let viewer = job
         .viewer
