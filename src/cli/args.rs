@@ -186,7 +186,8 @@ pub struct Common {
     /// Stage settings (TOML tables: topics, sim, eval, ...).
     #[arg(long, value_name = "CFG.toml")]
     pub config: Option<PathBuf>,
-    /// Nominal robot (default: the LMS111 wheelchair).
+    /// Nominal robot: a TOML file, or a bundled name (wheelchair, lego-robot, mines-rover,
+    /// khepera; default: the LMS111 wheelchair).
     #[arg(long, value_name = "ROBOT.toml")]
     pub robot: Option<PathBuf>,
 }

@@ -9,6 +9,7 @@ use crate::error::InputError;
 use crate::eval::EvalOptions;
 use crate::icp::IcpParams;
 use crate::io::TopicConfig;
+use crate::robot::bundled::{bundled_robot, BUNDLED_ROBOTS};
 use crate::robot::RobotConfig;
 use crate::sim::SimConfig;
 use serde::{Deserialize, Serialize};
@@ -91,6 +92,24 @@ pub fn load_robot(path: Option<&Path>) -> Result<RobotConfig, PipelineError> {
     let Some(path) = path else {
         return Ok(RobotConfig::default());
     };
+    // A bare name that is no file: one of the robots compiled in from scans/robots/.
+    let bare = path.components().count() == 1 && !path.exists();
+    if let Some(text) = path.to_str().filter(|_| bare).and_then(bundled_robot) {
+        return RobotConfig::from_toml(text).map_err(|e| {
+            InputError::new(format!("bundled robot {}", path.display()), e.to_string()).into()
+        });
+    }
+    if bare {
+        let names: Vec<&str> = BUNDLED_ROBOTS.iter().map(|(n, _)| *n).collect();
+        return Err(InputError::new(
+            path.display().to_string(),
+            format!(
+                "no such file, and not a bundled robot name ({})",
+                names.join(", ")
+            ),
+        )
+        .into());
+    }
     let text = read_text(path)?;
     RobotConfig::from_toml(&text)
         .map_err(|e| InputError::new(path.display().to_string(), e.to_string()).into())

@@ -2,6 +2,7 @@
 //! evaluation against the recording's reference — into a directory with a
 //! report, plots, trajectories and a Rerun recording.
 
+pub mod bundled;
 mod figures;
 mod report;
 
@@ -215,52 +216,44 @@ pub struct DemoJob {
     pub common: Common,
 }
 
-/// The bundled recording `odocal demo` runs on by default.
-pub const DEMO_RECORDING: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/scans/wheelchair-corridor.mcap"
-);
-/// Its truth file.
-pub const DEMO_TRUTH: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/scans/wheelchair-corridor.truth.json"
-);
-
-/// Runs `odocal demo`: reads the recording (the bundled one by default) and
-/// its truth, runs everything into `job.out` and records it for Rerun
-/// (`OUT/demo.rrd` unless a viewer is named; nothing without the `rerun`
-/// feature). `progress` receives the stage name and the fraction done.
+/// Runs `odocal demo`: reads the recording (the bundled one, from memory,
+/// by default) and its truth, runs everything into `job.out` and records it
+/// for Rerun (`OUT/demo.rrd` unless a viewer is named; nothing without the
+/// `rerun` feature). `progress` receives the stage name and the fraction done.
 pub fn run(
     job: &DemoJob,
     progress: &mut dyn FnMut(&str, f64),
 ) -> Result<DemoSummary, PipelineError> {
     let (cfg, robot) = job.common.load()?;
-    let (input, truth_path) = match &job.input {
-        Some(p) => (p.clone(), job.truth.clone()),
-        None => (
-            PathBuf::from(DEMO_RECORDING),
-            Some(
-                job.truth
-                    .clone()
-                    .unwrap_or_else(|| PathBuf::from(DEMO_TRUTH)),
-            ),
-        ),
-    };
-    let inputs: Vec<&Path> = std::iter::once(input.as_path())
-        .chain(truth_path.as_deref())
-        .collect();
+    let inputs: Vec<&Path> = job.input.iter().chain(&job.truth).map(PathBuf::as_path).collect();
     let outputs = output_files(&job.out);
     let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
     check_outputs(&inputs, &outputs)?;
-    let truth = truth_path.as_deref().map(load_truth).transpose()?;
-    let rec = crate::pipeline::read_recording(&input, &cfg, &robot)?;
+    let truth = match (&job.truth, &job.input) {
+        (Some(p), _) => Some(load_truth(p)?),
+        (None, None) => Some(
+            Truth::from_json(bundled::TRUTH)
+                .map_err(|e| InputError::new("bundled truth", e.to_string()))?,
+        ),
+        (None, Some(_)) => None,
+    };
+    let (rec, name) = match &job.input {
+        Some(p) => (
+            crate::pipeline::read_recording(p, &cfg, &robot)?,
+            p.display().to_string(),
+        ),
+        None => {
+            let read = crate::pipeline::read_options(&cfg, &robot);
+            let rec = crate::io::read_mcap_bytes(bundled::RECORDING, bundled::RECORDING_NAME, &read)?;
+            (rec, bundled::RECORDING_NAME.to_string())
+        }
+    };
     std::fs::create_dir_all(&job.out).map_err(|e| PipelineError::write(&job.out, e))?;
     let viewer = job
         .viewer
         .clone()
         .or_else(|| cfg!(feature = "rerun").then(|| Viewer::File(job.out.join("demo.rrd"))));
     let mut logger = open_logger(viewer.as_ref())?.unwrap_or_else(|| Box::new(NullLogger));
-    let name = input.display().to_string();
     let demo = DemoInput {
         recording: &rec,
         name: &name,
