@@ -230,17 +230,34 @@ fn pair(
              (reference gaps up to {} s bridged)",
             s.max_gap
         );
-        return Ok((m, of, PairingUsed { method: "resampled".into(), reason }));
+        return Ok((
+            m,
+            of,
+            PairingUsed {
+                method: "resampled".into(),
+                reason,
+            },
+        ));
     }
     let m = sync(reference, estimate, s)?;
     let of = reference.len().min(estimate.len());
     let (method, what) = if s.interpolate {
-        ("interpolated", "the denser trajectory interpolated at the sparser's stamps")
+        (
+            "interpolated",
+            "the denser trajectory interpolated at the sparser's stamps",
+        )
     } else {
         ("nearest", "nearest stamps")
     };
     let reason = format!("{what} within {} s (evo's association)", s.max_diff);
-    Ok((m, of, PairingUsed { method: method.into(), reason }))
+    Ok((
+        m,
+        of,
+        PairingUsed {
+            method: method.into(),
+            reason,
+        },
+    ))
 }
 
 /// Aligns the pairs as `opts.align` asks (`auto` resolved by
@@ -252,9 +269,11 @@ fn align_as_asked(
 ) -> Result<(Matched, Similarity3<f64>, AlignmentUsed), EvalError> {
     let kind = resolve(opts.align, opts.position_only);
     let reason = match (opts.align, opts.position_only) {
-        (Alignment::Auto, true) => "auto: the reference has positions only, in its own frame and \
+        (Alignment::Auto, true) => {
+            "auto: the reference has positions only, in its own frame and \
              without a first orientation; a least-squares SE(2) fit of the positions (Umeyama 1991)"
-            .to_string(),
+                .to_string()
+        }
         (Alignment::Auto, false) => {
             "auto: the reference has orientations; compared as given (evo's default)".into()
         }
@@ -266,11 +285,17 @@ fn align_as_asked(
     };
     if kind == Alignment::Origin && opts.position_only {
         let s = origin_by_heading(&matched.reference, &matched.estimate, HEADING_DISTANCE)?;
-        let used = AlignmentUsed { kind: "origin-heading".into(), reason };
+        let used = AlignmentUsed {
+            kind: "origin-heading".into(),
+            reason,
+        };
         return Ok((apply_all(matched, &s), s, used));
     }
     let (aligned, s) = align(matched, kind)?;
-    let used = AlignmentUsed { kind: kind.as_str().into(), reason };
+    let used = AlignmentUsed {
+        kind: kind.as_str().into(),
+        reason,
+    };
     Ok((aligned, s, used))
 }
 

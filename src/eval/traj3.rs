@@ -71,7 +71,11 @@ impl Trajectory3 {
     /// straight along +x with identity orientation is not flagged (nor, by
     /// this test, one reversing straight along −x).
     pub fn orientation_undefined(&self) -> bool {
-        if self.poses.iter().any(|p| p.rotation != UnitQuaternion::identity()) {
+        if self
+            .poses
+            .iter()
+            .any(|p| p.rotation != UnitQuaternion::identity())
+        {
             return false;
         }
         let mut last = match self.poses.first() {

@@ -2,8 +2,8 @@
 
 use super::{plot_anchor, viz_err, xy, DemoInput, DemoReference};
 use crate::calib::{self, CalibrationRun, Method};
-use crate::pipeline::recorder::in_world;
 use crate::geom::Pose2;
+use crate::pipeline::recorder::in_world;
 use crate::pipeline::PipelineError;
 use crate::traj::Trajectory;
 use crate::viz::plot::{self, LineChart, PathSeries, Series, TrajectoryPlot};

@@ -225,7 +225,12 @@ pub fn run(
     progress: &mut dyn FnMut(&str, f64),
 ) -> Result<DemoSummary, PipelineError> {
     let (cfg, robot) = job.common.load()?;
-    let inputs: Vec<&Path> = job.input.iter().chain(&job.truth).map(PathBuf::as_path).collect();
+    let inputs: Vec<&Path> = job
+        .input
+        .iter()
+        .chain(&job.truth)
+        .map(PathBuf::as_path)
+        .collect();
     let outputs = output_files(&job.out);
     let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
     check_outputs(&inputs, &outputs)?;
@@ -244,7 +249,8 @@ pub fn run(
         ),
         None => {
             let read = crate::pipeline::read_options(&cfg, &robot);
-            let rec = crate::io::read_mcap_bytes(bundled::RECORDING, bundled::RECORDING_NAME, &read)?;
+            let rec =
+                crate::io::read_mcap_bytes(bundled::RECORDING, bundled::RECORDING_NAME, &read)?;
             (rec, bundled::RECORDING_NAME.to_string())
         }
     };
@@ -334,15 +340,7 @@ pub fn run_on(
         wall_s: 0.0,
     };
     summary.eval_notes = notes;
-    figures::plots(
-        input,
-        &icp_out.trajectory,
-        &raw,
-        &runs,
-        r,
-        t_start,
-        out,
-    )?;
+    figures::plots(input, &icp_out.trajectory, &raw, &runs, r, t_start, out)?;
     summary.wall_s = start.elapsed().as_secs_f64();
     report::report(input, &summary, out)?;
     let js = out.join("summary.json");
