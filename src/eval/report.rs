@@ -362,15 +362,35 @@ mod tests {
         assert_eq!(v["matched"], 50);
         assert!((v["ape"]["mean"].as_f64().unwrap() - 0.1).abs() < 1e-12);
         assert!((v["final_error"].as_f64().unwrap() - 0.1).abs() < 1e-12);
-        // Position-only reference: rotation figures are null, translation stays.
+        assert_eq!(
+            (v["paired"].as_u64(), v["of"].as_u64()),
+            (Some(50), Some(50))
+        );
+        assert_eq!(v["alignment"]["kind"], "none");
+        assert_eq!(v["pairing"]["method"], "nearest");
+        assert!(v.get("rotation_omitted").is_none());
+        // Position-only reference: rotation figures are null, translation stays
+        // (resampled at the same stamps, the pairs are the same).
         let po = EvalOptions {
             position_only: true,
+            align: Alignment::None,
             ..Default::default()
         };
         let p = evaluate(&estimate, Some(&reference), None, &po).unwrap();
         let pv = serde_json::to_value(&p).unwrap();
         assert!(pv["ape_rot_deg"].is_null() && pv["rpe_rot_deg"].is_null());
+        assert!(pv["rmse_theta"].is_null() && pv["rotation_omitted"].is_string());
+        assert_eq!(pv["pairing"]["method"], "resampled");
         assert_eq!(pv["ape"], v["ape"]);
+        // auto: an SE(2) fit, which absorbs the 0.1 m offset.
+        let auto = EvalOptions {
+            position_only: true,
+            ..Default::default()
+        };
+        let a = evaluate(&estimate, Some(&reference), None, &auto).unwrap();
+        let av = serde_json::to_value(&a).unwrap();
+        assert_eq!(av["alignment"]["kind"], "se2");
+        assert!(av["ape"]["max"].as_f64().unwrap() < 1e-9);
         // Pure translation offset: point distances agree exactly.
         assert!(pv["rpe"]["max"].as_f64().unwrap() < 1e-12);
         // Only relations: no trajectory keys.

@@ -257,7 +257,11 @@ pub fn resample(
             continue;
         }
         m.ref_stamps.push(t);
-        m.reference.push(interpolate_at(reference, t));
+        m.reference.push(if lo == hi {
+            reference.poses[lo] // a shared stamp: the sample itself, no rounding
+        } else {
+            interpolate_at(reference, t)
+        });
         m.est_stamps.push(te);
         m.estimate.push(*pe);
     }
@@ -338,6 +342,37 @@ mod tests {
         .unwrap();
         assert_eq!(m.ref_stamps, vec![0.104, 0.2, 0.395]);
         assert!((m.reference[0].translation.x - 0.104).abs() < 1e-12);
+    }
+
+    #[test]
+    fn resampling_interpolates_inside_the_span_and_short_gaps_only() {
+        let r = line(&[0.0, 0.2, 0.4, 1.5, 1.7]);
+        let e = line(&[-0.1, 0.1, 0.3, 0.9, 1.6, 1.8]);
+        let (m, of) = resample(&r, &e, &SyncOptions::default()).unwrap();
+        // -0.1 and 1.8 lie outside the reference, 0.9 inside its 1.1 s gap.
+        assert_eq!(m.ref_stamps, vec![0.1, 0.3, 1.6]);
+        assert_eq!(m.est_stamps, vec![0.1, 0.3, 1.6]);
+        assert_eq!(of, 6);
+        for (p, t) in m.reference.iter().zip([0.1, 0.3, 1.6]) {
+            assert!((p.translation.x - t).abs() < 1e-12);
+        }
+        // The estimate's clock 1 s late, corrected by the offset.
+        let late = line(&[1.1, 1.3, 2.6]);
+        let opts = SyncOptions {
+            offset: -1.0,
+            ..Default::default()
+        };
+        let (m, _) = resample(&r, &late, &opts).unwrap();
+        assert_eq!(m.est_stamps, vec![1.1, 1.3, 2.6]);
+        assert!((m.reference[2].translation.x - 1.6).abs() < 1e-12);
+        let wide = SyncOptions {
+            max_gap: 0.1,
+            ..Default::default()
+        };
+        assert!(matches!(
+            resample(&r, &e, &wide),
+            Err(EvalError::TooFewResampled { paired: 0, .. })
+        ));
     }
 
     #[test]
