@@ -81,9 +81,15 @@ fn closed_form_ape(tracker: &[[f64; 3]], estimate: &[[f64; 3]], max_gap: f64) ->
         pairs.push(([e[1], e[2]], r));
     }
     let n = pairs.len() as f64;
-    let mean = |f: &dyn Fn(&([f64; 2], [f64; 2])) -> f64| pairs.iter().map(f).sum::<f64>() / n;
-    let (ex, ey) = (mean(&|p| p.0[0]), mean(&|p| p.0[1]));
-    let (rx, ry) = (mean(&|p| p.1[0]), mean(&|p| p.1[1]));
+    let mean = |side: usize, axis: usize| {
+        pairs
+            .iter()
+            .map(|p| if side == 0 { p.0[axis] } else { p.1[axis] })
+            .sum::<f64>()
+            / n
+    };
+    let (ex, ey) = (mean(0, 0), mean(0, 1));
+    let (rx, ry) = (mean(1, 0), mean(1, 1));
     let (mut dot, mut cross) = (0.0, 0.0);
     for (e, r) in &pairs {
         let (a, b) = ([e[0] - ex, e[1] - ey], [r[0] - rx, r[1] - ry]);

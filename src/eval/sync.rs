@@ -236,7 +236,7 @@ pub fn resample(
     estimate: &Trajectory3,
     opts: &SyncOptions,
 ) -> Result<(Matched, usize), EvalError> {
-    if !(opts.max_gap.is_finite() && opts.max_gap > 0.0) || !opts.offset.is_finite() {
+    if !(opts.max_gap.is_finite() && opts.max_gap > 0.0 && opts.offset.is_finite()) {
         return Err(EvalError::InvalidOption(format!(
             "max_gap must be finite and > 0 and offset finite (got {}, {})",
             opts.max_gap, opts.offset
