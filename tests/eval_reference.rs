@@ -173,6 +173,33 @@ fn lego_raw_odometry_against_the_tracker() {
     assert_eq!(v["rmse_xy"], v["ape"]["rmse"]);
     // Nominal 150 mm track: the data's README finds 0.74 m after fitting only the start.
     assert!(ours > 0.3 && ours < 1.0, "APE {ours} m");
+    // The tracker's text file as TUM with placeholder quaternions: detected
+    // as positions only from the data, the same figures.
+    let tum = dir.join("tracker.tum");
+    let lines: Vec<String> = tracker
+        .iter()
+        .map(|p| format!("{} {} {} 0 0 0 0 1", p[0], p[1], p[2]))
+        .collect();
+    std::fs::write(&tum, lines.join("\n")).unwrap();
+    let out = odocal(&[
+        "eval",
+        "--estimate",
+        est.to_str().unwrap(),
+        "--reference",
+        tum.to_str().unwrap(),
+        "--json",
+    ]);
+    let t: Value = serde_json::from_str(&ok(&out)).unwrap();
+    assert!(t["ape_rot_deg"].is_null() && t["rmse_theta"].is_null());
+    assert_eq!(
+        (&t["alignment"]["kind"], &t["paired"]),
+        (&v["alignment"]["kind"], &v["paired"])
+    );
+    let tum_rmse = t["ape"]["rmse"].as_f64().unwrap();
+    assert!(
+        (tum_rmse - rmse).abs() < 1e-6 * rmse,
+        "TUM {tum_rmse} vs {rmse}"
+    );
     // Human output: no rotation line, the pairing and the alignment named.
     let text = ok(&odocal(&args));
     assert!(
