@@ -134,6 +134,20 @@ fn lego_raw_odometry_against_the_tracker() {
         raw.to_str().unwrap(),
     ]));
     let est = raw.join("trajectory.tum");
+    // Without the topic configured, the refusal names the one to set.
+    let out = odocal(&[
+        "eval",
+        "--estimate",
+        est.to_str().unwrap(),
+        "--reference",
+        bag_s,
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("PointStamped on /reference") && err.contains("reference = \"/reference\""),
+        "{err}"
+    );
     let args = [
         "eval",
         "--estimate",

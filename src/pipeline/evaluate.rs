@@ -36,10 +36,23 @@ pub fn load_trajectory(
     };
     let (traj, _repeated) = eval::trajectory_from_stamped(stream);
     if traj.len() < 2 {
+        let topics = io::mcap_topics::trajectory_topics(path)?;
+        let found: Vec<String> = topics
+            .iter()
+            .map(|(topic, ty)| format!("{ty} on {topic}"))
+            .collect();
+        let hint = match topics.first() {
+            None => String::new(),
+            Some((topic, _)) => format!(
+                "; the bag holds {}: name the topic in a --config file, e.g. \
+                 [topics] reference = \"{topic}\"",
+                found.join(", ")
+            ),
+        };
         return Err(InputError::new(
             &file,
             format!(
-                "no trajectory: topics {} and {} hold fewer than 2 poses",
+                "no trajectory: topics {} and {} hold fewer than 2 poses{hint}",
                 read.topics.reference, read.topics.odom
             ),
         )
