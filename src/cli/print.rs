@@ -154,6 +154,9 @@ pub fn demo(summary: &DemoSummary, out: &Path, to_file: bool) {
             m.final_params[2]
         );
     }
+    for note in &summary.eval_notes {
+        out!("note: {note}");
+    }
     out!("report: {}", out.join("report.md").display());
     if cfg!(feature = "rerun") && to_file {
         out!(

@@ -219,7 +219,8 @@ fn pair(
     opts: &EvalOptions,
 ) -> Result<(Matched, usize, PairingUsed), EvalError> {
     let s = &opts.sync;
-    if s.resample.unwrap_or(opts.position_only) {
+    // evo's interpolation, when asked for, is kept for a position-only reference too.
+    if s.resample.unwrap_or(opts.position_only && !s.interpolate) {
         let why = match s.resample {
             Some(_) => "asked for",
             None => "the reference has positions only, as a tracker sampled on its own clock",

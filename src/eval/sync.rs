@@ -32,7 +32,7 @@ pub struct SyncOptions {
     pub interpolate: bool,
     /// Interpolate the reference at every estimate stamp (see [`resample`])
     /// instead of pairing nearest stamps; unset: only for a reference with
-    /// positions only.
+    /// positions only, unless `interpolate` asks for evo's pairing.
     pub resample: Option<bool>,
     /// Largest gap (s) between the two reference samples around an estimate
     /// stamp that resampling bridges (default 0.5 s: the LEGO tracker's gaps
