@@ -341,6 +341,29 @@ fn demo_report_without_reference_has_no_empty_table_or_dead_link() {
     assert!(report.contains("no reference"), "{report}");
 }
 
+#[test]
+fn diagnose_report_without_reference_links_only_written_plots() {
+    let test = "diagnose_report_without_reference_links_only_written_plots";
+    let Some(data) = support::shared_data(test) else {
+        return;
+    };
+    let dir = support::scratch(test);
+    let bag = data.join("mines-rover/exp1.mcap");
+    let report_dir = dir.join("report");
+    ok(&odocal(&[
+        "diagnose",
+        "--measured",
+        bag.to_str().unwrap(),
+        "--robot",
+        "mines-rover",
+        "--report",
+        report_dir.to_str().unwrap(),
+    ]));
+    let report = std::fs::read_to_string(report_dir.join("report.md")).unwrap();
+    check_report(&report, &report_dir);
+    assert!(!report.contains("vs reference"), "{report}");
+}
+
 /// A tracker's positions written as TUM with identity quaternions.
 fn placeholder_reference(truth: &[(f64, f64, f64, f64)]) -> Trajectory3 {
     let poses = truth
