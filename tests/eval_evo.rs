@@ -144,9 +144,13 @@ fn crosscheck(test: &str, seed: u64, dt_ref: f64, dt_est: f64, clock: f64) {
         check_stats(name, "rpe", &Some(m.rpe), &e["rpe"]);
         check_stats(name, "rpe_rot_deg", &m.rpe_rot_deg, &e["rpe_rot_deg"]);
     }
-    // Position-only reference: APE translation and RPE point distance.
+    // Position-only reference: APE translation and RPE point distance, paired
+    // as evo does (odocal would otherwise resample a position-only reference).
     let opts = EvalOptions {
-        sync,
+        sync: SyncOptions {
+            resample: Some(false),
+            ..sync
+        },
         align: Alignment::Se3,
         rpe_delta: frames,
         position_only: true,

@@ -23,6 +23,7 @@ mod diagnose_synthetic;
 mod eval_align;
 mod eval_evo;
 mod eval_inputs;
+mod eval_reference;
 mod eval_relations;
 mod fuzz_regressions;
 mod icp_bad_input;

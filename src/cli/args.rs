@@ -186,7 +186,8 @@ pub struct Common {
     /// Stage settings (TOML tables: topics, sim, eval, ...).
     #[arg(long, value_name = "CFG.toml")]
     pub config: Option<PathBuf>,
-    /// Nominal robot (default: the LMS111 wheelchair).
+    /// Nominal robot: a TOML file, or a bundled name (wheelchair, lego-robot, mines-rover,
+    /// khepera; default: the LMS111 wheelchair).
     #[arg(long, value_name = "ROBOT.toml")]
     pub robot: Option<PathBuf>,
 }
@@ -236,7 +237,8 @@ pub struct EvalArgs {
     /// Timestamps file for a KITTI reference.
     #[arg(long, value_name = "FILE")]
     pub reference_times: Option<PathBuf>,
-    /// Alignment: none, origin, se2, sim2, se3, sim3.
+    /// Alignment: auto (default: none, or se2 against a position-only reference), none,
+    /// origin (heading of the first metre for a position-only reference), se2, sim2, se3, sim3.
     #[arg(long, value_name = "KIND")]
     pub align: Option<Alignment>,
     /// Maximum time difference for association (s).
@@ -245,9 +247,16 @@ pub struct EvalArgs {
     /// Time offset added to the estimate's stamps (s).
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub t_offset: Option<f64>,
-    /// Interpolate the reference at the estimate's stamps.
+    /// evo's interpolation: the denser trajectory interpolated at the pairs found within --t-max-diff.
     #[arg(long)]
     pub interpolate: bool,
+    /// Interpolate the reference at every estimate stamp inside its span (default: only for a
+    /// position-only reference); `--resample-reference false` pairs nearest stamps.
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
+    pub resample_reference: Option<bool>,
+    /// Largest reference gap (s) that resampling bridges.
+    #[arg(long, value_name = "S")]
+    pub max_gap: Option<f64>,
     /// RPE step.
     #[arg(long, value_name = "X", allow_negative_numbers = true)]
     pub rpe_delta: Option<f64>,
@@ -356,6 +365,8 @@ impl EvalArgs {
             t_max_diff: self.t_max_diff,
             t_offset: self.t_offset,
             interpolate: self.interpolate,
+            resample: self.resample_reference,
+            max_gap: self.max_gap,
             rpe_delta: self.rpe_delta,
             rpe_unit: self.rpe_unit,
             plot: self.plot.clone(),

@@ -52,11 +52,35 @@ fn stats(name: &str, s: Option<&odocal::eval::Stats>) {
 }
 
 pub fn trajectory_metrics(t: &odocal::eval::TrajectoryMetrics) {
-    out!("matched poses    {}", t.matched);
+    out!(
+        "paired poses     {} of {} ({}: {})",
+        t.paired,
+        t.of,
+        t.pairing.method,
+        t.pairing.reason
+    );
+    if 2 * t.paired < t.of {
+        out!(
+            "                 fewer than half of the poses paired: the streams are sampled at \
+             different instants; try --resample-reference or a larger --t-max-diff"
+        );
+    }
+    out!(
+        "alignment        {} ({})",
+        t.alignment.kind,
+        t.alignment.reason
+    );
     stats("APE (m)", Some(&t.ape));
-    stats("APE rot (deg)", t.ape_rot_deg.as_ref());
+    if t.ape_rot_deg.is_some() {
+        stats("APE rot (deg)", t.ape_rot_deg.as_ref());
+    }
     stats("RPE (m)", Some(&t.rpe));
-    stats("RPE rot (deg)", t.rpe_rot_deg.as_ref());
+    if t.rpe_rot_deg.is_some() {
+        stats("RPE rot (deg)", t.rpe_rot_deg.as_ref());
+    }
+    if let Some(why) = &t.rotation_omitted {
+        out!("rotation         not reported: {why}");
+    }
     out!("RMSE x,y (m)     {:.4}", t.rmse_xy);
     if let Some(r) = t.rmse_theta {
         out!("RMSE θ (rad)     {r:.4}");
@@ -133,6 +157,9 @@ pub fn demo(summary: &DemoSummary, out: &Path, to_file: bool) {
             m.final_params[1],
             m.final_params[2]
         );
+    }
+    for note in &summary.eval_notes {
+        out!("note: {note}");
     }
     out!("report: {}", out.join("report.md").display());
     if cfg!(feature = "rerun") && to_file {

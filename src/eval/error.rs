@@ -46,6 +46,19 @@ pub enum EvalError {
         /// Offset used (s).
         offset: f64,
     },
+    /// Resampling the reference found fewer estimate stamps than needed.
+    #[error(
+        "only {paired} estimate stamp(s) lie inside the reference's span with reference \
+         samples at most {max_gap} s apart around them (offset {offset} s); at least 2 are needed"
+    )]
+    TooFewResampled {
+        /// Stamps paired.
+        paired: usize,
+        /// Largest reference gap bridged (s).
+        max_gap: f64,
+        /// Offset used (s).
+        offset: f64,
+    },
     /// The point sets do not determine an alignment (e.g. all positions equal
     /// or on one line for a 3D alignment).
     #[error("degenerate alignment: {0}")]

@@ -40,12 +40,14 @@ pub mod sync;
 pub mod traj3;
 pub mod umeyama;
 
-pub use align::{align, alignment_transform, Alignment};
+pub use align::{align, alignment_transform, origin_by_heading, resolve, Alignment};
 pub use ape::{ape, Ape};
 pub use error::EvalError;
 pub use relations::{relations, Relation, RelationError, RelationStats, RelationSummary};
-pub use report::{evaluate, EvalDetail, EvalOptions, EvalReport, TrajectoryMetrics};
+pub use report::{
+    evaluate, AlignmentUsed, EvalDetail, EvalOptions, EvalReport, PairingUsed, TrajectoryMetrics,
+};
 pub use rpe::{rpe, rpe_positions, DeltaUnit, Rpe, RpeDelta};
 pub use stats::Stats;
-pub use sync::{sync, Matched, SyncOptions};
+pub use sync::{resample, sync, Matched, SyncOptions};
 pub use traj3::{trajectory_from_stamped, Pose3, Trajectory3};

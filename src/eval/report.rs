@@ -2,12 +2,12 @@
 //! papers' figures and the relation metric, and return what `odocal eval
 //! --json` prints (design.md's `eval` keys) plus per-pose data for plots.
 
-use super::align::{align, Alignment};
+use super::align::{align, apply_all, origin_by_heading, resolve, Alignment, HEADING_DISTANCE};
 use super::ape::{ape, Ape};
 use super::relations::{relations, Relation, RelationStats};
 use super::rpe::{rpe, rpe_positions, Rpe, RpeDelta};
 use super::stats::Stats;
-use super::sync::{sync, Matched, SyncOptions};
+use super::sync::{resample, sync, Matched, SyncOptions};
 use super::traj3::{path_length, Trajectory3};
 use super::EvalError;
 use nalgebra::Similarity3;
@@ -24,8 +24,31 @@ pub struct EvalOptions {
     /// RPE step.
     pub rpe_delta: RpeDelta,
     /// The reference has positions only (e.g. PointStamped): rotation figures
-    /// are null, the RPE is evo's point distance, origin alignment is refused.
+    /// are null, the RPE is evo's point distance, `auto` alignment is an SE(2)
+    /// fit, `origin` takes the heading of the reference's first metre, and the
+    /// reference is resampled at the estimate's stamps unless told otherwise.
     pub position_only: bool,
+}
+
+/// How the estimate was aligned, and why (JSON `alignment`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AlignmentUsed {
+    /// `none`, `origin`, `origin-heading` (first position, heading of the
+    /// reference's first metre), `se2`, `sim2`, `se3` or `sim3`.
+    pub kind: String,
+    /// Why this alignment.
+    pub reason: String,
+}
+
+/// How poses were paired by time, and why (JSON `pairing`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PairingUsed {
+    /// `nearest` (evo's nearest stamp within `max_diff`), `interpolated`
+    /// (evo's interpolation within `max_diff`) or `resampled` (the reference
+    /// interpolated at every estimate stamp inside its span).
+    pub method: String,
+    /// Why this pairing, with its tolerance.
+    pub reason: String,
 }
 
 /// The figures against a reference trajectory (JSON keys of design.md).
@@ -33,6 +56,19 @@ pub struct EvalOptions {
 pub struct TrajectoryMetrics {
     /// Pose pairs associated by time.
     pub matched: usize,
+    /// Pose pairs associated by time (= `matched`).
+    pub paired: usize,
+    /// Poses that could have been paired: those of the trajectory driving the
+    /// search (the one with fewer poses) for nearest pairing, the estimate's
+    /// when resampling.
+    pub of: usize,
+    /// How the pairs were formed.
+    pub pairing: PairingUsed,
+    /// How the estimate was aligned.
+    pub alignment: AlignmentUsed,
+    /// Why no rotation figure is given (absent when they are).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotation_omitted: Option<String>,
     /// APE translation (m).
     pub ape: Stats,
     /// APE rotation angle (deg); null for a position-only reference.
@@ -128,14 +164,8 @@ pub fn against_reference(
     reference: &Trajectory3,
     opts: &EvalOptions,
 ) -> Result<(TrajectoryMetrics, EvalDetail), EvalError> {
-    if opts.position_only && opts.align == Alignment::Origin {
-        return Err(EvalError::InvalidOption(
-            "origin alignment needs the reference's orientation; the reference has positions only"
-                .into(),
-        ));
-    }
-    let matched = sync(reference, estimate, &opts.sync)?;
-    let (aligned, transform) = align(&matched, opts.align)?;
+    let (matched, of, pairing) = pair(reference, estimate, opts)?;
+    let (aligned, transform, alignment) = align_as_asked(&matched, opts)?;
     let a = ape(&aligned)?;
     let r = if opts.position_only {
         rpe_positions(&aligned, &opts.rpe_delta)?
@@ -150,6 +180,14 @@ pub fn against_reference(
     let path = path_length(&aligned.reference);
     let metrics = TrajectoryMetrics {
         matched: aligned.len(),
+        paired: aligned.len(),
+        of,
+        pairing,
+        alignment,
+        rotation_omitted: opts.position_only.then(|| {
+            "the reference has positions only (no orientation): no rotation error is defined"
+                .to_string()
+        }),
         ape: a.trans,
         ape_rot_deg: rot.then_some(a.rot_deg),
         rpe: r.trans,
@@ -169,6 +207,97 @@ pub fn against_reference(
             rpe: r,
         },
     ))
+}
+
+/// Pairs by time: the reference resampled at the estimate's stamps when
+/// asked, or by default for a position-only reference; else evo's nearest
+/// stamp (or its interpolation) within `max_diff`. Returns the pairs, the
+/// poses that could have paired, and how.
+fn pair(
+    reference: &Trajectory3,
+    estimate: &Trajectory3,
+    opts: &EvalOptions,
+) -> Result<(Matched, usize, PairingUsed), EvalError> {
+    let s = &opts.sync;
+    // evo's interpolation, when asked for, is kept for a position-only reference too.
+    if s.resample.unwrap_or(opts.position_only && !s.interpolate) {
+        let why = match s.resample {
+            Some(_) => "asked for",
+            None => "the reference has positions only, as a tracker sampled on its own clock",
+        };
+        let (m, of) = resample(reference, estimate, s)?;
+        let reason = format!(
+            "{why}: the reference interpolated at every estimate stamp inside its span \
+             (reference gaps up to {} s bridged)",
+            s.max_gap
+        );
+        return Ok((
+            m,
+            of,
+            PairingUsed {
+                method: "resampled".into(),
+                reason,
+            },
+        ));
+    }
+    let m = sync(reference, estimate, s)?;
+    let of = reference.len().min(estimate.len());
+    let (method, what) = if s.interpolate {
+        (
+            "interpolated",
+            "the denser trajectory interpolated at the sparser's stamps",
+        )
+    } else {
+        ("nearest", "nearest stamps")
+    };
+    let reason = format!("{what} within {} s (evo's association)", s.max_diff);
+    Ok((
+        m,
+        of,
+        PairingUsed {
+            method: method.into(),
+            reason,
+        },
+    ))
+}
+
+/// Aligns the pairs as `opts.align` asks (`auto` resolved by
+/// [`resolve`]; `origin` against a position-only reference by
+/// [`origin_by_heading`]).
+fn align_as_asked(
+    matched: &Matched,
+    opts: &EvalOptions,
+) -> Result<(Matched, Similarity3<f64>, AlignmentUsed), EvalError> {
+    let kind = resolve(opts.align, opts.position_only);
+    let reason = match (opts.align, opts.position_only) {
+        (Alignment::Auto, true) => {
+            "auto: the reference has positions only, in its own frame and \
+             without a first orientation; a least-squares SE(2) fit of the positions (Umeyama 1991)"
+                .to_string()
+        }
+        (Alignment::Auto, false) => {
+            "auto: the reference has orientations; compared as given (evo's default)".into()
+        }
+        (Alignment::Origin, true) => format!(
+            "origin asked for; the reference has positions only, so the estimate starts on its \
+             first position, turned to the heading of the reference's first {HEADING_DISTANCE:.1} m"
+        ),
+        (k, _) => format!("{} asked for", k.as_str()),
+    };
+    if kind == Alignment::Origin && opts.position_only {
+        let s = origin_by_heading(&matched.reference, &matched.estimate, HEADING_DISTANCE)?;
+        let used = AlignmentUsed {
+            kind: "origin-heading".into(),
+            reason,
+        };
+        return Ok((apply_all(matched, &s), s, used));
+    }
+    let (aligned, s) = align(matched, kind)?;
+    let used = AlignmentUsed {
+        kind: kind.as_str().into(),
+        reason,
+    };
+    Ok((aligned, s, used))
 }
 
 #[cfg(test)]
@@ -234,15 +363,35 @@ mod tests {
         assert_eq!(v["matched"], 50);
         assert!((v["ape"]["mean"].as_f64().unwrap() - 0.1).abs() < 1e-12);
         assert!((v["final_error"].as_f64().unwrap() - 0.1).abs() < 1e-12);
-        // Position-only reference: rotation figures are null, translation stays.
+        assert_eq!(
+            (v["paired"].as_u64(), v["of"].as_u64()),
+            (Some(50), Some(50))
+        );
+        assert_eq!(v["alignment"]["kind"], "none");
+        assert_eq!(v["pairing"]["method"], "nearest");
+        assert!(v.get("rotation_omitted").is_none());
+        // Position-only reference: rotation figures are null, translation stays
+        // (resampled at the same stamps, the pairs are the same).
         let po = EvalOptions {
             position_only: true,
+            align: Alignment::None,
             ..Default::default()
         };
         let p = evaluate(&estimate, Some(&reference), None, &po).unwrap();
         let pv = serde_json::to_value(&p).unwrap();
         assert!(pv["ape_rot_deg"].is_null() && pv["rpe_rot_deg"].is_null());
+        assert!(pv["rmse_theta"].is_null() && pv["rotation_omitted"].is_string());
+        assert_eq!(pv["pairing"]["method"], "resampled");
         assert_eq!(pv["ape"], v["ape"]);
+        // auto: an SE(2) fit, which absorbs the 0.1 m offset.
+        let auto = EvalOptions {
+            position_only: true,
+            ..Default::default()
+        };
+        let a = evaluate(&estimate, Some(&reference), None, &auto).unwrap();
+        let av = serde_json::to_value(&a).unwrap();
+        assert_eq!(av["alignment"]["kind"], "se2");
+        assert!(av["ape"]["max"].as_f64().unwrap() < 1e-9);
         // Pure translation offset: point distances agree exactly.
         assert!(pv["rpe"]["max"].as_f64().unwrap() < 1e-12);
         // Only relations: no trajectory keys.

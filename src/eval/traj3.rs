@@ -64,6 +64,36 @@ impl Trajectory3 {
         path_length(&self.poses)
     }
 
+    /// True when the orientations carry no information: every rotation is
+    /// exactly the identity while the path, taken in steps of at least
+    /// 0.1 m, somewhere heads more than 0.5 rad away from +x — a tracker's
+    /// positions written with a placeholder quaternion. A robot driving
+    /// straight along +x with identity orientation is not flagged (nor, by
+    /// this test, one reversing straight along −x).
+    pub fn orientation_undefined(&self) -> bool {
+        if self
+            .poses
+            .iter()
+            .any(|p| p.rotation != UnitQuaternion::identity())
+        {
+            return false;
+        }
+        let mut last = match self.poses.first() {
+            Some(p) => p.translation.vector.xy(),
+            None => return false,
+        };
+        for p in &self.poses[1..] {
+            let d = p.translation.vector.xy() - last;
+            if d.norm() >= 0.1 {
+                if d.y.atan2(d.x).abs() > 0.5 {
+                    return true;
+                }
+                last = p.translation.vector.xy();
+            }
+        }
+        false
+    }
+
     /// Index of the first pose holding a NaN or infinite value, if any.
     pub fn first_non_finite(&self) -> Option<usize> {
         (0..self.len()).find(|&i| {

@@ -48,6 +48,7 @@ mod mcap_guard;
 pub mod mcap_read;
 pub mod mcap_stream;
 mod mcap_streams;
+pub mod mcap_topics;
 pub mod mcap_write;
 mod options;
 pub mod out_lock;

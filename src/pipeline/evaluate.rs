@@ -9,18 +9,24 @@ use std::path::{Path, PathBuf};
 
 /// Loads a trajectory: an MCAP's reference stream (or, without one, its
 /// odometry), a KITTI pose file when `times` is given, else a TUM file.
-/// The flag is true for position-only sources (PointStamped references).
+/// The flag is true for position-only sources: PointStamped references, or
+/// orientations that are all the identity while the path turns
+/// ([`Trajectory3::orientation_undefined`]).
 pub fn load_trajectory(
     path: &Path,
     times: Option<&Path>,
     read: &ReadOptions,
 ) -> Result<(Trajectory3, bool), PipelineError> {
+    let with_flag = |t: Trajectory3| {
+        let undefined = t.orientation_undefined();
+        (t, undefined)
+    };
     if let Some(t) = times {
-        return Ok((io::kitti::read_kitti(path, t)?, false));
+        return Ok(with_flag(io::kitti::read_kitti(path, t)?));
     }
     let file = path.display().to_string();
     if io::sniff(path)? != io::Format::Mcap {
-        return Ok((io::tum::read_tum(path)?, false));
+        return Ok(with_flag(io::tum::read_tum(path)?));
     }
     let rec = io::read_recording(path, read)?;
     let stream = if !rec.reference.is_empty() {
@@ -30,17 +36,31 @@ pub fn load_trajectory(
     };
     let (traj, _repeated) = eval::trajectory_from_stamped(stream);
     if traj.len() < 2 {
+        let topics = io::mcap_topics::trajectory_topics(path)?;
+        let found: Vec<String> = topics
+            .iter()
+            .map(|(topic, ty)| format!("{ty} on {topic}"))
+            .collect();
+        let hint = match topics.first() {
+            None => String::new(),
+            Some((topic, _)) => format!(
+                "; the bag holds {}: name the topic in a --config file, e.g. \
+                 [topics] reference = \"{topic}\"",
+                found.join(", ")
+            ),
+        };
         return Err(InputError::new(
             &file,
             format!(
-                "no trajectory: topics {} and {} hold fewer than 2 poses",
+                "no trajectory: topics {} and {} hold fewer than 2 poses{hint}",
                 read.topics.reference, read.topics.odom
             ),
         )
         .into());
     }
-    let position_only = stream.iter().any(|s| !s.has_heading);
-    Ok((Trajectory3::from_2d(&traj), position_only))
+    let traj = Trajectory3::from_2d(&traj);
+    let position_only = stream.iter().any(|s| !s.has_heading) || traj.orientation_undefined();
+    Ok((traj, position_only))
 }
 
 /// What `odocal eval` is asked to do; every `None` keeps the configured
@@ -63,8 +83,13 @@ pub struct EvalJob {
     pub t_max_diff: Option<f64>,
     /// Offset added to the estimate's stamps (s).
     pub t_offset: Option<f64>,
-    /// Interpolate the reference at the estimate's stamps.
+    /// evo's interpolation within `t_max_diff`.
     pub interpolate: bool,
+    /// Interpolate the reference at every estimate stamp (`None`: only for a
+    /// position-only reference).
+    pub resample: Option<bool>,
+    /// Largest reference gap (s) resampling bridges.
+    pub max_gap: Option<f64>,
     /// The RPE step.
     pub rpe_delta: Option<f64>,
     /// The RPE step's unit.
@@ -88,6 +113,12 @@ impl EvalJob {
             opts.sync.offset = t;
         }
         opts.sync.interpolate |= self.interpolate;
+        if self.resample.is_some() {
+            opts.sync.resample = self.resample;
+        }
+        if let Some(g) = self.max_gap {
+            opts.sync.max_gap = g;
+        }
         if let Some(d) = self.rpe_delta {
             opts.rpe_delta = eval::RpeDelta {
                 value: d,

@@ -39,11 +39,9 @@ impl Nominal {
                 given: BTreeSet::new(),
             });
         };
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            InputError::new(path.display().to_string(), format!("cannot read: {e}"))
-        })?;
-        let (robot, given) = RobotConfig::from_toml_keys(&text)
-            .map_err(|e| InputError::new(path.display().to_string(), e.to_string()))?;
+        let (text, name) = robot_text(path)?;
+        let (robot, given) =
+            RobotConfig::from_toml_keys(&text).map_err(|e| InputError::new(name, e.to_string()))?;
         Ok(Self {
             robot,
             file: Some(path.to_path_buf()),
@@ -93,6 +91,34 @@ impl Nominal {
         }
         a
     }
+}
+
+/// The text of a robot file and the name errors give it: the file, or, for a
+/// bare name that is no file, one of the robots compiled in from
+/// `scans/robots/` (so that `--robot khepera` works from an installed binary).
+fn robot_text(path: &Path) -> Result<(String, String), PipelineError> {
+    let bare = path.components().count() == 1 && !path.exists();
+    if bare {
+        let name = path.to_str().unwrap_or_default();
+        if let Some(text) = crate::robot::bundled_robot(name) {
+            return Ok((text.to_string(), format!("bundled robot {name}")));
+        }
+        let names: Vec<&str> = crate::robot::BUNDLED_ROBOTS
+            .iter()
+            .map(|(n, _)| *n)
+            .collect();
+        return Err(InputError::new(
+            path.display().to_string(),
+            format!(
+                "no such file, and not a bundled robot name ({})",
+                names.join(", ")
+            ),
+        )
+        .into());
+    }
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::new(path.display().to_string(), format!("cannot read: {e}")))?;
+    Ok((text, path.display().to_string()))
 }
 
 /// The laser mounting a run uses (`base_from_laser`) and where it came from.

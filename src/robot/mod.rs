@@ -1,10 +1,12 @@
 //! The robot model: a differential drive with wheel radii and wheel base, its
 //! nominal configuration (TOML) and dead-reckoning odometry from wheel angles.
 
+pub mod bundled;
 mod config;
 mod kinematics;
 mod odometry;
 
+pub use bundled::{bundled_robot, BUNDLED_ROBOTS};
 pub use config::{LaserMount, RobotConfig, RobotConfigError};
 pub use kinematics::DiffDrive;
 pub use odometry::{wheel_odometry, wheel_rates, WheelIntegrator, WheelRate};

@@ -1,8 +1,9 @@
 //! The demo's figures (seed 000's Figs. 5–8) as PNG.
 
-use super::{viz_err, xy, DemoInput};
+use super::{plot_anchor, viz_err, xy, DemoInput, DemoReference};
 use crate::calib::{self, CalibrationRun, Method};
-use crate::pipeline::recorder::{anchor, in_world};
+use crate::geom::Pose2;
+use crate::pipeline::recorder::in_world;
 use crate::pipeline::PipelineError;
 use crate::traj::Trajectory;
 use crate::viz::plot::{self, LineChart, PathSeries, Series, TrajectoryPlot};
@@ -34,7 +35,7 @@ pub(super) fn plots(
     icp_traj: &Trajectory,
     raw: &Trajectory,
     runs: &[(Method, CalibrationRun)],
-    reference: Option<&Trajectory>,
+    reference: Option<&DemoReference>,
     t_start: f64,
     out: &Path,
 ) -> Result<(), PipelineError> {
@@ -123,16 +124,16 @@ fn trajectory_charts(
     icp_traj: &Trajectory,
     raw: &Trajectory,
     adaptive: &CalibrationRun,
-    reference: Option<&Trajectory>,
+    reference: Option<&DemoReference>,
     t_start: f64,
     out: &Path,
 ) -> Result<(), PipelineError> {
     let mut paths = Vec::new();
     let mut errors = Vec::new();
     let mut add = |name: &str, t: &Trajectory, kind: TrajectoryKind| {
-        let w = anchor(t, reference);
+        let w = reference.map_or_else(Pose2::identity, |r| plot_anchor(t, r));
         let poses = in_world(t, &w);
-        if let Some(r) = reference {
+        if let Some(r) = reference.map(|r| &r.traj) {
             let e: Vec<[f64; 2]> = t
                 .stamps
                 .iter()
@@ -157,7 +158,7 @@ fn trajectory_charts(
         &adaptive.trajectory,
         TrajectoryKind::Calibrated,
     );
-    if let Some(r) = reference {
+    if let Some(r) = reference.map(|r| &r.traj) {
         paths.insert(
             0,
             PathSeries::new("reference", xy(&r.poses))

@@ -2,6 +2,7 @@
 //! evaluation against the recording's reference — into a directory with a
 //! report, plots, trajectories and a Rerun recording.
 
+pub mod bundled;
 mod figures;
 mod report;
 
@@ -71,6 +72,10 @@ pub struct DemoSummary {
     pub raw_odometry_eval: Option<TrajectoryMetrics>,
     /// Every calibrator.
     pub methods: Vec<MethodResult>,
+    /// Why a trajectory has no figures against the reference (no reference
+    /// in the recording, or an evaluation that could not be made).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub eval_notes: Vec<String>,
     /// Wall time of the whole run (s).
     pub wall_s: f64,
 }
@@ -89,15 +94,81 @@ pub struct DemoInput<'a> {
     pub config: &'a Config,
 }
 
-fn origin_eval(est: &Trajectory, reference: Option<&Trajectory3>) -> Option<TrajectoryMetrics> {
-    let reference = reference?;
-    let opts = EvalOptions {
+/// The recording's reference for evaluation, and whether it has positions
+/// only (PointStamped, or orientations that carry nothing).
+pub(super) struct DemoReference {
+    /// The planar reference.
+    pub(super) traj: Trajectory,
+    /// The same in 3D.
+    traj3: Trajectory3,
+    /// No orientation.
+    position_only: bool,
+}
+
+impl DemoReference {
+    fn of(rec: &Recording) -> Option<Self> {
+        if rec.reference.len() < 2 {
+            return None;
+        }
+        let traj = eval::trajectory_from_stamped(&rec.reference).0;
+        let traj3 = Trajectory3::from_2d(&traj);
+        let position_only =
+            rec.reference.iter().any(|s| !s.has_heading) || traj3.orientation_undefined();
+        Some(Self {
+            traj,
+            traj3,
+            position_only,
+        })
+    }
+}
+
+/// Origin alignment of `est` onto the reference, as the table's.
+fn origin_options(reference: &DemoReference) -> EvalOptions {
+    EvalOptions {
         align: Alignment::Origin,
+        position_only: reference.position_only,
         ..Default::default()
-    };
-    eval::report::against_reference(&Trajectory3::from_2d(est), reference, &opts)
-        .ok()
-        .map(|(m, _)| m)
+    }
+}
+
+/// `world_from_estimate` for the plots: the estimate's first pose on the
+/// reference's; against a position-only reference the origin alignment of
+/// the table (first position, heading of the first metre), since its poses
+/// carry no heading.
+pub(super) fn plot_anchor(est: &Trajectory, reference: &DemoReference) -> Pose2 {
+    if reference.position_only {
+        let fitted = eval::report::against_reference(
+            &Trajectory3::from_2d(est),
+            &reference.traj3,
+            &origin_options(reference),
+        );
+        if let Ok((_, d)) = fitted {
+            let iso = d.transform.isometry;
+            let v = iso.translation.vector;
+            return crate::geom::pose(v.x, v.y, iso.rotation.euler_angles().2);
+        }
+    }
+    crate::pipeline::recorder::anchor(est, Some(&reference.traj))
+}
+
+/// `est` against the reference with origin alignment (the heading of the
+/// reference's first metre for a position-only one); a failure goes to
+/// `notes` under `name` rather than vanishing.
+fn origin_eval(
+    name: &str,
+    est: &Trajectory,
+    reference: Option<&DemoReference>,
+    notes: &mut Vec<String>,
+) -> Option<TrajectoryMetrics> {
+    let reference = reference?;
+    let opts = origin_options(reference);
+    match eval::report::against_reference(&Trajectory3::from_2d(est), &reference.traj3, &opts) {
+        Ok((m, _)) => Some(m),
+        Err(e) => {
+            notes.push(format!("{name}: not evaluated against the reference: {e}"));
+            None
+        }
+    }
 }
 
 fn convergence(run: &CalibrationRun, truth: &Truth, t_start: f64) -> Option<f64> {
@@ -145,48 +216,47 @@ pub struct DemoJob {
     pub common: Common,
 }
 
-/// The bundled recording `odocal demo` runs on by default.
-pub const DEMO_RECORDING: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/scans/wheelchair-corridor.mcap"
-);
-/// Its truth file.
-pub const DEMO_TRUTH: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/scans/wheelchair-corridor.truth.json"
-);
-
-/// Runs `odocal demo`: reads the recording (the bundled one by default) and
-/// its truth, runs everything into `job.out` and records it for Rerun
-/// (`OUT/demo.rrd` unless a viewer is named; nothing without the `rerun`
-/// feature). `progress` receives the stage name and the fraction done.
+/// Runs `odocal demo`: reads the recording (the bundled one, from memory,
+/// by default) and its truth, runs everything into `job.out` and records it
+/// for Rerun (`OUT/demo.rrd` unless a viewer is named; nothing without the
+/// `rerun` feature). `progress` receives the stage name and the fraction done.
 pub fn run(
     job: &DemoJob,
     progress: &mut dyn FnMut(&str, f64),
 ) -> Result<DemoSummary, PipelineError> {
     let (cfg, robot) = job.common.load()?;
-    let (input, truth_path) = match &job.input {
-        Some(p) => (p.clone(), job.truth.clone()),
-        None => (
-            PathBuf::from(DEMO_RECORDING),
-            Some(
-                job.truth
-                    .clone()
-                    .unwrap_or_else(|| PathBuf::from(DEMO_TRUTH)),
-            ),
-        ),
-    };
-    let inputs: Vec<&Path> = std::iter::once(input.as_path())
-        .chain(truth_path.as_deref())
+    let inputs: Vec<&Path> = job
+        .input
+        .iter()
+        .chain(&job.truth)
+        .map(PathBuf::as_path)
         .collect();
     let outputs = output_files(&job.out);
     let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
     check_outputs(&inputs, &outputs)?;
     let _lock = crate::pipeline::outputs::lock_outputs(&[&job.out])?;
-    let truth = truth_path.as_deref().map(load_truth).transpose()?;
-    let rec = crate::pipeline::read_recording(&input, &cfg, &robot)?;
-    if let (Some(t), Some(p)) = (&truth, &truth_path) {
-        crate::pipeline::sense::check_truth(p, t, &input, &rec)?;
+    let truth = match (&job.truth, &job.input) {
+        (Some(p), _) => Some(load_truth(p)?),
+        (None, None) => Some(
+            Truth::from_json(bundled::TRUTH)
+                .map_err(|e| InputError::new("bundled truth", e.to_string()))?,
+        ),
+        (None, Some(_)) => None,
+    };
+    let (rec, name) = match &job.input {
+        Some(p) => (
+            crate::pipeline::read_recording(p, &cfg, &robot)?,
+            p.display().to_string(),
+        ),
+        None => {
+            let read = crate::pipeline::read_options(&cfg, &robot);
+            let rec =
+                crate::io::read_mcap_bytes(bundled::RECORDING, bundled::RECORDING_NAME, &read)?;
+            (rec, bundled::RECORDING_NAME.to_string())
+        }
+    };
+    if let (Some(t), Some(p)) = (&truth, &job.truth) {
+        crate::pipeline::sense::check_truth(p, t, Path::new(&name), &rec)?;
     }
     std::fs::create_dir_all(&job.out).map_err(|e| PipelineError::write(&job.out, e))?;
     let viewer = job
@@ -194,7 +264,6 @@ pub fn run(
         .clone()
         .or_else(|| cfg!(feature = "rerun").then(|| Viewer::File(job.out.join("demo.rrd"))));
     let mut logger = open_logger(viewer.as_ref())?.unwrap_or_else(|| Box::new(NullLogger));
-    let name = input.display().to_string();
     let demo = DemoInput {
         recording: &rec,
         name: &name,
@@ -250,9 +319,15 @@ pub fn run_on(
     }
     let (icp_out, runs) = calibrate_all(input, out, logger, progress)?;
     progress("report", 1.0);
-    let reference2 =
-        (rec.reference.len() >= 2).then(|| eval::trajectory_from_stamped(&rec.reference).0);
-    let reference3 = reference2.as_ref().map(Trajectory3::from_2d);
+    let reference = DemoReference::of(rec);
+    let mut notes = Vec::new();
+    if reference.is_none() {
+        notes.push(format!(
+            "the recording has no reference trajectory (topic {}): no accuracy figures",
+            input.config.topics.reference
+        ));
+    }
+    let r = reference.as_ref();
     let raw = wheel_odometry(&input.robot.diff_drive(), &rec.wheels, Pose2::identity());
     let raw_path = out.join("raw_odometry.tum");
     crate::io::tum::write_tum_2d(&raw_path, &raw)
@@ -262,20 +337,14 @@ pub fn run_on(
         scans: rec.scans.len(),
         duration_s: rec.time_span().map(|(a, b)| b - a).unwrap_or(0.0),
         icp: icp_out.stats.clone(),
-        icp_eval: origin_eval(&icp_out.trajectory, reference3.as_ref()),
-        raw_odometry_eval: origin_eval(&raw, reference3.as_ref()),
-        methods: method_results(input, &runs, reference3.as_ref(), t_start),
+        icp_eval: origin_eval("ICP", &icp_out.trajectory, r, &mut notes),
+        raw_odometry_eval: origin_eval("raw odometry", &raw, r, &mut notes),
+        methods: method_results(input, &runs, r, t_start, &mut notes),
+        eval_notes: Vec::new(),
         wall_s: 0.0,
     };
-    figures::plots(
-        input,
-        &icp_out.trajectory,
-        &raw,
-        &runs,
-        reference2.as_ref(),
-        t_start,
-        out,
-    )?;
+    summary.eval_notes = notes;
+    figures::plots(input, &icp_out.trajectory, &raw, &runs, r, t_start, out)?;
     summary.wall_s = start.elapsed().as_secs_f64();
     report::report(input, &summary, out)?;
     let js = out.join("summary.json");
@@ -368,8 +437,9 @@ fn calibrate_all(
 fn method_results(
     input: &DemoInput<'_>,
     runs: &[(Method, CalibrationRun)],
-    reference: Option<&Trajectory3>,
+    reference: Option<&DemoReference>,
     t_start: f64,
+    notes: &mut Vec<String>,
 ) -> Vec<MethodResult> {
     let truth_end = input.truth.and_then(|t| {
         t.parameters
@@ -392,7 +462,12 @@ fn method_results(
                 }),
                 convergence_s: input.truth.and_then(|t| convergence(run, t, t_start)),
                 mean_iteration_ms: run.summary.mean_iteration_ms,
-                eval: origin_eval(&run.trajectory, reference),
+                eval: origin_eval(
+                    &format!("calibrated by {}", m.as_str()),
+                    &run.trajectory,
+                    reference,
+                    notes,
+                ),
             }
         })
         .collect()

@@ -104,40 +104,72 @@ fn calibration(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
     Ok(())
 }
 
-/// Every trajectory against the reference.
+/// Every trajectory against the reference; without a reference (or without
+/// any figure) no table and no error plot, only why and the trajectories.
 fn odometry(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
+    let named: Vec<(String, &TrajectoryMetrics)> = [
+        ("raw odometry (nominal)".to_string(), &s.raw_odometry_eval),
+        ("ICP".to_string(), &s.icp_eval),
+    ]
+    .into_iter()
+    .chain(
+        s.methods
+            .iter()
+            .map(|m| (format!("odometry calibrated by {}", m.method), &m.eval)),
+    )
+    .filter_map(|(n, m)| m.as_ref().map(|m| (n, m)))
+    .collect();
+    let Some(&(_, first)) = named.first() else {
+        r.heading(2, "Odometry");
+        for note in &s.eval_notes {
+            r.paragraph(&format!("Note — {note}."));
+        }
+        r.image(
+            "trajectories.png",
+            "Trajectories from the recording's start (no reference to compare with).",
+        );
+        return Ok(());
+    };
     r.heading(2, "Odometry against the reference");
-    let mut rows = Vec::new();
-    let mut row = |name: &str, m: &Option<TrajectoryMetrics>| {
-        if let Some(m) = m {
-            rows.push(vec![
-                name.to_string(),
-                num(m.ape.rmse, 3),
-                opt(m.rmse_theta, 4),
+    for note in &s.eval_notes {
+        r.paragraph(&format!("Note — {note}."));
+    }
+    let rot = first.rotation_omitted.is_none();
+    let rows: Vec<Vec<String>> = named
+        .iter()
+        .map(|(name, m)| {
+            let mut row = vec![name.clone(), num(m.ape.rmse, 3)];
+            if rot {
+                row.push(opt(m.rmse_theta, 4));
+            }
+            row.extend([
                 opt(m.drift_percent, 2),
                 num(m.final_error, 3),
                 num(m.rpe.rmse, 4),
             ]);
-        }
-    };
-    row("raw odometry (nominal)", &s.raw_odometry_eval);
-    row("ICP", &s.icp_eval);
-    for m in &s.methods {
-        row(&format!("odometry calibrated by {}", m.method), &m.eval);
+            row
+        })
+        .collect();
+    let mut header = vec!["trajectory", "APE RMSE (m)"];
+    if rot {
+        header.push("RMSE θ (rad)");
     }
-    r.table(
-        &[
-            "trajectory",
-            "APE RMSE (m)",
-            "RMSE θ (rad)",
-            "drift (%)",
-            "final error (m)",
-            "RPE RMSE (m, 1 frame)",
-        ],
-        &rows,
-    )
-    .map_err(viz_err)?;
-    r.paragraph("Every trajectory starts on the reference's pose at its first stamp (origin alignment), as a robot's dead reckoning would.");
+    header.extend(["drift (%)", "final error (m)", "RPE RMSE (m, 1 frame)"]);
+    r.table(&header, &rows).map_err(viz_err)?;
+    r.paragraph(&format!(
+        "Every trajectory starts on the reference at its first stamp, as a robot's dead \
+         reckoning would: alignment `{}` ({}). Pairs: {} of {} ({}).{}",
+        first.alignment.kind,
+        first.alignment.reason,
+        first.paired,
+        first.of,
+        first.pairing.reason,
+        first
+            .rotation_omitted
+            .as_ref()
+            .map(|w| format!(" No θ error: {w}."))
+            .unwrap_or_default()
+    ));
     r.image(
         "trajectories.png",
         "Trajectories against the reference (seed 000, Fig. 7).",
