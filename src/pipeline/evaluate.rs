@@ -19,7 +19,7 @@ pub fn load_trajectory(
         return Ok((io::kitti::read_kitti(path, t)?, false));
     }
     let file = path.display().to_string();
-    if io::sniff(path)? != io::Format::Mcap {
+    if !io::sniff(path)?.is_bag() {
         return Ok((io::tum::read_tum(path)?, false));
     }
     let rec = io::read_recording(path, read)?;
