@@ -14,7 +14,10 @@ use odocal::recording::Recording;
 
 use crate::support::{python_with, scratch, shared_data};
 
-const BUNDLED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scans/wheelchair-corridor.mcap");
+const BUNDLED: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scans/wheelchair-corridor.mcap"
+);
 
 /// Runs `tools/bag_convert.py SRC OUT ARGS...`; `None` (skip) without
 /// Python and rosbags outside CI.
@@ -76,7 +79,12 @@ fn bundled(test: &str) -> Option<&'static (PathBuf, Recording)> {
     static B: OnceLock<Option<(PathBuf, Recording)>> = OnceLock::new();
     B.get_or_init(|| {
         let dir = scratch("io_bags_bundled");
-        convert(test, Path::new(BUNDLED), &dir, &["--ros1-compression", "bz2"])?;
+        convert(
+            test,
+            Path::new(BUNDLED),
+            &dir,
+            &["--ros1-compression", "bz2"],
+        )?;
         let rec = read_recording(Path::new(BUNDLED), &ReadOptions::default()).unwrap();
         Some((dir, rec))
     })
@@ -116,7 +124,13 @@ fn ros1_bags_with_lz4_or_plain_chunks_overlapping_in_time_read_in_time_order() {
         let out = dir.join(compression);
         // Topic after topic in 16 KiB chunks: the chunks of /scan span the
         // whole recording, and so do those of every other topic.
-        let args = ["--ros1-compression", compression, "--by-topic", "--only", "bag"];
+        let args = [
+            "--ros1-compression",
+            compression,
+            "--by-topic",
+            "--only",
+            "bag",
+        ];
         convert(test, Path::new(BUNDLED), &out, &args).unwrap();
         let bag = out.join("bag.bag");
         assert_same(&read(&bag), truth, compression);

@@ -95,7 +95,10 @@ impl<'o> Messages<'o> {
             let (opcode, data) = match event {
                 LinearReadEvent::ReadRequest(n) => {
                     let buf = self.reader.insert(n);
-                    let got = self.file.read(buf).map_err(|e| Fail::Format(e.to_string()))?;
+                    let got = self
+                        .file
+                        .read(buf)
+                        .map_err(|e| Fail::Format(e.to_string()))?;
                     self.reader.notify_read(got);
                     continue;
                 }

@@ -8,8 +8,9 @@
 //! How the readers turn stamps into the times of a [`Recording`] (seconds as
 //! `f64`), and what the later stages do with what they get:
 //! - **Source.** A bag message's time is its `header.stamp`; a stamp of
-//!   exactly zero means "unset" and the message's MCAP log time is used
-//!   instead. A CARMEN record's time is its `ipc_timestamp`.
+//!   exactly zero means "unset" and the message's receive time is used
+//!   instead (MCAP log time, ROS 1 record `time`, rosbag2 SQLite
+//!   `timestamp`). A CARMEN record's time is its `ipc_timestamp`.
 //! - **Invalid stamps** are errors naming the message (bag) or line (CARMEN):
 //!   a negative time, or nanoseconds ≥ 10⁹.
 //! - **Going backwards.** Each stream (scans, joint states, IMU, odometry,

@@ -109,7 +109,9 @@ impl Ros1Messages {
             .op()
             .and_then(|o| match o {
                 op::BAG_HEADER => f.u64("index_pos"),
-                o => Err(format!("record op {o:#04x} where the bag header (0x03) was expected")),
+                o => Err(format!(
+                    "record op {o:#04x} where the bag header (0x03) was expected"
+                )),
             })
             .map_err(|m| self.at(pos, m))?;
         if index_pos == 0 {
@@ -179,7 +181,10 @@ impl Ros1Messages {
         let topic = f.text("topic").map_err(|m| self.at(pos, m))?.to_string();
         let c = Fields::parse(data)
             .and_then(|c| c.text("type").map(str::to_string))
-            .map_err(|m| self.at(pos, format!("connection {conn}: {m}")).topic(&topic))?;
+            .map_err(|m| {
+                self.at(pos, format!("connection {conn}: {m}"))
+                    .topic(&topic)
+            })?;
         let roles = roles_for(&topic, &c, "ros1", Wire::Ros1, opts)
             .map_err(|m| InputError::new(&self.name, m).topic(&topic))?;
         self.connections.insert(
@@ -201,7 +206,10 @@ impl Ros1Messages {
         let data = (|| {
             let f = Fields::parse(&rec.header)?;
             if f.op()? != op::CHUNK {
-                return Err(format!("record op {:#04x} where a chunk (0x05) was expected", f.op()?));
+                return Err(format!(
+                    "record op {:#04x} where a chunk (0x05) was expected",
+                    f.op()?
+                ));
             }
             decompress(f.text("compression")?, rec.data, f.u32("size")?)
         })()
@@ -209,7 +217,8 @@ impl Ros1Messages {
         let mut entries = Vec::new();
         let records = chunk_records(&data).map_err(|m| self.at(pos, format!("chunk: {m}")))?;
         for (offset, header, body) in records {
-            let in_chunk = |m: String| self.at(pos, format!("chunk, record at chunk byte {offset}: {m}"));
+            let in_chunk =
+                |m: String| self.at(pos, format!("chunk, record at chunk byte {offset}: {m}"));
             let f = Fields::parse(header).map_err(in_chunk)?;
             if f.op().map_err(in_chunk)? != op::MSG_DATA {
                 continue;

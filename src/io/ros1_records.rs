@@ -71,7 +71,10 @@ impl<'a> Fields<'a> {
     pub(crate) fn op(&self) -> Result<u8, String> {
         match self.get("op")? {
             [op] => Ok(*op),
-            v => Err(format!("'op' field of {} bytes where 1 was expected", v.len())),
+            v => Err(format!(
+                "'op' field of {} bytes where 1 was expected",
+                v.len()
+            )),
         }
     }
 
@@ -157,9 +160,13 @@ fn read_prefixed(file: &mut File, len: u64, at: &mut u64, what: &str) -> Result<
     Ok(buf)
 }
 
-/// The records inside a decompressed chunk: (offset in the chunk, header,
-/// data) for each, or an error at the first that does not fit.
-pub(crate) fn chunk_records(chunk: &[u8]) -> Result<Vec<(usize, &[u8], &[u8])>, String> {
+/// A record inside a decompressed chunk: its offset in the chunk, header
+/// and data.
+pub(crate) type ChunkRecord<'a> = (usize, &'a [u8], &'a [u8]);
+
+/// The records inside a decompressed chunk, or an error at the first that
+/// does not fit.
+pub(crate) fn chunk_records(chunk: &[u8]) -> Result<Vec<ChunkRecord<'_>>, String> {
     let mut out = Vec::new();
     let mut pos = 0;
     while pos < chunk.len() {
@@ -222,7 +229,9 @@ mod tests {
     use super::*;
 
     fn field(name: &str, value: &[u8]) -> Vec<u8> {
-        let mut f = ((name.len() + 1 + value.len()) as u32).to_le_bytes().to_vec();
+        let mut f = ((name.len() + 1 + value.len()) as u32)
+            .to_le_bytes()
+            .to_vec();
         f.extend_from_slice(name.as_bytes());
         f.push(b'=');
         f.extend_from_slice(value);

@@ -105,7 +105,9 @@ fn read_topics(
             s.query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?)))?
                 .collect()
         })
-        .map_err(|e| err(format!("table 'topics' does not read as rosbag2's: {e}")).topic("topics"))?;
+        .map_err(|e| {
+            err(format!("table 'topics' does not read as rosbag2's: {e}")).topic("topics")
+        })?;
     let mut topics = HashMap::new();
     for (id, topic, ty, format) in rows {
         let roles = roles_for(&topic, &ty, &format, Wire::Cdr, opts)
@@ -128,13 +130,22 @@ impl RawMessages for Db3Messages {
         let (id, topic_id, stamp, data) = match self.rows.recv() {
             Err(_) => return Ok(None),
             Ok(Err(m)) => {
-                return Err(InputError::new(&self.name, format!("table 'messages': {m}"))
-                    .topic("messages")
-                    .into())
+                return Err(
+                    InputError::new(&self.name, format!("table 'messages': {m}"))
+                        .topic("messages")
+                        .into(),
+                )
             }
             Ok(Ok(row)) => row,
         };
-        let (topic, roles) = &self.topics[&topic_id];
+        let Some((topic, roles)) = self.topics.get(&topic_id) else {
+            return Err(InputError::new(
+                &self.name,
+                format!("message of topic id {topic_id}, which table 'topics' does not list"),
+            )
+            .at(At::Row(id).to_string())
+            .into());
+        };
         let log_time = u64::try_from(stamp).map_err(|_| {
             InputError::new(&self.name, format!("negative timestamp {stamp} ns"))
                 .topic(topic.as_str())

@@ -60,7 +60,11 @@ fn bag_files(dir: &Path) -> Result<Vec<PathBuf>, InputError> {
         return Err(InputError::new(&name, "relative_file_paths lists no file")
             .topic("rosbag2_bagfile_information"));
     }
-    let files: Vec<PathBuf> = info.relative_file_paths.iter().map(|f| dir.join(f)).collect();
+    let files: Vec<PathBuf> = info
+        .relative_file_paths
+        .iter()
+        .map(|f| dir.join(f))
+        .collect();
     for f in &files {
         if !f.is_file() {
             return Err(InputError::new(
@@ -84,9 +88,7 @@ type Part<'o> = Box<dyn RawMessages + 'o>;
 fn open_part<'o>(path: &Path, opts: &'o ReadOptions) -> Result<Part<'o>, InputError> {
     match sniff(path)? {
         Format::Mcap => Ok(Box::new(super::mcap_stream::raw_messages(path, opts)?)),
-        Format::Rosbag2Sqlite => Ok(Box::new(super::rosbag2_db3::Db3Messages::open(
-            path, opts,
-        )?)),
+        Format::Rosbag2Sqlite => Ok(Box::new(super::rosbag2_db3::Db3Messages::open(path, opts)?)),
         _ => Err(InputError::new(
             path.display().to_string(),
             "listed in metadata.yaml but neither an MCAP nor an SQLite file",
