@@ -198,6 +198,29 @@ fn ros1_bag_with_unknown_compression_missing_connection_or_no_index_is_refused()
     }
     let e = read_bytes("bags_bad_connection", "k.bag", &b).unwrap_err();
     assert!(e.message.contains("does not list"), "{e}");
+    // The first JointState's name count made huge: the message is named.
+    let mut b = bag.clone();
+    let robot = odocal::robot::RobotConfig::default();
+    let name_at = |n: &str| {
+        let mut pat = (n.len() as u32).to_le_bytes().to_vec();
+        pat.extend_from_slice(n.as_bytes());
+        find(&b, &pat, 0)
+    };
+    let first = name_at(&robot.left_joint).min(name_at(&robot.right_joint));
+    b[first - 4..first].copy_from_slice(&u32::MAX.to_le_bytes());
+    let e = read_bytes("bags_bad_message", "m.bag", &b).unwrap_err();
+    assert_eq!(e.topic.as_deref(), Some("/joint_states"), "{e}");
+    let at = e.position.clone().unwrap_or_default();
+    assert!(at.starts_with("message 0 (chunk at byte "), "{e}");
+    assert!(e.message.contains("sequence of 4294967295"), "{e}");
+    // A configured topic of another type names the topic.
+    let mut opts = ReadOptions::default();
+    opts.topics.scan = "/joint_states".into();
+    let path = scratch("bags_bad_type").join("t.bag");
+    std::fs::write(&path, &bag).unwrap();
+    let e = open(&path, &opts).err().expect("a JointState topic is no scan topic");
+    assert_eq!(e.topic.as_deref(), Some("/joint_states"), "{e}");
+    assert!(e.message.contains("sensor_msgs/JointState"), "{e}");
     // A bag whose recording was not closed has index_pos 0.
     let mut b = bag.clone();
     let at = find(&b, b"index_pos=", 0) + 10;

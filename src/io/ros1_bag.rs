@@ -22,12 +22,11 @@ use super::ros1_records::{chunk_records, decompress, op, read_record, Fields, MA
 use super::source::SampleSource;
 use crate::error::InputError;
 
-/// A connection (topic) of the bag: what its messages are for.
+/// A connection of the bag (one publisher of a topic): what its messages
+/// are for.
 struct Connection {
     topic: String,
     roles: Vec<Role>,
-    /// Messages of this connection handed out so far.
-    count: usize,
 }
 
 /// A chunk as the index describes it.
@@ -63,6 +62,8 @@ pub(crate) struct Ros1Messages {
     file: File,
     len: u64,
     connections: HashMap<u32, Connection>,
+    /// Messages of each topic handed out so far (all its connections).
+    counts: HashMap<String, usize>,
     /// Chunks not opened yet, latest first (popped from the back).
     pending: Vec<ChunkInfo>,
     open: Vec<OpenChunk>,
@@ -88,6 +89,7 @@ impl Ros1Messages {
             file,
             len,
             connections: HashMap::new(),
+            counts: HashMap::new(),
             pending: Vec::new(),
             open: Vec::new(),
         };
@@ -187,14 +189,7 @@ impl Ros1Messages {
             })?;
         let roles = roles_for(&topic, &c, "ros1", Wire::Ros1, opts)
             .map_err(|m| InputError::new(&self.name, m).topic(&topic))?;
-        self.connections.insert(
-            conn,
-            Connection {
-                topic,
-                roles,
-                count: 0,
-            },
-        );
+        self.connections.insert(conn, Connection { topic, roles });
         Ok(())
     }
 
@@ -271,7 +266,7 @@ impl RawMessages for Ros1Messages {
             let (time, offset, conn, range) = chunk.entries[chunk.next].clone();
             chunk.next += 1;
             let chunk_pos = chunk.pos;
-            let Some(c) = self.connections.get_mut(&conn) else {
+            let Some(c) = self.connections.get(&conn) else {
                 return Err(Fail::Input(self.at(
                     chunk_pos,
                     format!(
@@ -280,8 +275,9 @@ impl RawMessages for Ros1Messages {
                     ),
                 )));
             };
-            let index = c.count;
-            c.count += 1;
+            let count = self.counts.entry(c.topic.clone()).or_insert(0);
+            let index = *count;
+            *count += 1;
             if c.roles.is_empty() {
                 continue;
             }
