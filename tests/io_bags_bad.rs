@@ -218,7 +218,9 @@ fn ros1_bag_with_unknown_compression_missing_connection_or_no_index_is_refused()
     opts.topics.scan = "/joint_states".into();
     let path = scratch("bags_bad_type").join("t.bag");
     std::fs::write(&path, &bag).unwrap();
-    let e = open(&path, &opts).err().expect("a JointState topic is no scan topic");
+    let e = open(&path, &opts)
+        .err()
+        .expect("a JointState topic is no scan topic");
     assert_eq!(e.topic.as_deref(), Some("/joint_states"), "{e}");
     assert!(e.message.contains("sensor_msgs/JointState"), "{e}");
     // A bag whose recording was not closed has index_pos 0.
@@ -230,6 +232,22 @@ fn ros1_bag_with_unknown_compression_missing_connection_or_no_index_is_refused()
     let (code, err) = icp(&path);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("reindex") && err.contains("u.bag"), "{err}");
+}
+
+#[test]
+fn ros1_bag_cut_anywhere_in_its_index_is_an_error() {
+    let Some((dir, _)) = small() else { return };
+    let bag = std::fs::read(dir.join("lz4/bag.bag")).unwrap();
+    let at = find(&bag, b"index_pos=", 0) + 10;
+    let index = u64::from_le_bytes(bag[at..at + 8].try_into().unwrap()) as usize;
+    assert!(bag.len() - index > 1000, "an index of many chunks");
+    let path = scratch("bags_bad_index_cut").join("i.bag");
+    // Every cut, at a record boundary or not, loses part of the index.
+    for cut in index..bag.len() {
+        std::fs::write(&path, &bag[..cut]).unwrap();
+        let e = read(&path).expect_err("a cut index is an error");
+        assert!(e.position.is_some(), "cut at {cut}: {e}");
+    }
 }
 
 /// The small bags' bytes: plain, bz2 and lz4 ROS 1 bags, and the SQLite file.

@@ -93,8 +93,19 @@ impl Ros1Messages {
             pending: Vec::new(),
             open: Vec::new(),
         };
-        let index_pos = bag.bag_header()?;
+        let (index_pos, counts) = bag.bag_header()?;
         bag.read_index(index_pos, opts)?;
+        let found = [bag.connections.len(), bag.pending.len()];
+        if found != counts.map(|n| n as usize) {
+            return Err(bag.at(
+                index_pos,
+                format!(
+                    "the index holds {} connections and {} chunks, the bag header says {} and {} \
+                     (truncated?)",
+                    found[0], found[1], counts[0], counts[1]
+                ),
+            ));
+        }
         Ok(bag)
     }
 
@@ -102,8 +113,9 @@ impl Ros1Messages {
         InputError::new(&self.name, m).at(format!("byte {pos}"))
     }
 
-    /// Reads the bag header record (right after the magic): the index offset.
-    fn bag_header(&mut self) -> Result<u64, InputError> {
+    /// Reads the bag header record (right after the magic): the index
+    /// offset and how many connections and chunks the index lists.
+    fn bag_header(&mut self) -> Result<(u64, [u32; 2]), InputError> {
         let pos = MAGIC.len() as u64;
         let rec = read_record(&mut self.file, self.len, pos).map_err(|m| self.at(pos, m))?;
         let f = Fields::parse(&rec.header).map_err(|m| self.at(pos, m))?;
@@ -116,6 +128,11 @@ impl Ros1Messages {
                 )),
             })
             .map_err(|m| self.at(pos, m))?;
+        let counts = [f.u32("conn_count"), f.u32("chunk_count")];
+        let counts = match counts {
+            [Ok(a), Ok(b)] => [a, b],
+            [Err(m), _] | [_, Err(m)] => return Err(self.at(pos, m)),
+        };
         if index_pos == 0 {
             return Err(self.at(
                 pos,
@@ -133,7 +150,7 @@ impl Ros1Messages {
                 ),
             ));
         }
-        Ok(index_pos)
+        Ok((index_pos, counts))
     }
 
     /// Reads the index section: connections and chunk infos.
@@ -165,6 +182,9 @@ impl Ros1Messages {
             }
             pos = rec.next;
         }
+        // A chunk listed twice is read once.
+        chunks.sort_by_key(|c| c.pos);
+        chunks.dedup_by_key(|c| c.pos);
         chunks.sort_by_key(|c| std::cmp::Reverse((c.start, c.pos)));
         self.pending = chunks;
         Ok(())
