@@ -6,7 +6,9 @@
 //! order), so chunks that overlap in time still give one time-ordered
 //! stream, while only the chunks that overlap are held in memory. Messages
 //! use the ROS 1 serialisation ([`super::cdr::CdrReader::ros1`]); type
-//! names are ROS 1's (`sensor_msgs/LaserScan`). Every problem is an
+//! names are ROS 1's (`sensor_msgs/LaserScan`); a ROS 1 stamp's `uint32`
+//! seconds are read as ROS 2's `int32`, so stamps after 2038 are refused as
+//! negative rather than read wrong. Every problem is an
 //! [`InputError`] naming the file, the topic when known, and the byte
 //! offset of the record.
 
