@@ -32,6 +32,8 @@ mod icp_real;
 mod icp_relations;
 mod icp_sim;
 mod io_bad_input;
+mod io_bags;
+mod io_bags_bad;
 mod io_crosscheck;
 mod io_kill;
 mod io_output_sets;

@@ -2,6 +2,12 @@
 //! a 4-byte encapsulation header (`00 01` little endian, `00 00` big endian),
 //! every primitive aligned to its size counted from after the header, strings
 //! as a u32 length (including the NUL) then bytes, sequences as a u32 count.
+//!
+//! The reader also reads the ROS 1 serialisation ([`CdrReader::ros1`]), which
+//! is the same walk through the fields without the encapsulation header,
+//! without alignment and with strings as a u32 length then bytes (no NUL);
+//! `std_msgs/Header` carries a `seq` before its stamp there
+//! (wiki.ros.org/roscpp/Overview/MessagesSerializationAndAdaptingTypes).
 
 /// A message that does not decode: where (byte offset from the start of the
 /// message, header included) and what was expected there.
@@ -22,6 +28,8 @@ pub struct CdrReader<'a> {
     /// Position in `body`.
     pos: usize,
     little: bool,
+    /// ROS 1 serialisation: no header, no alignment, strings without NUL.
+    ros1: bool,
 }
 
 /// Bytes of the encapsulation header.
@@ -50,18 +58,38 @@ impl<'a> CdrReader<'a> {
             body: &data[HEADER..],
             pos: 0,
             little,
+            ros1: false,
         })
+    }
+
+    /// Starts reading a ROS 1 message (little endian, packed, no header).
+    pub fn ros1(data: &'a [u8]) -> Self {
+        Self {
+            body: data,
+            pos: 0,
+            little: true,
+            ros1: true,
+        }
+    }
+
+    /// Whether this reads the ROS 1 serialisation.
+    pub fn is_ros1(&self) -> bool {
+        self.ros1
     }
 
     fn err(&self, expected: impl Into<String>) -> CdrError {
         CdrError {
-            offset: self.pos + HEADER,
+            offset: self.pos + if self.ros1 { 0 } else { HEADER },
             expected: expected.into(),
         }
     }
 
     fn take<const N: usize>(&mut self, what: &str) -> Result<[u8; N], CdrError> {
-        let aligned = self.pos.next_multiple_of(N);
+        let aligned = if self.ros1 {
+            self.pos
+        } else {
+            self.pos.next_multiple_of(N)
+        };
         match self.body.get(aligned..aligned + N) {
             Some(b) => {
                 self.pos = aligned + N;
@@ -122,6 +150,7 @@ impl<'a> CdrReader<'a> {
         let n = self.seq_len(1)?;
         let bytes = &self.body[self.pos..self.pos + n];
         let text = match bytes.split_last() {
+            _ if self.ros1 => bytes,
             None => &[][..],
             Some((0, rest)) => rest,
             Some(_) => return Err(self.err("NUL-terminated string")),
@@ -158,10 +187,10 @@ impl<'a> CdrReader<'a> {
     }
 
     /// Checks that the message has been consumed, allowing up to 3 bytes of
-    /// end padding.
+    /// end padding (none in ROS 1, which does not pad).
     pub fn finish(&self) -> Result<(), CdrError> {
         let left = self.body.len() - self.pos;
-        if left > 3 {
+        if left > if self.ros1 { 0 } else { 3 } {
             return Err(self.err(format!("end of message ({left} bytes left over)")));
         }
         Ok(())

@@ -1,7 +1,9 @@
 //! What kind of file an input is, decided in one place: by the MCAP magic
 //! bytes, by the `.tuple` extension of Censi et al.'s calibration tuples, and
 //! otherwise text, which a reader then parses as the format it expects (a
-//! CARMEN log for recordings, TUM for trajectories).
+//! CARMEN log for recordings, TUM for trajectories). ROS 1 bags and rosbag2
+//! SQLite files are known by their first bytes, a rosbag2 folder by its
+//! `metadata.yaml`.
 
 use std::io::Read;
 use std::path::Path;
@@ -17,16 +19,41 @@ pub enum Format {
     CensiTuples,
     /// Any other file: a text format (CARMEN log, TUM trajectory).
     Text,
+    /// A ROS 1 bag, format 2.0 (starts with `#ROSBAG V2.0`).
+    Ros1Bag,
+    /// A rosbag2 SQLite file (`.db3`, starts with `SQLite format 3`).
+    Rosbag2Sqlite,
+    /// A rosbag2 folder: `metadata.yaml` and the files it lists.
+    Rosbag2Dir,
+}
+
+impl Format {
+    /// Whether this is a recording of ROS messages (a bag of any kind).
+    pub fn is_bag(self) -> bool {
+        matches!(
+            self,
+            Format::Mcap | Format::Ros1Bag | Format::Rosbag2Sqlite | Format::Rosbag2Dir
+        )
+    }
 }
 
 /// Sniffs the format of `path`; an error when the file cannot be opened.
 pub fn sniff(path: &Path) -> Result<Format, InputError> {
+    if path.is_dir() {
+        return sniff_dir(path);
+    }
     let mut file = std::fs::File::open(path)
         .map_err(|e| InputError::new(path.display().to_string(), format!("cannot read: {e}")))?;
-    let mut head = [0u8; 8];
+    let mut head = [0u8; 16];
     let n = read_up_to(&mut file, &mut head);
     if head[..n].starts_with(mcap::MAGIC) {
         return Ok(Format::Mcap);
+    }
+    if head[..n].starts_with(super::ros1_records::MAGIC) {
+        return Ok(Format::Ros1Bag);
+    }
+    if head[..n].starts_with(super::rosbag2_db3::MAGIC) {
+        return Ok(Format::Rosbag2Sqlite);
     }
     if let Some(byte) = damaged_magic(&head[..n]) {
         return Err(InputError::new(
@@ -34,7 +61,7 @@ pub fn sniff(path: &Path) -> Result<Format, InputError> {
             format!(
                 "not an MCAP (bad magic at byte {byte}: {:02x?} instead of {:02x?}); the file \
                  starts like one but is damaged",
-                &head[..n],
+                &head[..n.min(mcap::MAGIC.len())],
                 mcap::MAGIC
             ),
         ));
@@ -65,6 +92,19 @@ fn damaged_magic(head: &[u8]) -> Option<usize> {
         return None;
     }
     head.iter().zip(mcap::MAGIC).position(|(a, b)| a != b)
+}
+
+/// A folder is a recording when it holds a rosbag2 `metadata.yaml`.
+fn sniff_dir(path: &Path) -> Result<Format, InputError> {
+    if path.join("metadata.yaml").is_file() {
+        Ok(Format::Rosbag2Dir)
+    } else {
+        Err(InputError::new(
+            path.display().to_string(),
+            "a folder without metadata.yaml: a rosbag2 folder (what `ros2 bag record` \
+             writes) has one; otherwise name the bag file itself",
+        ))
+    }
 }
 
 /// Reads as many bytes as the file has, up to `buf.len()`.

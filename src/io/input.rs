@@ -6,13 +6,15 @@
 use crate::error::InputError;
 use std::path::Path;
 
-/// Refuses `path` when it exists and is not a regular file, naming what it
-/// is. A missing file passes: the reader reports it as unreadable.
+/// Refuses `path` when it exists and is neither a regular file nor a
+/// directory, naming what it is. A missing file passes (the reader reports
+/// it as unreadable), and so does a directory: a rosbag2 folder is a
+/// recording, and the format sniffer refuses any other folder by name.
 pub fn check_regular(path: &Path) -> Result<(), InputError> {
     let Ok(meta) = std::fs::metadata(path) else {
         return Ok(());
     };
-    if meta.is_file() {
+    if meta.is_file() || meta.is_dir() {
         return Ok(());
     }
     let what = kind(&meta);

@@ -41,6 +41,25 @@ pub(crate) enum Role {
     Tf,
 }
 
+/// How a bag serialises its messages: CDR (ROS 2) or ROS 1.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Wire {
+    /// ROS 2: CDR with its encapsulation header (MCAP, rosbag2 SQLite).
+    Cdr,
+    /// ROS 1 bags: packed little endian, `Header` with `seq`.
+    Ros1,
+}
+
+impl Wire {
+    /// The message encoding a channel of this wire must declare.
+    fn encoding(self) -> &'static str {
+        match self {
+            Wire::Cdr => "cdr",
+            Wire::Ros1 => "ros1",
+        }
+    }
+}
+
 /// Wheel readings before sorting: angles, or rates to integrate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum WheelMode {
@@ -53,6 +72,7 @@ enum WheelMode {
 pub(crate) struct State<'a> {
     file: String,
     opts: &'a ReadOptions,
+    wire: Wire,
     rec: Recording,
     latest: HashMap<&'static str, (f64, bool)>,
     wheel_mode: Option<WheelMode>,
@@ -110,9 +130,15 @@ fn pose_of(p: &super::ros_msgs::Pose) -> Result<(Pose2, bool), String> {
 
 impl<'a> State<'a> {
     pub(crate) fn new(file: &str, opts: &'a ReadOptions) -> Self {
+        Self::with_wire(file, opts, Wire::Cdr)
+    }
+
+    /// A state that decodes messages serialised as `wire`.
+    pub(crate) fn with_wire(file: &str, opts: &'a ReadOptions, wire: Wire) -> Self {
         Self {
             file: file.to_string(),
             opts,
+            wire,
             rec: Recording {
                 source: file.to_string(),
                 ..Default::default()
@@ -123,6 +149,15 @@ impl<'a> State<'a> {
             tf: HashMap::new(),
             tf_dynamic: HashMap::new(),
         }
+    }
+
+    /// Decodes one message in this state's wire format.
+    fn decode<M: RosMsg>(&self, data: &[u8]) -> Result<M, String> {
+        match self.wire {
+            Wire::Cdr => M::decode(data),
+            Wire::Ros1 => M::decode_ros1(data),
+        }
+        .map_err(cdr)
     }
 
     /// The stamp of a message in `stream` (see [`stamp_of`]); refuses one
@@ -157,7 +192,7 @@ impl<'a> State<'a> {
             Role::Scan => self.scan(data, log_time),
             Role::Joints => self.joints(data, log_time),
             Role::Imu => {
-                let m = ImuMsg::decode(data).map_err(cdr)?;
+                let m: ImuMsg = self.decode(data)?;
                 let t = self.stamp("imu", &m.header.stamp, log_time)?;
                 let wz = m.angular_velocity.z;
                 finite("angular_velocity.z", &[wz])?;
@@ -165,7 +200,7 @@ impl<'a> State<'a> {
                 Ok(())
             }
             Role::Odom | Role::RefOdometry => {
-                let m = OdometryMsg::decode(data).map_err(cdr)?;
+                let m: OdometryMsg = self.decode(data)?;
                 let stream = if role == Role::Odom {
                     "odom"
                 } else {
@@ -189,7 +224,7 @@ impl<'a> State<'a> {
                 Ok(())
             }
             Role::RefPose => {
-                let m = PoseStampedMsg::decode(data).map_err(cdr)?;
+                let m: PoseStampedMsg = self.decode(data)?;
                 let t = self.stamp("reference", &m.header.stamp, log_time)?;
                 let (pose, has_heading) = pose_of(&m.pose)?;
                 self.rec.reference.push(StampedPose {
@@ -200,7 +235,7 @@ impl<'a> State<'a> {
                 Ok(())
             }
             Role::RefPoint => {
-                let m = PointStampedMsg::decode(data).map_err(cdr)?;
+                let m: PointStampedMsg = self.decode(data)?;
                 let t = self.stamp("reference", &m.header.stamp, log_time)?;
                 finite("point", &[m.point.x, m.point.y])?;
                 self.rec.reference.push(StampedPose {
@@ -211,7 +246,7 @@ impl<'a> State<'a> {
                 Ok(())
             }
             Role::TfStatic | Role::Tf => {
-                let m = TfMessage::decode(data).map_err(cdr)?;
+                let m: TfMessage = self.decode(data)?;
                 let map = if role == Role::Tf {
                     &mut self.tf_dynamic
                 } else {
@@ -238,7 +273,7 @@ impl<'a> State<'a> {
     }
 
     fn scan(&mut self, data: &[u8], log_time: u64) -> Result<(), String> {
-        let m = LaserScanMsg::decode(data).map_err(cdr)?;
+        let m: LaserScanMsg = self.decode(data)?;
         let t = self.stamp("scan", &m.header.stamp, log_time)?;
         if m.ranges.is_empty() {
             return Err("LaserScan with zero beams".into());
@@ -283,7 +318,7 @@ impl<'a> State<'a> {
     }
 
     fn joints(&mut self, data: &[u8], log_time: u64) -> Result<(), String> {
-        let m = JointStateMsg::decode(data).map_err(cdr)?;
+        let m: JointStateMsg = self.decode(data)?;
         let t = self.stamp("joint_states", &m.header.stamp, log_time)?;
         let find = |name: &str| {
             m.name
@@ -462,21 +497,30 @@ fn integrate_rates(w: &mut [WheelSample]) {
     }
 }
 
-/// The roles a channel plays; a configured topic with an unexpected schema is
-/// an error, other topics are ignored.
+/// The roles an MCAP channel plays (see [`roles_for`]); its messages must be CDR.
 pub(crate) fn channel_roles(
     ch: &mcap::Channel<'_>,
     opts: &ReadOptions,
 ) -> Result<Vec<Role>, String> {
+    let schema = ch.schema.as_ref().map(|s| s.name.as_ref()).unwrap_or("");
+    roles_for(&ch.topic, schema, &ch.message_encoding, Wire::Cdr, opts)
+}
+
+/// The roles a topic of message type `type_name` (`pkg/msg/Type` or ROS 1's
+/// `pkg/Type`) plays; a configured topic with an unexpected type, or with an
+/// encoding other than `wire`'s, is an error; other topics are ignored.
+pub(crate) fn roles_for(
+    topic: &str,
+    type_name: &str,
+    encoding: &str,
+    wire: Wire,
+    opts: &ReadOptions,
+) -> Result<Vec<Role>, String> {
     let t = &opts.topics;
-    let schema = ch
-        .schema
-        .as_ref()
-        .map(|s| short_name(&s.name))
-        .unwrap_or_default();
+    let schema = short_name(type_name);
     let mut roles = Vec::new();
-    let mut want = |topic: &str, accepted: &[(&str, Role)]| -> Result<(), String> {
-        if ch.topic != topic {
+    let mut want = |name: &str, accepted: &[(&str, Role)]| -> Result<(), String> {
+        if topic != name {
             return Ok(());
         }
         match accepted.iter().find(|(n, _)| short_name(n) == schema) {
@@ -508,10 +552,10 @@ pub(crate) fn channel_roles(
     )?;
     want(&t.tf_static, &[(TfMessage::TYPE, Role::TfStatic)])?;
     want(&t.tf, &[(TfMessage::TYPE, Role::Tf)])?;
-    if !roles.is_empty() && ch.message_encoding != "cdr" {
+    if !roles.is_empty() && encoding != wire.encoding() {
         return Err(format!(
-            "message encoding '{}' where cdr was expected",
-            ch.message_encoding
+            "message encoding '{encoding}' where {} was expected",
+            wire.encoding()
         ));
     }
     Ok(roles)

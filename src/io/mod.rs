@@ -1,4 +1,5 @@
-//! Reading and writing files, and nothing else: recordings (MCAP, CARMEN) as
+//! Reading and writing files, and nothing else: recordings (MCAP, rosbag2
+//! SQLite and folders, ROS 1 bags, CARMEN) as
 //! a stream of samples ([`source`]), trajectories, CSV outputs. The format of
 //! an input is decided in [`format::sniff`]. Every write goes through
 //! [`atomic`].
@@ -7,8 +8,9 @@
 //! How the readers turn stamps into the times of a [`Recording`] (seconds as
 //! `f64`), and what the later stages do with what they get:
 //! - **Source.** A bag message's time is its `header.stamp`; a stamp of
-//!   exactly zero means "unset" and the message's MCAP log time is used
-//!   instead. A CARMEN record's time is its `ipc_timestamp`.
+//!   exactly zero means "unset" and the message's receive time is used
+//!   instead (MCAP log time, ROS 1 record `time`, rosbag2 SQLite
+//!   `timestamp`). A CARMEN record's time is its `ipc_timestamp`.
 //! - **Invalid stamps** are errors naming the message (bag) or line (CARMEN):
 //!   a negative time, or nanoseconds ≥ 10⁹.
 //! - **Going backwards.** Each stream (scans, joint states, IMU, odometry,
@@ -35,6 +37,7 @@
 //!   from 0 while its log times are wall-clock fails with the error above.
 
 pub mod atomic;
+mod bag_stream;
 pub mod carmen;
 pub mod cdr;
 pub mod censi;
@@ -53,8 +56,12 @@ pub mod mcap_write;
 mod options;
 pub mod out_lock;
 pub mod relations;
+pub mod ros1_bag;
+mod ros1_records;
 pub mod ros_msgs;
 pub mod ros_schema;
+pub mod rosbag2_db3;
+pub mod rosbag2_dir;
 pub mod seed_tables;
 pub mod source;
 pub mod stream_out;
@@ -74,12 +81,16 @@ use crate::error::InputError;
 use crate::recording::Recording;
 use std::path::Path;
 
-/// Reads a whole recording by its sniffed format ([`sniff`]): a ROS 2 bag,
-/// or a text file read as a CARMEN log; the result's streams are sorted by
-/// stamp. Censi et al.'s tuples are not a recording and are refused.
+/// Reads a whole recording by its sniffed format ([`sniff`]): a ROS 2 bag
+/// (MCAP, rosbag2 SQLite or folder), a ROS 1 bag, or a text file read as a
+/// CARMEN log; the result's streams are sorted by stamp. Censi et al.'s
+/// tuples are not a recording and are refused.
 pub fn read_recording(path: &Path, opts: &ReadOptions) -> Result<Recording, InputError> {
     match sniff(path)? {
         Format::Mcap => read_mcap(path, opts),
+        Format::Ros1Bag | Format::Rosbag2Sqlite | Format::Rosbag2Dir => {
+            collect(&mut *open(path, opts)?)
+        }
         Format::Text => read_carmen(path, opts),
         Format::CensiTuples => Err(InputError::new(
             path.display().to_string(),
@@ -89,14 +100,18 @@ pub fn read_recording(path: &Path, opts: &ReadOptions) -> Result<Recording, Inpu
     }
 }
 
-/// Opens a recording file as a sample source, by its sniffed format: ROS 2
-/// bags stream from disk, CARMEN logs are read whole and then streamed.
+/// Opens a recording file (or rosbag2 folder) as a sample source, by its
+/// sniffed format: bags stream from disk, CARMEN logs are read whole and
+/// then streamed.
 pub fn open<'o>(
     path: &Path,
     opts: &'o ReadOptions,
 ) -> Result<Box<dyn SampleSource + 'o>, InputError> {
     match sniff(path)? {
         Format::Mcap => Ok(Box::new(McapStream::open(path, opts)?)),
+        Format::Ros1Bag => ros1_bag::open(path, opts),
+        Format::Rosbag2Sqlite => rosbag2_db3::open(path, opts),
+        Format::Rosbag2Dir => rosbag2_dir::open(path, opts),
         Format::Text | Format::CensiTuples => Ok(Box::new(RecordingSource::owned(read_recording(
             path, opts,
         )?))),

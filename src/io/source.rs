@@ -1,7 +1,8 @@
 //! Every recording format as one stream of samples: a [`SampleSource`] yields
 //! each stream (scans, wheels, gyro, odometry, reference) in stamp order,
 //! after saying how many samples each stream has and where the laser sits.
-//! ROS 2 bags stream from disk in bounded memory ([`super::McapStream`]);
+//! Bags (MCAP, ROS 1, rosbag2 SQLite and folders) stream from disk in bounded
+//! memory ([`super::McapStream`] and the readers beside it);
 //! a recording already in memory, or a format read whole, is streamed by
 //! [`RecordingSource`]. The stages downstream see only the source, so every
 //! format gets the same streaming pipeline.

@@ -25,7 +25,7 @@ pub fn load_trajectory(
         return Ok(with_flag(io::kitti::read_kitti(path, t)?));
     }
     let file = path.display().to_string();
-    if io::sniff(path)? != io::Format::Mcap {
+    if !io::sniff(path)?.is_bag() {
         return Ok(with_flag(io::tum::read_tum(path)?));
     }
     let rec = io::read_recording(path, read)?;

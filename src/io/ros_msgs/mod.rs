@@ -28,6 +28,15 @@ pub trait RosMsg: Sized {
         Ok(m)
     }
 
+    /// Decodes a whole ROS 1 message (the same fields, ROS 1 serialisation,
+    /// see [`CdrReader::ros1`]); trailing bytes are an error.
+    fn decode_ros1(data: &[u8]) -> Result<Self, CdrError> {
+        let mut r = CdrReader::ros1(data);
+        let m = Self::read(&mut r)?;
+        r.finish()?;
+        Ok(m)
+    }
+
     /// Encodes a whole message (little endian).
     fn encode(&self) -> Vec<u8> {
         let mut w = CdrWriter::new();
@@ -148,7 +157,22 @@ pub struct Header {
 }
 
 impl Field for Header {
-    fields_in_order!(stamp, frame_id);
+    /// ROS 1's Header starts with a `uint32 seq`, which ROS 2 dropped; it is
+    /// read and not kept.
+    fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
+        if r.is_ros1() {
+            r.u32()?;
+        }
+        Ok(Self {
+            stamp: Field::read(r)?,
+            frame_id: Field::read(r)?,
+        })
+    }
+
+    fn write(&self, w: &mut CdrWriter) {
+        self.stamp.write(w);
+        self.frame_id.write(w);
+    }
 }
 
 /// `geometry_msgs/Vector3` and `geometry_msgs/Point` (same layout).

@@ -1,0 +1,171 @@
+//! Reads a rosbag2 SQLite file (`.db3`, what `ros2 bag record` wrote before
+//! MCAP became the default): table `topics(id, name, type,
+//! serialization_format, ...)` and table `messages(id, topic_id, timestamp,
+//! data)` with CDR payloads and receive times in ns. Messages come in
+//! timestamp order (ties by row id) from one query that a worker thread
+//! steps through, handing rows over a small bounded channel, so memory
+//! stays bounded whatever the file's size. Errors name the file, the topic
+//! and the row id.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::mpsc::{sync_channel, Receiver};
+
+use rusqlite::{Connection, OpenFlags};
+
+use super::bag_stream::{At, Raw, RawMessages};
+use super::mcap_streams::{roles_for, Role, Wire};
+use super::options::ReadOptions;
+use super::source::SampleSource;
+use crate::error::InputError;
+
+/// The first 16 bytes of every SQLite 3 database.
+pub const MAGIC: &[u8] = b"SQLite format 3\0";
+
+/// A row of `messages`: id, topic id, timestamp (ns), data.
+type Row = (i64, i64, i64, Vec<u8>);
+
+/// Rows handed over by the worker before it waits for the reader.
+const CHANNEL_ROWS: usize = 64;
+
+/// The raw messages of a rosbag2 SQLite file, in timestamp order.
+pub(crate) struct Db3Messages {
+    name: String,
+    /// topic id → (topic, roles).
+    topics: HashMap<i64, (String, Vec<Role>)>,
+    rows: Receiver<Result<Row, String>>,
+}
+
+fn open_db(path: &Path, name: &str) -> Result<Connection, InputError> {
+    Connection::open_with_flags(
+        path,
+        OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
+    )
+    .map_err(|e| InputError::new(name, format!("cannot open as SQLite: {e}")))
+}
+
+impl Db3Messages {
+    /// Opens `path`: reads the topics and starts the ordered query.
+    pub(crate) fn open(path: &Path, opts: &ReadOptions) -> Result<Self, InputError> {
+        let name = path.display().to_string();
+        let db = open_db(path, &name)?;
+        let topics = read_topics(&db, &name, opts)?;
+        let wanted: Vec<String> = topics
+            .iter()
+            .filter(|(_, (_, roles))| !roles.is_empty())
+            .map(|(id, _)| id.to_string())
+            .collect();
+        let (tx, rows) = sync_channel(CHANNEL_ROWS);
+        let sql = format!(
+            "SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id IN ({}) \
+             ORDER BY timestamp, id",
+            wanted.join(",")
+        );
+        std::thread::spawn(move || {
+            let run = || -> rusqlite::Result<()> {
+                let mut stmt = db.prepare(&sql)?;
+                let mut it = stmt.query([])?;
+                while let Some(r) = it.next()? {
+                    let row = (r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?);
+                    if tx.send(Ok(row)).is_err() {
+                        return Ok(());
+                    }
+                }
+                Ok(())
+            };
+            if let Err(e) = run() {
+                let _ = tx.send(Err(e.to_string()));
+            }
+        });
+        Ok(Self { name, topics, rows })
+    }
+}
+
+/// The roles of each topic of the `topics` table.
+fn read_topics(
+    db: &Connection,
+    name: &str,
+    opts: &ReadOptions,
+) -> Result<HashMap<i64, (String, Vec<Role>)>, InputError> {
+    let err = |m: String| InputError::new(name, m);
+    let tables: Vec<String> = db
+        .prepare("SELECT name FROM sqlite_master WHERE type = 'table'")
+        .and_then(|mut s| s.query_map([], |r| r.get(0))?.collect())
+        .map_err(|e| err(format!("not a readable SQLite database: {e}")))?;
+    for t in ["topics", "messages"] {
+        if !tables.iter().any(|n| n == t) {
+            return Err(err(format!(
+                "not a rosbag2 database: it has no table '{t}' (tables: {tables:?})"
+            )));
+        }
+    }
+    let rows: Vec<(i64, String, String, String)> = db
+        .prepare("SELECT id, name, type, serialization_format FROM topics")
+        .and_then(|mut s| {
+            s.query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?)))?
+                .collect()
+        })
+        .map_err(|e| {
+            err(format!("table 'topics' does not read as rosbag2's: {e}")).topic("topics")
+        })?;
+    let mut topics = HashMap::new();
+    for (id, topic, ty, format) in rows {
+        let roles = roles_for(&topic, &ty, &format, Wire::Cdr, opts)
+            .map_err(|m| InputError::new(name, m).topic(&topic))?;
+        topics.insert(id, (topic, roles));
+    }
+    Ok(topics)
+}
+
+impl RawMessages for Db3Messages {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn wire(&self) -> Wire {
+        Wire::Cdr
+    }
+
+    fn next_raw(&mut self) -> Result<Option<Raw>, super::bag_stream::Fail> {
+        let (id, topic_id, stamp, data) = match self.rows.recv() {
+            Err(_) => return Ok(None),
+            Ok(Err(m)) => {
+                return Err(
+                    InputError::new(&self.name, format!("table 'messages': {m}"))
+                        .topic("messages")
+                        .into(),
+                )
+            }
+            Ok(Ok(row)) => row,
+        };
+        let Some((topic, roles)) = self.topics.get(&topic_id) else {
+            return Err(InputError::new(
+                &self.name,
+                format!("message of topic id {topic_id}, which table 'topics' does not list"),
+            )
+            .at(At::Row(id).to_string())
+            .into());
+        };
+        let log_time = u64::try_from(stamp).map_err(|_| {
+            InputError::new(&self.name, format!("negative timestamp {stamp} ns"))
+                .topic(topic.as_str())
+                .at(At::Row(id).to_string())
+        })?;
+        Ok(Some(Raw {
+            roles: roles.clone(),
+            topic: topic.clone(),
+            at: At::Row(id),
+            data,
+            log_time,
+        }))
+    }
+}
+
+/// Opens a rosbag2 SQLite file as a sample source: runs the first pass
+/// (counts, laser mount), then streams.
+pub fn open<'o>(
+    path: &Path,
+    opts: &'o ReadOptions,
+) -> Result<Box<dyn SampleSource + 'o>, InputError> {
+    super::bag_stream::open_with(path, opts, || Db3Messages::open(path, opts))
+}
