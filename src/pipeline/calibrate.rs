@@ -160,8 +160,14 @@ pub fn run(
     job: &CalibrateJob,
     watch: &mut dyn RunObserver,
 ) -> Result<CalibrateOutcome, PipelineError> {
+    if job.choice.method == Some(calib::Method::Batch) {
+        return super::batch::run(job, watch);
+    }
     check_job_outputs(job)?;
     let (mut cfg, nominal) = job.common.load_nominal()?;
+    if cfg.calib.method == calib::Method::Batch && job.choice.method.is_none() {
+        return super::batch::run(job, watch);
+    }
     let robot = &nominal.robot;
     job.choice.apply(&mut cfg.calib);
     let params = params_for_robot(&cfg.calib, robot);

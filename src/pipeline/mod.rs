@@ -2,6 +2,7 @@
 //! through the one driver ([`drive`]), write outputs atomically, and return
 //! summaries the binary prints. Each command is `pipeline::<command>::run`.
 
+pub mod batch;
 pub mod calibrate;
 mod config;
 pub mod demo;
