@@ -171,3 +171,74 @@ fn adaptive_pf_matches_the_authors_on_lmov_within_one_percent() {
     // Configuration C: laser 39 mm off the axis, turned by −107°.
     within_one_percent_of_the_authors("lmov");
 }
+
+/// The batch calibration of `set` without the laser pose: the estimate and
+/// the authors' numbers, each row printed.
+fn batch_on(set: &str) -> Option<(odocal::calib::batch::BatchEstimate, censi::CensiResults)> {
+    use odocal::calib::{batch, CheckParams};
+    let dir = shared_data("calib_censi_batch")?.join("censi-calibration");
+    let tuples = censi::read(&dir.join(format!("{set}.tuple"))).unwrap();
+    let authors = censi::read_results(&dir.join(format!("{set}_results.json"))).unwrap();
+    let problem = odocal::pipeline::batch::tuples_problem(&tuples);
+    let nominal = DiffDrive {
+        r_right: 0.021,
+        r_left: 0.021,
+        wheel_base: 0.09,
+    };
+    let e = batch::estimate(
+        &problem,
+        &nominal,
+        &batch::BatchParams::default(),
+        &CheckParams::default(),
+    )
+    .unwrap();
+    eprintln!(
+        "{set}: r_R {:.6}±{:.1e} (authors {:.6}, {:+.3} %), r_L {:.6}±{:.1e} (authors {:.6}, {:+.3} %), \
+         b {:.6}±{:.1e} (authors {:.6}, {:+.3} %), laser x {:.5}±{:.1e} y {:.5}±{:.1e} yaw {:.5}±{:.1e} \
+         (authors {:.5} {:.5} {:.5}); closed form {:?}; dropped {} of {}; σ {:?}",
+        e.r_right.value, e.r_right.std, authors.r_diam / 2.0, 100.0 * (e.r_right.value / (authors.r_diam / 2.0) - 1.0),
+        e.r_left.value, e.r_left.std, authors.l_diam / 2.0, 100.0 * (e.r_left.value / (authors.l_diam / 2.0) - 1.0),
+        e.wheel_base.value, e.wheel_base.std, authors.axle, 100.0 * (e.wheel_base.value / authors.axle - 1.0),
+        e.laser.x.value, e.laser.x.std, e.laser.y.value, e.laser.y.std, e.laser.yaw.value, e.laser.yaw.std,
+        authors.l_x, authors.l_y, authors.l_theta, e.closed_form, e.dropped, tuples.len(), e.noise_sigma
+    );
+    Some((e, authors))
+}
+
+/// Radii and axle within 0.5 % of the authors', laser position within 3 mm
+/// and yaw within 0.5°, without being given the laser pose.
+fn batch_matches_the_authors(set: &str) {
+    let Some((e, a)) = batch_on(set) else {
+        return;
+    };
+    for (name, got, want) in [
+        ("r_right", e.r_right.value, a.r_diam / 2.0),
+        ("r_left", e.r_left.value, a.l_diam / 2.0),
+        ("wheel_base", e.wheel_base.value, a.axle),
+    ] {
+        assert!(rel(got, want) < 0.005, "{set} {name}: {got} vs {want}");
+    }
+    assert!((e.laser.x.value - a.l_x).abs() < 3e-3, "{set} laser x");
+    assert!((e.laser.y.value - a.l_y).abs() < 3e-3, "{set} laser y");
+    let dyaw = odocal::geom::wrap_angle(e.laser.yaw.value - a.l_theta);
+    assert!(
+        dyaw.abs() < 0.5f64.to_radians(),
+        "{set} laser yaw {dyaw} rad off"
+    );
+    assert!(e.time_offset.is_none(), "tuples carry no time");
+}
+
+#[test]
+fn batch_matches_the_authors_on_lstraight() {
+    batch_matches_the_authors("lstraight");
+}
+
+#[test]
+fn batch_matches_the_authors_on_l90() {
+    batch_matches_the_authors("l90");
+}
+
+#[test]
+fn batch_matches_the_authors_on_lmov() {
+    batch_matches_the_authors("lmov");
+}

@@ -1,6 +1,7 @@
 //! Integration tests, compiled as one binary.
 
 mod architecture;
+mod calib_batch;
 mod calib_censi;
 mod calib_checks;
 mod calib_end_to_end;

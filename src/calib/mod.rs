@@ -6,6 +6,7 @@
 
 mod adaptive;
 mod akf;
+pub mod batch;
 mod change;
 mod dkf;
 mod evidence;
@@ -176,5 +177,10 @@ pub fn build(
         Method::Dkf => Box::new(DualKf::new(params)),
         Method::Akf => Box::new(AugmentedKf::new(params)),
         Method::None => Box::new(Nominal::new(nominal)),
+        Method::Batch => {
+            return Err(CalibError::Config(
+                "method batch is not an online filter: use calib::batch::estimate".into(),
+            ))
+        }
     })
 }

@@ -25,6 +25,9 @@ pub enum Method {
     Akf,
     /// No calibration: the nominal parameters.
     None,
+    /// Joint maximum-likelihood batch estimate of the kinematics, the laser
+    /// mounting and the time offset ([`super::batch`]); not an online filter.
+    Batch,
 }
 
 impl Method {
@@ -45,6 +48,7 @@ impl Method {
             Self::Dkf => "dkf",
             Self::Akf => "akf",
             Self::None => "none",
+            Self::Batch => "batch",
         }
     }
 }
@@ -54,8 +58,9 @@ impl std::str::FromStr for Method {
     fn from_str(s: &str) -> Result<Self, String> {
         Self::ALL
             .into_iter()
+            .chain([Method::Batch])
             .find(|x| x.as_str() == s)
-            .ok_or_else(|| format!("unknown method {s:?} (adaptive-pf|pf|dkf|akf|none)"))
+            .ok_or_else(|| format!("unknown method {s:?} (adaptive-pf|pf|dkf|akf|none|batch)"))
     }
 }
 
@@ -199,6 +204,8 @@ pub struct CalibParams {
     pub max_weight_factor: f64,
     /// Observability and plausibility checks before a result is reported.
     pub checks: super::sanity::CheckParams,
+    /// The batch calibration's settings (`--method batch`).
+    pub batch: super::batch::BatchParams,
 }
 
 impl Default for CalibParams {
@@ -216,6 +223,7 @@ impl Default for CalibParams {
             neff_ratio: 0.5,
             max_weight_factor: 2.0,
             checks: Default::default(),
+            batch: Default::default(),
         }
     }
 }

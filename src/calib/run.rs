@@ -42,6 +42,11 @@ pub struct CalibSummary {
     /// command that ran, which refuses what it cannot).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub observability: Option<super::Observability>,
+    /// The batch calibration's estimate (`--method batch`): each unknown with
+    /// its std, the laser mounting, the time offset and the correlations, as
+    /// top-level keys.
+    #[serde(flatten)]
+    pub batch: Option<super::batch::BatchEstimate>,
 }
 
 /// Result of [`run`].
@@ -100,6 +105,7 @@ impl CalibSummary {
             },
             assumptions: Assumptions::default(),
             observability: None,
+            batch: None,
             multipliers: Multipliers {
                 left_wheel_radius: ratio(final_params.r_left, nominal.r_left),
                 right_wheel_radius: ratio(final_params.r_right, nominal.r_right),

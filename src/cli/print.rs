@@ -94,6 +94,9 @@ pub fn trajectory_metrics(t: &odocal::eval::TrajectoryMetrics) {
 
 pub fn calibration(s: &CalibSummary, out: &Path) {
     assumptions(&s.assumptions);
+    if let Some(b) = &s.batch {
+        return batch(s, b, out);
+    }
     if let Some(o) = &s.observability {
         observability(o);
     }
@@ -115,6 +118,52 @@ pub fn calibration(s: &CalibSummary, out: &Path) {
         s.multipliers.left_wheel_radius,
         s.multipliers.wheel_separation,
         out.display()
+    );
+}
+
+/// The batch estimate: every unknown with its std and observability.
+fn batch(s: &CalibSummary, b: &odocal::calib::batch::BatchEstimate, out: &Path) {
+    let obs = s.observability.as_ref();
+    let line = |name: &str, v: odocal::calib::batch::Valued, unit: &str| {
+        let note = obs
+            .and_then(|o| o.parameters.get(name))
+            .map(|p| match (p.weak, p.missing.as_deref()) {
+                (true, Some(m)) => format!(" (weakly observable: {m})"),
+                _ => " (observable)".to_string(),
+            })
+            .unwrap_or_default();
+        out!("{name:<12} {:>12.6} ± {:.6} {unit}{note}", v.value, v.std);
+    };
+    if let Some(o) = obs {
+        let e = &o.excitation;
+        eprintln!(
+            "excitation: {} intervals, {:.2} m driven ({:.2} m straight), turns {:.2} rad left / {:.2} rad right",
+            e.steps, e.distance_m, e.straight_m, e.turn_left_rad, e.turn_right_rad
+        );
+    }
+    out!(
+        "batch: {} intervals ({} dropped as outliers), χ² {:.1} for {} degrees of freedom",
+        b.intervals,
+        b.dropped,
+        b.chi2,
+        b.dof
+    );
+    line("r_right", b.r_right, "m");
+    line("r_left", b.r_left, "m");
+    line("wheel_base", b.wheel_base, "m");
+    line("laser_x", b.laser.x, "m");
+    line("laser_y", b.laser.y, "m");
+    line("laser_yaw", b.laser.yaw, "rad");
+    match b.time_offset {
+        Some(t) => line("time_offset", t, "s"),
+        None => out!("time_offset  not estimated (the input carries no wheel time)"),
+    }
+    eprintln!(
+        "diff_drive_controller multipliers: right_wheel_radius {:.5}, left_wheel_radius {:.5}, wheel_separation {:.5}; summary in {}",
+        s.multipliers.right_wheel_radius,
+        s.multipliers.left_wheel_radius,
+        s.multipliers.wheel_separation,
+        out.join("summary.json").display()
     );
 }
 

@@ -94,8 +94,9 @@ pub fn read_recording(path: &Path, opts: &ReadOptions) -> Result<Recording, Inpu
         Format::Text => read_carmen(path, opts),
         Format::CensiTuples => Err(InputError::new(
             path.display().to_string(),
-            "Censi et al.'s calibration tuples hold no scans or wheel encoder samples: \
-             only `odocal diagnose --measured` reads them",
+            "Censi et al.'s calibration tuples hold no scans or wheel encoder samples, and \
+             no laser mounting ([laser]) for the online filters: `odocal calibrate --method \
+             batch` (which estimates the mounting) and `odocal diagnose --measured` read them",
         )),
     }
 }

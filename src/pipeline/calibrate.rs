@@ -3,13 +3,14 @@
 //! A bag, another recording format, a recording in memory and CSV inputs all
 //! go through the one driver ([`super::drive`]).
 
+pub use super::calibrate_job::{CalibSource, CalibrateJob, CalibrateOutcome, CalibratorChoice};
 use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
 use super::outputs::{check_outputs, lock_outputs, CalibFiles, Collect};
 use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
-use super::{Common, PipelineError};
+use super::PipelineError;
 use crate::calib::{self, CalibParams, CalibSummary, CalibrationRun, Ranges};
 use crate::error::InputError;
 use crate::io::out_lock::OutputLock;
@@ -77,83 +78,6 @@ pub fn from_streams_observed(
     Ok(collect.calibration(done.summary, done.weight_resets))
 }
 
-/// Which calibrator `odocal calibrate` runs and how (each `None` keeps the
-/// configuration file's value).
-#[derive(Debug, Clone, Default)]
-pub struct CalibratorChoice {
-    /// The method.
-    pub method: Option<calib::Method>,
-    /// The resampling scheme.
-    pub resampler: Option<calib::Scheme>,
-    /// When to resample.
-    pub trigger: Option<calib::Trigger>,
-    /// The initial particle count.
-    pub particles: Option<usize>,
-    /// The seed of every random draw.
-    pub seed: Option<u64>,
-}
-
-impl CalibratorChoice {
-    /// `params` with the choices made here.
-    pub fn apply(&self, params: &mut CalibParams) {
-        if let Some(m) = self.method {
-            params.method = m;
-        }
-        if let Some(r) = self.resampler {
-            params.resampler = r;
-        }
-        if let Some(t) = self.trigger {
-            params.trigger = t;
-        }
-        if let Some(n) = self.particles {
-            params.particles = Some(n);
-        }
-        if let Some(s) = self.seed {
-            params.seed = s;
-        }
-    }
-}
-
-/// What `odocal calibrate` reads: a recording (ICP runs inside), or ICP
-/// motions and wheel angles or rates from CSV files.
-#[derive(Debug, Clone)]
-pub enum CalibSource {
-    /// A recording (any format [`crate::io::sniff`] knows).
-    Recording(PathBuf),
-    /// Motions CSV (as `odocal icp --motions` writes) and wheels CSV.
-    Csv {
-        /// The motions.
-        motions: PathBuf,
-        /// Wheel angles `t,left,right` or rates `t0,t1,omega_right,omega_left`.
-        wheels: PathBuf,
-    },
-}
-
-/// What `odocal calibrate` is asked to do.
-#[derive(Debug, Clone)]
-pub struct CalibrateJob {
-    /// The input.
-    pub input: CalibSource,
-    /// The output directory.
-    pub out: PathBuf,
-    /// Overrides of the configured calibrator.
-    pub choice: CalibratorChoice,
-    /// Where to show the run in the Rerun viewer, if anywhere.
-    pub viewer: Option<Viewer>,
-    /// Configuration and robot files.
-    pub common: Common,
-}
-
-/// What `odocal calibrate` gives: the summary, and notes on what the Rerun
-/// recording left out.
-#[derive(Debug, Clone)]
-pub struct CalibrateOutcome {
-    /// design.md's summary (also in `DIR/summary.json`).
-    pub summary: CalibSummary,
-    /// What the recording left out, for the user (empty when nothing).
-    pub notes: Vec<String>,
-}
-
 /// Runs `odocal calibrate`: ICP (for a recording) and the calibrator, the
 /// history, trajectory and summary written into the output directory
 /// atomically, the run recorded for Rerun when asked; `watch` sees the run.
@@ -161,10 +85,13 @@ pub fn run(
     job: &CalibrateJob,
     watch: &mut dyn RunObserver,
 ) -> Result<CalibrateOutcome, PipelineError> {
-    let _lock = check_job_outputs(job)?;
     let (mut cfg, nominal) = job.common.load_nominal()?;
-    let robot = &nominal.robot;
     job.choice.apply(&mut cfg.calib);
+    if cfg.calib.method == calib::Method::Batch {
+        return super::batch::run(job, watch);
+    }
+    let _lock = check_job_outputs(job)?;
+    let robot = &nominal.robot;
     let params = params_for_robot(&cfg.calib, robot);
     let mut logger = open_logger(job.viewer.as_ref())?;
     let mut recorder = logger.as_deref_mut().map(|l| {

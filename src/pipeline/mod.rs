@@ -2,7 +2,9 @@
 //! through the one driver ([`drive`]), write outputs atomically, and return
 //! summaries the binary prints. Each command is `pipeline::<command>::run`.
 
+pub mod batch;
 pub mod calibrate;
+mod calibrate_job;
 mod config;
 pub mod demo;
 pub mod diagnose;

@@ -1,0 +1,137 @@
+//! Censi et al.'s closed-form initialisation (T-RO 2013, Sec. IV): first
+//! J21 = −r_L/b and J22 = r_R/b by linear least squares on the rotation
+//! (Eq. 12), then the wheel base and the laser mounting from the
+//! translation equation (Eq. 14–17), homogeneous in
+//! x = (ℓx, ℓy, b, cos ℓθ, sin ℓθ) under cos² + sin² = 1.
+
+use super::model::{robot_motion, Unknowns};
+use super::BatchError;
+use nalgebra::{Matrix2, Matrix3, Matrix5, SMatrix, Vector2};
+
+/// The rotation's least-squares condition number above which the wheels
+/// never moved in two independent ways (Censi's solver refuses above 75 on
+/// unweighted tuples; weights and units change the scale, so this is looser).
+const MAX_ROTATION_CONDITION: f64 = 1e4;
+
+/// One interval as the closed form sees it: the total wheel increments and
+/// all sub-steps, the laser displacement and the weights of its rotation and
+/// translation rows (inverse variances).
+pub struct Row<'a> {
+    /// Sub-step increments `(Δφ_L, Δφ_R)` (rad).
+    pub inc: &'a [[f64; 2]],
+    /// Laser displacement `[x, y, θ]` (m, m, rad).
+    pub s: [f64; 3],
+    /// Weight of the rotation row (1/rad²).
+    pub w_rot: f64,
+    /// Weight of the translation rows (1/m²).
+    pub w_tr: f64,
+}
+
+/// J21, J22 from θ_k = J21 Δφ_L,k + J22 Δφ_R,k (Eq. 12). A rank-deficient
+/// system names the motion that is missing.
+pub fn rotation_jacobian(rows: &[Row]) -> Result<(f64, f64), BatchError> {
+    let mut a = Matrix2::zeros();
+    let mut g = Vector2::zeros();
+    for r in rows {
+        let l = r
+            .inc
+            .iter()
+            .fold([0.0; 2], |s, d| [s[0] + d[0], s[1] + d[1]]);
+        let l = Vector2::new(l[0], l[1]);
+        a += r.w_rot * l * l.transpose();
+        g += r.w_rot * r.s[2] * l;
+    }
+    let eig = a.symmetric_eigen();
+    let (lo, hi) = if eig.eigenvalues[0] < eig.eigenvalues[1] {
+        (0, 1)
+    } else {
+        (1, 0)
+    };
+    if !(eig.eigenvalues[lo] * MAX_ROTATION_CONDITION > eig.eigenvalues[hi]) {
+        let n = eig.eigenvectors.column(lo);
+        // The null direction (1, −1) is "left minus right never varies".
+        let turning_missing = n[0] * n[1] < 0.0;
+        return Err(BatchError::Unobservable(if turning_missing {
+            "the wheels never turned the robot (left and right always turned alike): \
+             record turns both ways"
+                .into()
+        } else {
+            "the robot only turned in place (the wheels always turned opposite ways): \
+             record straight or curved driving"
+                .into()
+        }));
+    }
+    let j = a
+        .try_inverse()
+        .ok_or_else(|| BatchError::Unobservable("the wheel increments are all zero".into()))?
+        * g;
+    Ok((j[0], j[1]))
+}
+
+/// The full closed-form estimate (time offset 0): J from the rotation, then
+/// min xᵀMx subject to x₄² + x₅² = 1 by the Schur complement of M onto the
+/// (cos, sin) block and its smallest eigenvector (equivalent to Censi's
+/// Lagrange multiplier, Eq. 17), the sign chosen for b > 0.
+pub fn closed_form(rows: &[Row]) -> Result<Unknowns, BatchError> {
+    let (j21, j22) = rotation_jacobian(rows)?;
+    // With r_R = J22·b and r_L = −J21·b the robot's translation is b·c_k.
+    let unit = Unknowns {
+        r_right: j22,
+        r_left: -j21,
+        wheel_base: 1.0,
+        laser: [0.0; 3],
+        time_offset: 0.0,
+    };
+    let mut m = Matrix5::zeros();
+    for r in rows {
+        let o = robot_motion(r.inc, &unit);
+        let (s, c) = o[2].sin_cos();
+        let (sx, sy) = (r.s[0], r.s[1]);
+        // (I − R(o_θ)) ℓ_t + R(ℓθ) s_t − b c = 0 (Eq. 14), rows in x.
+        let l = SMatrix::<f64, 2, 5>::new(
+            1.0 - c,
+            s,
+            -o[0],
+            sx,
+            -sy, //
+            -s,
+            1.0 - c,
+            -o[1],
+            sy,
+            sx,
+        );
+        m += r.w_tr * l.transpose() * l;
+    }
+    let a: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into();
+    let b: SMatrix<f64, 3, 2> = m.fixed_view::<3, 2>(0, 3).into();
+    let c: Matrix2<f64> = m.fixed_view::<2, 2>(3, 3).into();
+    let a_eig = a.symmetric_eigen();
+    let (amin, amax) = (a_eig.eigenvalues.min(), a_eig.eigenvalues.max());
+    if !(amin > 1e-12 * amax) {
+        return Err(BatchError::Unobservable(
+            "the robot never turned while the laser moved: the laser position needs turns".into(),
+        ));
+    }
+    let ainv = a.try_inverse().expect("checked positive definite");
+    let schur = c - b.transpose() * ainv * b;
+    let se = schur.symmetric_eigen();
+    let k = if se.eigenvalues[0] < se.eigenvalues[1] {
+        0
+    } else {
+        1
+    };
+    let mut v: Vector2<f64> = se.eigenvectors.column(k).into();
+    let mut u = -ainv * b * v;
+    if u[2] < 0.0 {
+        v = -v;
+        u = -u;
+    }
+    let wheel_base = u[2];
+    Ok(Unknowns {
+        r_right: j22 * wheel_base,
+        r_left: -j21 * wheel_base,
+        wheel_base,
+        laser: [u[0], u[1], v[1].atan2(v[0])],
+        time_offset: 0.0,
+    })
+}

@@ -1,0 +1,322 @@
+//! The batch estimate as reported: each unknown with its std from the
+//! inverse Fisher information (JᵀΣ⁻¹J)⁻¹ at the optimum (not rescaled by the
+//! reduced χ²: the Σ's are either the scan matcher's calibrated covariances
+//! or, without them, the residuals' own σ's, which sets χ²/dof ≈ 1), the
+//! correlation matrix, per-unknown observability with the motion that is
+//! missing, and the plausibility checks.
+
+use super::model::Unknowns;
+use super::solve::Fit;
+use super::{BatchError, BatchParams, NAMES};
+use crate::calib::{implausible, observability, CheckParams, Evidence, ParamObservability};
+use crate::robot::DiffDrive;
+use nalgebra::DMatrix;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// A value with its standard deviation (same unit).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Valued {
+    /// The estimate.
+    pub value: f64,
+    /// Its standard deviation.
+    pub std: f64,
+}
+
+/// The laser mounting `base_from_laser` with std's (m, m, rad).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LaserValued {
+    /// Forward offset (m).
+    pub x: Valued,
+    /// Left offset (m).
+    pub y: Valued,
+    /// Yaw (rad).
+    pub yaw: Valued,
+}
+
+/// The correlation matrix with its row/column names.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Correlation {
+    /// Unknown names, in row order.
+    pub names: Vec<String>,
+    /// Correlation coefficients.
+    pub matrix: Vec<Vec<f64>>,
+}
+
+/// The result of the batch calibration.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BatchEstimate {
+    /// Right wheel radius (m).
+    pub r_right: Valued,
+    /// Left wheel radius (m).
+    pub r_left: Valued,
+    /// Wheel base (m).
+    pub wheel_base: Valued,
+    /// Laser mounting.
+    pub laser: LaserValued,
+    /// Wheel stamps minus laser stamps of one instant (s); `None` when not
+    /// estimated (no wheel time, or switched off).
+    pub time_offset: Option<Valued>,
+    /// Correlations of the unknowns.
+    pub correlation: Correlation,
+    /// Per unknown: observable, weak, std and what motion is missing (in the
+    /// summary under `observability`).
+    #[serde(skip)]
+    pub observability: BTreeMap<String, ParamObservability>,
+    /// The closed-form start (Censi 2013, Sec. IV), `[r_R, r_L, b, ℓx, ℓy, ℓθ]`.
+    pub closed_form: [f64; 6],
+    /// Intervals in the final fit.
+    pub intervals: usize,
+    /// Intervals dropped as outliers.
+    pub dropped: usize,
+    /// χ² of the final fit and its degrees of freedom.
+    pub chi2: f64,
+    /// 3·intervals − unknowns.
+    pub dof: usize,
+    /// The σ's estimated from the residuals `[x m, y m, θ rad]`, when the
+    /// intervals carried no covariance.
+    pub noise_sigma: Option<[f64; 3]>,
+    /// The motion the intervals showed.
+    #[serde(skip)]
+    pub excitation: Evidence,
+    /// Covariance of the unknowns (in [`NAMES`] order).
+    #[serde(skip)]
+    pub covariance: DMatrix<f64>,
+}
+
+impl BatchEstimate {
+    /// The estimated kinematics.
+    pub fn drive(&self) -> DiffDrive {
+        DiffDrive {
+            r_right: self.r_right.value,
+            r_left: self.r_left.value,
+            wheel_base: self.wheel_base.value,
+        }
+    }
+
+    /// The std's of the kinematics (m).
+    pub fn drive_std(&self) -> DiffDrive {
+        DiffDrive {
+            r_right: self.r_right.std,
+            r_left: self.r_left.std,
+            wheel_base: self.wheel_base.std,
+        }
+    }
+
+    /// The estimate as unknowns (time offset 0 when not estimated).
+    pub fn unknowns(&self) -> Unknowns {
+        Unknowns {
+            r_right: self.r_right.value,
+            r_left: self.r_left.value,
+            wheel_base: self.wheel_base.value,
+            laser: [self.laser.x.value, self.laser.y.value, self.laser.yaw.value],
+            time_offset: self.time_offset.map_or(0.0, |v| v.value),
+        }
+    }
+}
+
+/// What [`build`] needs besides the fit.
+pub struct Context<'a> {
+    /// The nominal kinematics (scale and bounds).
+    pub nominal: &'a DiffDrive,
+    /// The batch settings.
+    pub params: &'a BatchParams,
+    /// The excitation and plausibility thresholds.
+    pub checks: &'a CheckParams,
+    /// The motion the intervals showed.
+    pub evidence: Evidence,
+    /// The closed-form start.
+    pub init: Unknowns,
+    /// Intervals kept and dropped.
+    pub kept: usize,
+    /// Intervals dropped as outliers.
+    pub dropped: usize,
+    /// σ's estimated from the residuals, if any.
+    pub noise: Option<[f64; 3]>,
+    /// The wheel stream's period (s), if timed.
+    pub period: Option<f64>,
+}
+
+/// The covariance from the Fisher information, normalised to unit diagonal
+/// first; `Err` names the unknowns spanning a (near) null direction.
+fn covariance(info: &DMatrix<f64>, singular: f64) -> Result<DMatrix<f64>, Vec<usize>> {
+    let n = info.nrows();
+    let d = DMatrix::from_diagonal(&info.diagonal().map(|x| 1.0 / x.max(1e-300).sqrt()));
+    let norm = &d * info * &d;
+    let eig = norm.clone().symmetric_eigen();
+    let (k, min) = eig
+        .eigenvalues
+        .iter()
+        .enumerate()
+        .fold(
+            (0, f64::INFINITY),
+            |a, (i, &v)| if v < a.1 { (i, v) } else { a },
+        );
+    if !(min > singular) || info.diagonal().iter().any(|x| !(*x > 0.0)) {
+        let v = eig.eigenvectors.column(k);
+        return Err((0..n)
+            .filter(|&i| v[i].abs() > 0.3 || !(info[(i, i)] > 0.0))
+            .collect());
+    }
+    let inv = norm
+        .try_inverse()
+        .ok_or_else(|| (0..n).collect::<Vec<_>>())?;
+    Ok(&d * inv * &d)
+}
+
+/// What motion each unknown needs (for the refusal and the weak flags).
+fn needs(name: &str) -> &'static str {
+    match name {
+        "r_right" | "r_left" => "straight driving and turns",
+        "wheel_base" => "turns both ways while driving",
+        "laser_x" | "laser_y" => "turns (in place or on curves) both ways",
+        "laser_yaw" => "translation: straight or curved driving",
+        _ => "changes of speed or of turn rate (accelerations) with the laser matching well",
+    }
+}
+
+/// The reported estimate, or the reason there is none.
+pub fn build(f: &Fit, c: Context) -> Result<BatchEstimate, BatchError> {
+    let n = f.p.len();
+    let cov = covariance(&f.info, c.params.singular).map_err(|idx| {
+        BatchError::Unobservable(
+            idx.iter()
+                .map(|&i| format!("{} needs {}", NAMES[i], needs(NAMES[i])))
+                .collect::<Vec<_>>()
+                .join("; "),
+        )
+    })?;
+    let std: Vec<f64> = (0..n).map(|i| cov[(i, i)].sqrt()).collect();
+    let u = Unknowns::from_slice(&f.p);
+    let obs = observe(&std, &c);
+    let missing: Vec<String> = obs
+        .iter()
+        .filter(|(_, o)| !o.observable)
+        .map(|(k, o)| format!("{k}: {}", o.missing.as_deref().unwrap_or("not excited")))
+        .collect();
+    if !missing.is_empty() {
+        return Err(BatchError::Unobservable(missing.join("; ")));
+    }
+    plausible(&u, &c)?;
+    let v = |i: usize| Valued {
+        value: f.p[i],
+        std: std[i],
+    };
+    Ok(BatchEstimate {
+        r_right: v(0),
+        r_left: v(1),
+        wheel_base: v(2),
+        laser: LaserValued {
+            x: v(3),
+            y: v(4),
+            yaw: v(5),
+        },
+        time_offset: (n == 7).then(|| v(6)),
+        correlation: Correlation {
+            names: NAMES[..n].iter().map(|s| s.to_string()).collect(),
+            matrix: (0..n)
+                .map(|i| (0..n).map(|j| cov[(i, j)] / (std[i] * std[j])).collect())
+                .collect(),
+        },
+        observability: obs,
+        closed_form: [
+            c.init.r_right,
+            c.init.r_left,
+            c.init.wheel_base,
+            c.init.laser[0],
+            c.init.laser[1],
+            c.init.laser[2],
+        ],
+        intervals: c.kept,
+        dropped: c.dropped,
+        chi2: f.chi2,
+        dof: (3 * c.kept).saturating_sub(n),
+        noise_sigma: c.noise,
+        excitation: c.evidence,
+        covariance: cov,
+    })
+}
+
+/// Per unknown: the online filters' excitation checks for the kinematics
+/// ([`observability`]), turns for the laser position, translation for its
+/// yaw; weak where the Fisher std exceeds the configured fraction.
+fn observe(std: &[f64], c: &Context) -> BTreeMap<String, ParamObservability> {
+    let sd = DiffDrive {
+        r_right: std[0],
+        r_left: std[1],
+        wheel_base: std[2],
+    };
+    let mut checks = *c.checks;
+    checks.weak_widening = 1.0;
+    let mut out = observability(&c.evidence, &sd, c.nominal, &checks).parameters;
+    let b0 = c.nominal.wheel_base;
+    let nom = [c.nominal.r_right, c.nominal.r_left, b0];
+    let ev = &c.evidence;
+    let rotation = ev.turn_left_rad + ev.turn_right_rad;
+    for (i, name) in NAMES.iter().enumerate().take(std.len()) {
+        let (limit, unexcited) = match i {
+            0..=2 => (c.params.weak_relative * nom[i], None),
+            3 | 4 => (
+                c.params.weak_laser_position * b0,
+                (rotation < c.checks.min_rotation_rad).then(|| {
+                    format!(
+                        "the robot turned {rotation:.2} rad in all; the laser position needs turns"
+                    )
+                }),
+            ),
+            5 => (
+                c.params.weak_laser_yaw,
+                (ev.distance_m < c.checks.min_distance_wheel_bases * b0).then(|| {
+                    format!(
+                        "the robot drove {:.2} m; the laser yaw needs translation",
+                        ev.distance_m
+                    )
+                }),
+            ),
+            _ => (0.5 * c.period.unwrap_or(f64::INFINITY), None),
+        };
+        let e = out.entry(name.to_string()).or_insert(ParamObservability {
+            observable: true,
+            weak: false,
+            std: std[i],
+            missing: None,
+        });
+        e.std = std[i];
+        if let Some(m) = unexcited {
+            e.observable = false;
+            e.missing = Some(m);
+        } else if e.observable && std[i] > limit && e.missing.is_none() {
+            e.weak = true;
+            e.missing = Some(format!(
+                "weak: std {:.3e} above {:.3e}; more {} would firm it",
+                std[i],
+                limit,
+                needs(name)
+            ));
+        }
+    }
+    out
+}
+
+/// Radii and wheel base within the multiplier bounds of the nominal robot,
+/// and a time offset under one wheel period.
+fn plausible(u: &Unknowns, c: &Context) -> Result<(), BatchError> {
+    let est = DiffDrive {
+        r_right: u.r_right,
+        r_left: u.r_left,
+        wheel_base: u.wheel_base,
+    };
+    if let Some(m) = implausible(&est, c.nominal, None, c.checks) {
+        return Err(BatchError::Implausible(m));
+    }
+    if let Some(p) = c.period {
+        if u.time_offset.abs() > p {
+            return Err(BatchError::Implausible(format!(
+                "time_offset came out {:.4} s, more than the wheel stream's period {p:.4} s: \
+                 the streams' clocks disagree by more than a sample; fix the stamps",
+                u.time_offset
+            )));
+        }
+    }
+    Ok(())
+}

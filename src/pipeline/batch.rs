@@ -1,0 +1,212 @@
+//! `odocal calibrate --method batch`: the joint maximum-likelihood estimate
+//! of the radii, the wheel base, the laser mounting and the time offset
+//! ([`crate::calib::batch`]) from Censi et al.'s tuples or from a recording
+//! (ICP motions moved into the laser frame and aggregated into intervals). The
+//! mounting is estimated, never taken from the robot file or the recording
+//! (those are only reported), so this path never needs a stated `[laser]`.
+
+use super::calibrate_job::{CalibSource, CalibrateJob, CalibrateOutcome};
+use super::Config;
+use super::{PipelineError, RunObserver};
+use crate::assumptions::{Assumptions, Origin};
+use crate::calib::batch::{
+    self, BatchEstimate, BatchParams, Interval, LaserMotion, Problem, WheelMotion, WheelTrack,
+};
+use crate::calib::{CalibSummary, Observability};
+use crate::error::InputError;
+use crate::geom::Pose2;
+use crate::io::censi::CensiTuple;
+use crate::motion::Motion;
+use crate::robot::RobotConfig;
+use crate::robot::{DiffDrive, LaserMount};
+use std::path::Path;
+
+/// The batch problem of Censi et al.'s tuples: one interval per tuple with
+/// one wheel sub-step `(T·phi_l, T·phi_r)` and no covariance (the σ's are
+/// estimated from the residuals, as the authors' solver does); no time.
+pub fn tuples_problem(tuples: &[CensiTuple]) -> Problem {
+    Problem {
+        intervals: tuples
+            .iter()
+            .map(|t| Interval {
+                s: t.sm,
+                cov: None,
+                duration: t.t,
+                wheels: WheelMotion::Steps(vec![[t.t * t.phi_l, t.t * t.phi_r]]),
+            })
+            .collect(),
+        track: None,
+    }
+}
+
+/// Runs `odocal calibrate --method batch`: reads the input by its format,
+/// estimates, writes `DIR/summary.json` atomically.
+pub fn run(
+    job: &CalibrateJob,
+    _watch: &mut dyn RunObserver,
+) -> Result<CalibrateOutcome, PipelineError> {
+    let CalibSource::Recording(path) = &job.input else {
+        return Err(PipelineError::BadArgument(
+            "--method batch reads a recording or Censi tuples (--input), not --motions/--wheels CSV"
+                .into(),
+        ));
+    };
+    let js = job.out.join("summary.json");
+    super::outputs::check_outputs(&[path], &[&js])?;
+    let _lock = super::outputs::lock_outputs(&[job.out.as_path()])?;
+    let (cfg, nominal) = job.common.load_nominal()?;
+    let robot = &nominal.robot;
+    let mut params = cfg.calib.clone();
+    job.choice.apply(&mut params);
+    let problem = if crate::io::sniff(path)? == crate::io::Format::CensiTuples {
+        tuples_problem(&crate::io::censi::read(path)?)
+    } else {
+        recording_problem(path, &cfg, robot, &params.batch)?
+    };
+    let est = batch::estimate(&problem, &robot.diff_drive(), &params.batch, &params.checks)
+        .map_err(|e| InputError::new(path.display().to_string(), e.to_string()))?;
+    let mut assumptions = nominal.assumptions();
+    state_laser(&mut assumptions, &est, robot.laser);
+    let summary = summary(
+        est,
+        robot.diff_drive(),
+        problem.intervals.len(),
+        assumptions,
+    );
+    write_summary(&job.out, &summary)?;
+    Ok(CalibrateOutcome {
+        summary,
+        notes: Vec::new(),
+    })
+}
+
+/// The estimated mounting under `laser`, with the stated one (if any) in
+/// the note.
+fn state_laser(a: &mut Assumptions, est: &BatchEstimate, stated: Option<LaserMount>) {
+    let l = &est.laser;
+    let note = match stated {
+        Some(s) => format!(
+            "batch estimate; the robot file states x {:.4} m, y {:.4} m, yaw {:.4} rad (not used)",
+            s.x, s.y, s.yaw
+        ),
+        None => "batch estimate".to_string(),
+    };
+    let mount = LaserMount {
+        x: l.x.value,
+        y: l.y.value,
+        yaw: l.yaw.value,
+    };
+    a.set("laser", mount, Origin::Estimated, Some(note));
+}
+
+/// design.md's calibrate summary with the batch keys added.
+fn summary(
+    est: BatchEstimate,
+    nominal: DiffDrive,
+    n: usize,
+    assumptions: Assumptions,
+) -> CalibSummary {
+    let mut s = CalibSummary::after("batch", None, nominal, n, 0.0);
+    s.final_params = est.drive();
+    s.std = est.drive_std();
+    let ratio = |a: f64, b: f64| a / b;
+    s.multipliers.right_wheel_radius = ratio(est.r_right.value, nominal.r_right);
+    s.multipliers.left_wheel_radius = ratio(est.r_left.value, nominal.r_left);
+    s.multipliers.wheel_separation = ratio(est.wheel_base.value, nominal.wheel_base);
+    s.assumptions = assumptions;
+    s.observability = Some(Observability {
+        parameters: est.observability.clone(),
+        excitation: est.excitation.clone(),
+    });
+    s.batch = Some(est);
+    s
+}
+
+fn write_summary(dir: &Path, s: &CalibSummary) -> Result<(), PipelineError> {
+    std::fs::create_dir_all(dir).map_err(|e| PipelineError::write(dir, e))?;
+    let js = dir.join("summary.json");
+    let text = serde_json::to_string_pretty(s).expect("summary serialises");
+    crate::io::atomic::write_bytes_atomic(&js, text.as_bytes())
+        .map_err(|e| PipelineError::write(&js, e))
+}
+
+/// The batch problem of a recording: ICP scan to scan with the mounting the
+/// recording or robot file states (else the identity, so the motions are
+/// the laser's own), each motion moved into the laser frame,
+/// `s = M⁻¹ ⊕ m ⊕ M`, composed into intervals, and the wheel angles as the
+/// track the time offset shifts.
+fn recording_problem(
+    path: &Path,
+    cfg: &Config,
+    robot: &RobotConfig,
+    p: &BatchParams,
+) -> Result<Problem, PipelineError> {
+    let rec = super::read_recording(path, cfg, robot)?;
+    if rec.wheels.len() < 2 {
+        return Err(InputError::new(
+            &rec.source,
+            format!(
+                "no wheel angles (JointState with the joints `{}` and `{}` of the robot file): \
+                 the batch calibration needs the wheel encoders",
+                robot.left_joint, robot.right_joint
+            ),
+        )
+        .into());
+    }
+    let robot_icp = match super::icp::mount(&rec, robot) {
+        Ok(_) => robot.clone(),
+        Err(_) => RobotConfig {
+            laser: Some(LaserMount {
+                x: 0.0,
+                y: 0.0,
+                yaw: 0.0,
+            }),
+            ..robot.clone()
+        },
+    };
+    let mount = super::icp::mount(&rec, &robot_icp)?.pose;
+    let icp = super::icp::match_recording(
+        &rec,
+        &robot_icp,
+        &super::diagnose::icp_for_diagnosis(&cfg.icp),
+    )?;
+    let motions: Vec<LaserMotion> = icp.motions.iter().map(|m| to_laser(m, &mount)).collect();
+    let intervals = batch::aggregate(&motions, p.interval_s, p.interval_rad, 1e-3);
+    let track = WheelTrack {
+        t: rec.wheels.iter().map(|w| w.stamp).collect(),
+        left: rec.wheels.iter().map(|w| w.left).collect(),
+        right: rec.wheels.iter().map(|w| w.right).collect(),
+    };
+    Ok(Problem {
+        intervals,
+        track: Some(track),
+    })
+}
+
+/// A base-frame ICP motion `m` (matched with mounting `M`) as the laser's
+/// own displacement `M⁻¹ ⊕ m ⊕ M`, its covariance carried by the Jacobian
+/// of that map (central differences; the map is the adjoint of `M⁻¹`).
+fn to_laser(m: &Motion, mount: &Pose2) -> LaserMotion {
+    let f = |x: [f64; 3]| {
+        let p = mount.inverse() * crate::geom::pose(x[0], x[1], x[2]) * mount;
+        [p.translation.x, p.translation.y, p.rotation.angle()]
+    };
+    let x0 = [m.dx, m.dy, m.dtheta];
+    let mut j = nalgebra::Matrix3::zeros();
+    for k in 0..3 {
+        let (mut a, mut b) = (x0, x0);
+        a[k] += 1e-6;
+        b[k] -= 1e-6;
+        let (fa, fb) = (f(a), f(b));
+        for r in 0..3 {
+            j[(r, k)] = (fa[r] - fb[r]) / 2e-6;
+        }
+    }
+    LaserMotion {
+        t0: m.t0,
+        t1: m.t1,
+        s: f(x0),
+        cov: j * m.cov * j.transpose(),
+        valid: m.failure.is_none(),
+    }
+}
