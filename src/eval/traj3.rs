@@ -67,7 +67,7 @@ impl Trajectory3 {
     /// True when the orientations carry no information: every rotation is
     /// exactly the identity while the path, taken in steps of at least
     /// 0.1 m, somewhere heads more than 0.5 rad away from +x — a tracker's
-    /// positions written with a placeholder quaternion. A robot driving
+    /// positions written with a stand-in quaternion. A robot driving
     /// straight along +x with identity orientation is not flagged (nor, by
     /// this test, one reversing straight along −x).
     pub fn orientation_undefined(&self) -> bool {

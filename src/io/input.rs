@@ -29,9 +29,6 @@ pub fn check_regular(path: &Path) -> Result<(), InputError> {
 
 /// What kind of file `meta` describes, in words.
 fn kind(meta: &std::fs::Metadata) -> &'static str {
-    if meta.is_dir() {
-        return "a directory";
-    }
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileTypeExt;
