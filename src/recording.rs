@@ -25,6 +25,66 @@ pub struct GyroSample {
     pub wz: f64,
 }
 
+/// What a recording's wheel messages carried before they became wheel
+/// angles: how the angles were obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WheelValues {
+    /// Joint positions (rad), used as they are.
+    Positions,
+    /// Joint velocities (rad/s), integrated by the trapezoidal rule.
+    Velocities,
+    /// A body twist (m/s, rad/s) turned into wheel rates with the nominal
+    /// robot, then integrated.
+    Twist,
+    /// Encoder tick counters, unwrapped and scaled by 2π / ticks per revolution.
+    Ticks,
+}
+
+/// Which stream a run's wheel samples came from, and what that stream
+/// cannot show (JSON `wheel_source`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct WheelSource {
+    /// `joint_states`, `odometry` or `ticks`.
+    pub kind: crate::robot::WheelSourceKind,
+    /// The topic read.
+    pub topic: String,
+    /// Its message type (`pkg/msg/Type`).
+    #[serde(rename = "type")]
+    pub type_name: String,
+    /// What the messages carried (`None`: no message was read).
+    pub values: Option<WheelValues>,
+    /// Wheel messages read.
+    pub messages: usize,
+    /// Where the choice came from: the robot file's `[wheels]`, or the default.
+    pub source: crate::assumptions::Origin,
+    /// What the user should know: how the values became wheel angles and
+    /// what this source cannot show.
+    pub notes: Vec<String>,
+}
+
+impl WheelSource {
+    /// One line for the human output, e.g. "wheels from /odom twist
+    /// (nav_msgs/msg/Odometry), robot file [wheels] source".
+    pub fn sentence(&self) -> String {
+        let what = match self.values {
+            Some(WheelValues::Positions) => "joint positions",
+            Some(WheelValues::Velocities) => "joint velocities",
+            Some(WheelValues::Twist) => "twist",
+            Some(WheelValues::Ticks) => "encoder ticks",
+            None => "(no message)",
+        };
+        let whence = match self.source {
+            crate::assumptions::Origin::RobotFile => "robot file [wheels] source",
+            _ => "default source (no [wheels] in the robot file)",
+        };
+        format!(
+            "wheels from {} {what} ({}), {whence}",
+            self.topic, self.type_name
+        )
+    }
+}
+
 /// A pose at a time; `has_heading` is false for position-only sources
 /// (PointStamped), whose heading is then 0 and meaningless.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,6 +119,8 @@ pub struct Recording {
     /// Why the recording states no mounting, when it could have (e.g. the
     /// scans' frame is not linked to `base_link`).
     pub mount_note: Option<String>,
+    /// How the wheel angles were obtained (`None`: no wheel samples).
+    pub wheel_values: Option<WheelValues>,
 }
 
 impl Recording {

@@ -569,7 +569,10 @@ fn calibrating_without_wheel_data_names_the_file() {
     let err = refused(&["calibrate", "--input", s(&log), "--out", s(&out)]);
     assert!(err.contains("scans-only.clf"), "{err}");
     assert!(err.contains("no wheel encoder data"), "{err}");
-    assert!(err.contains("left_joint"), "names the key to set: {err}");
+    assert!(
+        err.contains("CARMEN log has no wheel topic") && err.contains("diagnose"),
+        "says what the log lacks and what reads it: {err}"
+    );
     // The CSV path: a wheels file of one sample.
     let wheels = d.join("one-sample.csv");
     std::fs::write(&wheels, "t,left,right\n0.0,0.0,0.0\n").unwrap();

@@ -316,13 +316,20 @@ fn a_bag_and_the_same_recording_in_memory_give_the_same_files() {
     let s = calibrate_command(bag, &b, Method::AdaptivePf, Some(300), None);
     same_file(&a.join("calibration.csv"), &b.join("calibration.csv"));
     same_file(&a.join("trajectory.tum"), &b.join("trajectory.tum"));
-    // The command adds where the nominal values came from and each
-    // parameter's observability, widening the std of a weak one (the bundled
-    // run turns one way only, so the wheel base's).
+    // The command adds where the nominal values and the wheels came from and
+    // each parameter's observability, widening the std of a weak one (the
+    // bundled run turns one way only, so the wheel base's).
     let mut expect = mem.summary.clone();
     expect.mean_iteration_ms = s.mean_iteration_ms;
     expect.assumptions = s.assumptions.clone();
     expect.observability = s.observability.clone();
+    let wheels = s
+        .wheel_source
+        .clone()
+        .expect("the command states the wheel source");
+    assert_eq!(wheels.kind, odocal::robot::WheelSourceKind::JointStates);
+    assert_eq!(wheels.messages, rec.wheels.len());
+    expect.wheel_source = Some(wheels);
     expect.std.wheel_base = s.std.wheel_base;
     assert_eq!(s, expect);
     assert!(s.std.wheel_base > 2.0 * mem.summary.std.wheel_base);

@@ -45,6 +45,7 @@ mod io_roundtrip;
 mod io_sense;
 mod io_stream;
 mod io_time;
+mod io_wheel_sources;
 mod record_stream;
 mod sim_effects;
 mod sim_scenario;

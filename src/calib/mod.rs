@@ -40,7 +40,7 @@ pub use pf::{ParticleFilter, Particles};
 pub use pool::NormalPool;
 pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};
 pub use robust::student_t_weight;
-pub use run::{CalibSummary, CalibrationRun, Multipliers};
+pub use run::{CalibSummary, CalibrationRun, Multipliers, OdometryScale};
 pub use runner::{run, run_observed, Runner};
 pub use sanity::{implausible, observability, CheckParams, Observability, ParamObservability};
 pub use step_builder::StepBuilder;

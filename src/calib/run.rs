@@ -19,6 +19,36 @@ pub struct Multipliers {
     pub wheel_separation: f64,
 }
 
+impl Multipliers {
+    /// The scales of odometry computed with the nominal parameters against
+    /// the calibrated ones, for multipliers m_R, m_L, m_D (calibrated /
+    /// nominal): on a straight run the calibrated robot covers
+    /// `linear = 2 / (1/m_R + 1/m_L)` times the nominal odometry's distance
+    /// (the harmonic mean; m_R = m_L = m gives m), and turning in place it
+    /// turns `angular = linear / m_D` times the nominal odometry's angle. They
+    /// follow from V = (R_R ω_R + R_L ω_L)/2, W = (R_R ω_R − R_L ω_L)/D with
+    /// R_R ω_R = R_L ω_L (straight) or R_R ω_R = −R_L ω_L (in place).
+    pub fn odometry_scale(&self) -> OdometryScale {
+        let linear = 2.0 / (1.0 / self.right_wheel_radius + 1.0 / self.left_wheel_radius);
+        OdometryScale {
+            linear,
+            angular: linear / self.wheel_separation,
+        }
+    }
+}
+
+/// How far a robot's own odometry is off in scale (JSON `odometry_scale`):
+/// true distance / reported distance on a straight run, true angle /
+/// reported angle turning in place.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct OdometryScale {
+    /// Distance scale (the `wheel_radius_multiplier` of a controller with
+    /// one radius multiplier).
+    pub linear: f64,
+    /// Heading scale.
+    pub angular: f64,
+}
+
 /// The summary design.md's `calibrate` JSON and `summary.json` carry.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CalibSummary {
@@ -42,6 +72,13 @@ pub struct CalibSummary {
     /// command that ran, which refuses what it cannot).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub observability: Option<super::Observability>,
+    /// Which stream the wheels came from (set by the command that ran).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wheel_source: Option<crate::recording::WheelSource>,
+    /// With the robot's own odometry as the wheel source: how far that
+    /// odometry is off in distance and heading ([`Multipliers::odometry_scale`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub odometry_scale: Option<OdometryScale>,
     /// The batch calibration's estimate (`--method batch`): each unknown with
     /// its std, the laser mounting, the time offset and the correlations, as
     /// top-level keys.
@@ -105,6 +142,8 @@ impl CalibSummary {
             },
             assumptions: Assumptions::default(),
             observability: None,
+            wheel_source: None,
+            odometry_scale: None,
             batch: None,
             multipliers: Multipliers {
                 left_wheel_radius: ratio(final_params.r_left, nominal.r_left),

@@ -94,6 +94,7 @@ pub fn trajectory_metrics(t: &odocal::eval::TrajectoryMetrics) {
 
 pub fn calibration(s: &CalibSummary, out: &Path) {
     assumptions(&s.assumptions);
+    wheel_source(s);
     if let Some(b) = &s.batch {
         return batch(s, b, out);
     }
@@ -234,6 +235,25 @@ pub fn simulation(summary: &SimulateSummary) {
             .map(|t| format!("; truth in {t}"))
             .unwrap_or_default()
     );
+}
+
+/// Where the wheels came from and what that source cannot show; with the
+/// robot's own odometry as the source, how far it is off in scale.
+fn wheel_source(s: &CalibSummary) {
+    let Some(w) = &s.wheel_source else {
+        return;
+    };
+    eprintln!("{}", w.sentence());
+    for n in &w.notes {
+        eprintln!("note: {n}");
+    }
+    if let Some(o) = &s.odometry_scale {
+        eprintln!(
+            "the robot's own odometry: true distance = {:.5} × its distance, true turn = {:.5} × its turn (odometry_scale)",
+            o.linear,
+            o.angular
+        );
+    }
 }
 
 /// Where each nominal value came from, one line each.

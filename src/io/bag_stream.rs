@@ -289,7 +289,13 @@ fn first_pass<M: RawMessages>(mut m: M, opts: &ReadOptions) -> Result<StreamInfo
                     }
                     info.scans += 1;
                 }
-                Role::Joints => info.wheels += 1,
+                Role::Wheels => {
+                    // Decoded here too, so that the wheel values are known
+                    // before the first item and a bad topic fails early.
+                    handle()?;
+                    state.decoded().wheels.clear();
+                    info.wheels += 1;
+                }
                 Role::Imu => info.gyro += 1,
                 Role::Odom => info.odom += 1,
                 Role::RefOdometry | Role::RefPose | Role::RefPoint => info.reference += 1,
@@ -301,5 +307,6 @@ fn first_pass<M: RawMessages>(mut m: M, opts: &ReadOptions) -> Result<StreamInfo
     info.base_from_laser = rec.base_from_laser;
     info.mount_origin = rec.mount_origin;
     info.mount_note = rec.mount_note;
+    info.wheel_values = rec.wheel_values;
     Ok(info)
 }

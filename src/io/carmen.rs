@@ -58,6 +58,18 @@ pub fn read_carmen_bytes(
 ) -> Result<Recording, InputError> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| InputError::new(file, format!("not a CARMEN log (not UTF-8 text: {e})")))?;
+    let source = opts.wheels.source;
+    if source != crate::robot::WheelSourceKind::JointStates {
+        return Err(InputError::new(
+            file,
+            format!(
+                "a CARMEN log has no wheel topic, and the robot file's [wheels] source = \"{}\" \
+                 asks for one; its ODOM lines are read as the robot's odometry poses. Use a robot \
+                 file without [wheels] for this log",
+                source.word()
+            ),
+        ));
+    }
     let mut rec = Recording {
         source: file.to_string(),
         ..Default::default()

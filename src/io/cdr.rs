@@ -122,6 +122,24 @@ impl<'a> CdrReader<'a> {
         Ok(u32::from_le_bytes(self.take("uint32")?))
     }
 
+    /// Reads a sequence of integers of `bits` (16, 32 or 64) bits, signed or
+    /// not, each widened exactly to `i128`.
+    pub fn int_seq(&mut self, bits: u32, signed: bool) -> Result<Vec<i128>, CdrError> {
+        let n = self.seq_len(bits as usize / 8)?;
+        (0..n)
+            .map(|_| {
+                Ok(match (bits, signed) {
+                    (16, true) => i16::from_le_bytes(self.take("int16")?) as i128,
+                    (16, false) => u16::from_le_bytes(self.take("uint16")?) as i128,
+                    (32, true) => i32::from_le_bytes(self.take("int32")?) as i128,
+                    (32, false) => u32::from_le_bytes(self.take("uint32")?) as i128,
+                    (_, true) => i64::from_le_bytes(self.take("int64")?) as i128,
+                    (_, false) => u64::from_le_bytes(self.take("uint64")?) as i128,
+                })
+            })
+            .collect()
+    }
+
     /// Reads a `float32`.
     pub fn f32(&mut self) -> Result<f32, CdrError> {
         Ok(f32::from_le_bytes(self.take("float32")?))
@@ -245,6 +263,12 @@ impl CdrWriter {
         self.buf.extend_from_slice(&v.to_le_bytes());
     }
 
+    /// Writes an `int64`.
+    pub fn i64(&mut self, v: i64) {
+        self.align(8);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
     /// Writes a `float32`.
     pub fn f32(&mut self, v: f32) {
         self.align(4);
@@ -324,6 +348,31 @@ mod tests {
         assert_eq!(v[2], f32::INFINITY);
         assert_eq!(r.i32().unwrap(), -3);
         r.finish().unwrap();
+    }
+
+    #[test]
+    fn integer_sequences_widen_exactly() {
+        let mut w = CdrWriter::new();
+        w.u8(1);
+        w.seq_len(2);
+        w.i64(i64::MIN);
+        w.i64(-1);
+        let mut r = CdrReader::new(w.bytes()).unwrap();
+        r.u8().unwrap();
+        assert_eq!(r.int_seq(64, true).unwrap(), [i64::MIN as i128, -1]);
+        r.finish().unwrap();
+        let mut r = CdrReader::new(w.bytes()).unwrap();
+        r.u8().unwrap();
+        assert_eq!(r.int_seq(64, false).unwrap()[1], u64::MAX as i128);
+        let mut w = CdrWriter::new();
+        w.seq_len(3);
+        for v in [-2, 0, 65535] {
+            w.i32(v);
+        }
+        let mut r = CdrReader::new(w.bytes()).unwrap();
+        assert_eq!(r.int_seq(32, true).unwrap(), [-2, 0, 65535]);
+        let mut r = CdrReader::new(w.bytes()).unwrap();
+        assert_eq!(r.int_seq(16, false).unwrap().len(), 3);
     }
 
     #[test]

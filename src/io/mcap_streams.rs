@@ -1,20 +1,23 @@
 //! Turns decoded ROS messages into the streams of a [`Recording`]: stamps,
-//! the time-order check, wheel joints by name, scan validation, and the laser
-//! mount from the static transforms.
+//! the time-order check, the wheels from the source the robot file names
+//! ([`super::wheel_msgs`]), scan validation, and the laser mount from the
+//! static transforms.
 
 use std::collections::HashMap;
 
-use super::cdr::CdrError;
+use super::cdr::{CdrError, CdrReader};
 use super::options::ReadOptions;
 use super::ros_msgs::{
-    ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, PoseStampedMsg, RosMsg,
-    TfMessage, Time,
+    read_int_array, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg,
+    PoseStampedMsg, RosMsg, TfMessage, Time,
 };
 use super::ros_schema::short_name;
+use super::wheel_msgs::WheelDecoder;
 use crate::assumptions::Origin;
 use crate::error::InputError;
 use crate::geom::{self, Pose2};
 use crate::recording::{GyroSample, Recording, StampedPose, WheelSample};
+use crate::robot::WheelSourceKind;
 use crate::scan::LaserScan;
 
 /// What a channel's messages become.
@@ -22,8 +25,9 @@ use crate::scan::LaserScan;
 pub(crate) enum Role {
     /// LaserScan → `scans`.
     Scan,
-    /// JointState → `wheels`.
-    Joints,
+    /// The robot file's wheel source (JointState, Odometry twist or tick
+    /// counters) → `wheels`.
+    Wheels,
     /// Imu → `gyro`.
     Imu,
     /// Odometry → `odom`.
@@ -60,13 +64,6 @@ impl Wire {
     }
 }
 
-/// Wheel readings before sorting: angles, or rates to integrate.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum WheelMode {
-    Positions,
-    Velocities,
-}
-
 /// Streams being collected, with the latest stamp seen per stream (and
 /// whether it was a log time) for the time-order check.
 pub(crate) struct State<'a> {
@@ -75,7 +72,7 @@ pub(crate) struct State<'a> {
     wire: Wire,
     rec: Recording,
     latest: HashMap<&'static str, (f64, bool)>,
-    wheel_mode: Option<WheelMode>,
+    wheels: WheelDecoder,
     laser_frame: Option<String>,
     /// child → (parent, parent_from_child).
     tf: HashMap<String, (String, Pose2)>,
@@ -144,7 +141,7 @@ impl<'a> State<'a> {
                 ..Default::default()
             },
             latest: HashMap::new(),
-            wheel_mode: None,
+            wheels: WheelDecoder::default(),
             laser_frame: None,
             tf: HashMap::new(),
             tf_dynamic: HashMap::new(),
@@ -164,6 +161,12 @@ impl<'a> State<'a> {
     /// further back than the tolerance from the latest stamp of its stream.
     fn stamp(&mut self, stream: &'static str, stamp: &Time, log_time: u64) -> Result<f64, String> {
         let (t, from_log) = stamp_of(stamp, log_time)?;
+        self.in_order(stream, t, from_log)
+    }
+
+    /// `t` (s), checked against the latest stamp of `stream`; `from_log`:
+    /// a log time stood in for an unset header stamp.
+    fn in_order(&mut self, stream: &'static str, t: f64, from_log: bool) -> Result<f64, String> {
         let (last, last_from_log) = *self.latest.entry(stream).or_insert((t, from_log));
         if t < last - self.opts.reorder_tolerance {
             let hint = if from_log || last_from_log {
@@ -190,7 +193,7 @@ impl<'a> State<'a> {
     pub(crate) fn handle(&mut self, role: Role, data: &[u8], log_time: u64) -> Result<(), String> {
         match role {
             Role::Scan => self.scan(data, log_time),
-            Role::Joints => self.joints(data, log_time),
+            Role::Wheels => self.wheels(data, log_time),
             Role::Imu => {
                 let m: ImuMsg = self.decode(data)?;
                 let t = self.stamp("imu", &m.header.stamp, log_time)?;
@@ -317,43 +320,34 @@ impl<'a> State<'a> {
         Ok(())
     }
 
-    fn joints(&mut self, data: &[u8], log_time: u64) -> Result<(), String> {
-        let m: JointStateMsg = self.decode(data)?;
-        let t = self.stamp("joint_states", &m.header.stamp, log_time)?;
-        let find = |name: &str| {
-            m.name
-                .iter()
-                .position(|n| n == name)
-                .ok_or_else(|| format!("JointState has no joint '{name}' (names: {:?})", m.name))
-        };
-        let il = find(&self.opts.left_joint)?;
-        let ir = find(&self.opts.right_joint)?;
-        let has = |v: &Vec<f64>| v.len() == m.name.len();
-        let mode = *self.wheel_mode.get_or_insert(if has(&m.position) {
-            WheelMode::Positions
-        } else {
-            WheelMode::Velocities
-        });
-        let values = match mode {
-            WheelMode::Positions if has(&m.position) => &m.position,
-            WheelMode::Velocities if has(&m.velocity) => &m.velocity,
-            _ => {
-                return Err(format!(
-                    "JointState has {} positions and {} velocities for {} names; \
-                     the wheel {} are needed",
-                    m.position.len(),
-                    m.velocity.len(),
-                    m.name.len(),
-                    if mode == WheelMode::Positions {
-                        "positions"
-                    } else {
-                        "velocities"
-                    }
-                ))
+    /// A wheel message of the robot file's source: its stamp (the log time
+    /// for tick arrays, which have no header) and the wheel values.
+    fn wheels(&mut self, data: &[u8], log_time: u64) -> Result<(), String> {
+        let opts = self.opts;
+        let (t, (left, right)) = match opts.wheels.source {
+            WheelSourceKind::JointStates => {
+                let m: JointStateMsg = self.decode(data)?;
+                let t = self.stamp("wheels", &m.header.stamp, log_time)?;
+                (t, self.wheels.joint_state(&m, opts)?)
+            }
+            WheelSourceKind::Odometry => {
+                let m: OdometryMsg = self.decode(data)?;
+                let t = self.stamp("wheels", &m.header.stamp, log_time)?;
+                (t, self.wheels.twist(&m, opts)?)
+            }
+            WheelSourceKind::Ticks => {
+                let ty = opts.wheels.ticks_layout().map(|l| l.ticks_type);
+                let ty = ty.ok_or("[wheels] source = \"ticks\" without ticks_type")?;
+                let mut r = match self.wire {
+                    Wire::Cdr => CdrReader::new(data).map_err(cdr)?,
+                    Wire::Ros1 => CdrReader::ros1(data),
+                };
+                let counts = read_int_array(&mut r, ty).map_err(cdr)?;
+                let t = self.in_order("wheels", log_time as f64 * 1e-9, false)?;
+                (t, self.wheels.ticks(&counts, opts)?)
             }
         };
-        let (left, right) = (values[il], values[ir]);
-        finite("wheel joint value", &[left, right])?;
+        self.rec.wheel_values = self.wheels.values();
         self.rec.wheels.push(WheelSample {
             stamp: t,
             left,
@@ -368,15 +362,20 @@ impl<'a> State<'a> {
         &mut self.rec
     }
 
-    /// Whether the wheel joints carry rates (rad/s) rather than angles.
+    /// Whether the wheel values are rates (rad/s) rather than angles.
     pub(crate) fn wheel_rates(&self) -> bool {
-        self.wheel_mode == Some(WheelMode::Velocities)
+        self.wheels.rates()
     }
 
-    /// Sorts, integrates wheel rates if needed and resolves the laser mount.
+    /// Sorts, integrates wheel rates if needed and resolves the laser mount;
+    /// refuses a wheel topic whose messages together say nothing of the
+    /// wheels (an odometry twist that is zero throughout).
     pub(crate) fn finish(mut self) -> Result<Recording, InputError> {
         self.rec.sort_streams();
-        if self.wheel_mode == Some(WheelMode::Velocities) {
+        self.wheels
+            .check_end(self.opts)
+            .map_err(|m| InputError::new(&self.file, m).topic(self.opts.wheel_topic()))?;
+        if self.wheels.rates() {
             integrate_rates(&mut self.rec.wheels);
             if let Some(w) = self
                 .rec
@@ -391,7 +390,7 @@ impl<'a> State<'a> {
                         w.stamp
                     ),
                 )
-                .topic(&self.opts.topics.joint_states));
+                .topic(self.opts.wheel_topic()));
             }
         }
         if let Some(laser) = self.laser_frame.clone() {
@@ -539,7 +538,12 @@ pub(crate) fn roles_for(
         }
     };
     want(&t.scan, &[(LaserScanMsg::TYPE, Role::Scan)])?;
-    want(&t.joint_states, &[(JointStateMsg::TYPE, Role::Joints)])?;
+    want(opts.wheel_topic(), &[(opts.wheel_type(), Role::Wheels)]).map_err(|e| {
+        format!(
+            "{e}: the robot file's [wheels] source = \"{}\" reads the wheels from this topic",
+            opts.wheels.source.word()
+        )
+    })?;
     want(&t.imu, &[(ImuMsg::TYPE, Role::Imu)])?;
     want(&t.odom, &[(OdometryMsg::TYPE, Role::Odom)])?;
     want(

@@ -66,6 +66,7 @@ pub mod seed_tables;
 pub mod source;
 pub mod stream_out;
 pub mod tum;
+mod wheel_msgs;
 
 pub use carmen::read_carmen;
 pub use format::{sniff, Format};
@@ -127,6 +128,7 @@ pub fn collect(source: &mut dyn SampleSource) -> Result<Recording, InputError> {
         base_from_laser: info.base_from_laser,
         mount_origin: info.mount_origin,
         mount_note: info.mount_note.clone(),
+        wheel_values: info.wheel_values,
         ..Default::default()
     };
     while let Some(item) = source.next_item()? {

@@ -1,9 +1,11 @@
-//! What a reader needs to know besides the file: topic names, wheel joint
-//! names, and how far a stream may go back in time before it is corrupt.
+//! What a reader needs to know besides the file: topic names, where the
+//! wheels are reported (joint names, odometry twist or tick counters), and
+//! how far a stream may go back in time before it is corrupt.
 
 use serde::{Deserialize, Serialize};
 
-use crate::robot::RobotConfig;
+use super::ros_msgs::{JointStateMsg, OdometryMsg, RosMsg};
+use crate::robot::{DiffDrive, RobotConfig, WheelSourceKind, WheelsConfig};
 
 /// Topic names of each stream in a bag.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -54,6 +56,13 @@ pub struct ReadOptions {
     /// Largest backward stamp jump within one stream that is tolerated and
     /// fixed by sorting (s).
     pub reorder_tolerance: f64,
+    /// Which stream carries the wheels, and how to read it.
+    pub wheels: WheelsConfig,
+    /// The nominal kinematics that turn an odometry twist back into wheel
+    /// rates (the robot's own controller's configured radii and separation).
+    pub nominal: DiffDrive,
+    /// Encoder ticks per wheel revolution, for tick counters.
+    pub ticks_per_rev: f64,
 }
 
 impl Default for ReadOptions {
@@ -61,9 +70,12 @@ impl Default for ReadOptions {
         let robot = RobotConfig::default();
         Self {
             topics: TopicConfig::default(),
-            left_joint: robot.left_joint,
-            right_joint: robot.right_joint,
+            left_joint: robot.left_joint.clone(),
+            right_joint: robot.right_joint.clone(),
             reorder_tolerance: 2.0,
+            nominal: robot.diff_drive(),
+            ticks_per_rev: robot.ticks_per_rev,
+            wheels: robot.wheels,
         }
     }
 }
@@ -74,7 +86,32 @@ impl ReadOptions {
         Self {
             left_joint: robot.left_joint.clone(),
             right_joint: robot.right_joint.clone(),
+            wheels: robot.wheels.clone(),
+            nominal: robot.diff_drive(),
+            ticks_per_rev: robot.ticks_per_rev,
             ..Self::default()
+        }
+    }
+
+    /// The topic the wheels come from: `[wheels] topic`, else `[topics]
+    /// joint_states` (JointState) or `[topics] odom` (Odometry).
+    pub fn wheel_topic(&self) -> &str {
+        match (&self.wheels.topic, self.wheels.source) {
+            (Some(t), _) => t,
+            (None, WheelSourceKind::Odometry) => &self.topics.odom,
+            (None, _) => &self.topics.joint_states,
+        }
+    }
+
+    /// The message type the wheel topic must have (`pkg/msg/Type`).
+    pub fn wheel_type(&self) -> &'static str {
+        match self.wheels.source {
+            WheelSourceKind::JointStates => JointStateMsg::TYPE,
+            WheelSourceKind::Odometry => OdometryMsg::TYPE,
+            WheelSourceKind::Ticks => self
+                .wheels
+                .ticks_layout()
+                .map_or("std_msgs/msg/Int32MultiArray", |l| l.ticks_type.type_name()),
         }
     }
 }

@@ -57,7 +57,7 @@ impl Item {
 pub struct StreamInfo {
     /// LaserScan messages.
     pub scans: usize,
-    /// JointState messages (one wheel sample each).
+    /// Wheel messages (one wheel sample each).
     pub wheels: usize,
     /// Imu messages.
     pub gyro: usize,
@@ -71,6 +71,8 @@ pub struct StreamInfo {
     pub mount_origin: Option<crate::assumptions::Origin>,
     /// Why the recording states no mounting, when it could have.
     pub mount_note: Option<String>,
+    /// How the wheel angles are obtained (`None`: no wheel samples).
+    pub wheel_values: Option<crate::recording::WheelValues>,
 }
 
 /// A recording as a stream of samples, each stream in stamp order.
@@ -119,6 +121,7 @@ impl<'r> RecordingSource<'r> {
             base_from_laser: rec.base_from_laser,
             mount_origin: rec.mount_origin,
             mount_note: rec.mount_note.clone(),
+            wheel_values: rec.wheel_values,
         };
         Self {
             rec,

@@ -17,6 +17,7 @@ use crate::error::InputError;
 use crate::geom::Pose2;
 use crate::io::censi::CensiTuple;
 use crate::motion::Motion;
+use crate::recording::WheelSource;
 use crate::robot::RobotConfig;
 use crate::robot::{DiffDrive, LaserMount};
 use std::path::Path;
@@ -58,21 +59,35 @@ pub fn run(
     let robot = &nominal.robot;
     let mut params = cfg.calib.clone();
     job.choice.apply(&mut params);
-    let problem = if crate::io::sniff(path)? == crate::io::Format::CensiTuples {
-        tuples_problem(&crate::io::censi::read(path)?)
+    let (problem, wheel_source) = if crate::io::sniff(path)? == crate::io::Format::CensiTuples {
+        (tuples_problem(&crate::io::censi::read(path)?), None)
     } else {
-        recording_problem(path, &cfg, robot, &params.batch)?
+        let (problem, wheels) = recording_problem(path, &cfg, &nominal, &params.batch)?;
+        (problem, Some(wheels))
     };
     let est = batch::estimate(&problem, &robot.diff_drive(), &params.batch, &params.checks)
-        .map_err(|e| InputError::new(path.display().to_string(), e.to_string()))?;
+        .map_err(|e| {
+            let why = match &wheel_source {
+                Some(w) if w.kind == crate::robot::WheelSourceKind::Odometry => {
+                    " (the wheels come from a controller's twist, which lags its wheels by \
+                     the controller's velocity filtering: a lag of more than a sample is \
+                     refused like a clock offset)"
+                }
+                _ => "",
+            };
+            InputError::new(path.display().to_string(), format!("{e}{why}"))
+        })?;
     let mut assumptions = nominal.assumptions();
     state_laser(&mut assumptions, &est, robot.laser);
-    let summary = summary(
+    let mut summary = summary(
         est,
         robot.diff_drive(),
         problem.intervals.len(),
         assumptions,
     );
+    if let Some(w) = wheel_source {
+        super::wheels::state(&mut summary, w);
+    }
     write_summary(&job.out, &summary)?;
     Ok(CalibrateOutcome {
         summary,
@@ -134,25 +149,23 @@ fn write_summary(dir: &Path, s: &CalibSummary) -> Result<(), PipelineError> {
 /// recording or robot file states (else the identity, so the motions are
 /// the laser's own), each motion moved into the laser frame,
 /// `s = M⁻¹ ⊕ m ⊕ M`, composed into intervals, and the wheel angles as the
-/// track the time offset shifts.
+/// track the time offset shifts; with the wheel source it was read from.
 fn recording_problem(
     path: &Path,
     cfg: &Config,
-    robot: &RobotConfig,
+    nominal: &super::Nominal,
     p: &BatchParams,
-) -> Result<Problem, PipelineError> {
-    let rec = super::read_recording(path, cfg, robot)?;
-    if rec.wheels.len() < 2 {
-        return Err(InputError::new(
-            &rec.source,
-            format!(
-                "no wheel angles (JointState with the joints `{}` and `{}` of the robot file): \
-                 the batch calibration needs the wheel encoders",
-                robot.left_joint, robot.right_joint
-            ),
-        )
-        .into());
-    }
+) -> Result<(Problem, WheelSource), PipelineError> {
+    let robot = &nominal.robot;
+    let read = super::read_options(cfg, robot);
+    let rec = crate::io::read_recording(path, &read)?;
+    let found = super::wheels::Found {
+        wheels: rec.wheels.len(),
+        odom: rec.odom.len(),
+        bag: crate::io::sniff(path)? != crate::io::Format::Text,
+    };
+    super::wheels::require(&read, nominal, &rec.source, found)?;
+    let wheels = super::wheels::describe(&read, nominal, found.wheels, rec.wheel_values);
     let robot_icp = match super::icp::mount(&rec, robot) {
         Ok(_) => robot.clone(),
         Err(_) => RobotConfig {
@@ -177,10 +190,11 @@ fn recording_problem(
         left: rec.wheels.iter().map(|w| w.left).collect(),
         right: rec.wheels.iter().map(|w| w.right).collect(),
     };
-    Ok(Problem {
+    let problem = Problem {
         intervals,
         track: Some(track),
-    })
+    };
+    Ok((problem, wheels))
 }
 
 /// A base-frame ICP motion `m` (matched with mounting `M`) as the laser's

@@ -112,10 +112,17 @@ pub fn run(
     };
     let mut files = CalibFiles::create(&job.out)?;
     let mut obs = Observers(vec![&mut files, rec_obs, watch]);
-    let (done, assumptions, input) = match &job.input {
+    let (done, assumptions, input, wheel_source) = match &job.input {
         CalibSource::Recording(path) => {
             let read = super::read_options(&cfg, robot);
             let mut source = crate::io::open(path, &read)?;
+            let info = source.info().clone();
+            let found = super::wheels::Found {
+                wheels: info.wheels,
+                odom: info.odom,
+                bag: crate::io::sniff(path)? != crate::io::Format::Text,
+            };
+            super::wheels::require(&read, &nominal, &path.display().to_string(), found)?;
             let (icp, done) = drive::run_calibration(
                 source.as_mut(),
                 robot,
@@ -124,7 +131,13 @@ pub fn run(
                 &cfg.measurements,
                 &mut obs,
             )?;
-            (done, nominal.assumptions_with(&icp.mount), path)
+            let wheels = super::wheels::describe(&read, &nominal, info.wheels, info.wheel_values);
+            (
+                done,
+                nominal.assumptions_with(&icp.mount),
+                path,
+                Some(wheels),
+            )
         }
         CalibSource::Csv { motions, wheels } => {
             let input = read_csv_input(motions, wheels, &cfg.icp)?;
@@ -138,7 +151,7 @@ pub fn run(
                 &mut obs,
             )
             .map_err(|e| name_csv_inputs(e, motions, wheels))?;
-            (done, nominal.assumptions(), motions)
+            (done, nominal.assumptions(), motions, None)
         }
     };
     drop(obs);
@@ -151,6 +164,9 @@ pub fn run(
         &params,
         &input.display().to_string(),
     )?;
+    if let Some(w) = wheel_source {
+        super::wheels::state(&mut summary, w);
+    }
     files.commit(&summary)?;
     let notes = match recorder {
         Some(r) => r.finish().map_err(super::viewer::viz_error)?,

@@ -108,7 +108,8 @@ pub fn run_recording(
     } else {
         return Err(crate::error::InputError::new(
             &rec.source,
-            "no wheel encoder data (JointState with the robot's wheel joints) and no odometry: nothing to replay",
+            "no wheel data (the stream the robot file's [wheels] source and topic name; JointState \
+             with left_joint and right_joint by default) and no odometry: nothing to replay",
         )
         .into());
     };

@@ -364,9 +364,9 @@ pub fn run_calibration(
         return Err(InputError::new(
             source.name(),
             format!(
-                "no wheel encoder data to calibrate: {} JointState samples with the wheel \
-                 joints '{}' and '{}' (the robot file's left_joint and right_joint name them; \
-                 [topics] joint_states in --config names the topic)",
+                "no wheel encoder data to calibrate: {} wheel samples ([wheels] source and topic in \
+                 the robot file name the stream; for JointState, left_joint and right_joint \
+                 name the joints: '{}' and '{}')",
                 info.wheels, robot.left_joint, robot.right_joint
             ),
         )

@@ -19,6 +19,7 @@ pub mod recorder;
 pub mod sense;
 pub mod simulate;
 pub mod viewer;
+pub mod wheels;
 
 pub use config::{load_robot, Config};
 pub use error::PipelineError;

@@ -1,5 +1,6 @@
 //! Nominal robot description, loadable from TOML (`--robot FILE.toml`).
 
+use super::wheels::{WheelSourceKind, WheelsConfig};
 use crate::geom::{self, Pose2};
 use serde::{Deserialize, Serialize};
 
@@ -58,6 +59,9 @@ pub struct RobotConfig {
     /// file without a `[laser]` table never inherits the wheelchair's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub laser: Option<LaserMount>,
+    /// Where the wheels are reported (`[wheels]`; absent: JointState).
+    #[serde(default, skip_serializing_if = "WheelsConfig::is_default")]
+    pub wheels: WheelsConfig,
 }
 
 impl Default for RobotConfig {
@@ -72,6 +76,7 @@ impl Default for RobotConfig {
             left_joint: "left_wheel".into(),
             right_joint: "right_wheel".into(),
             laser: Some(LaserMount::default()),
+            wheels: WheelsConfig::default(),
         }
     }
 }
@@ -133,6 +138,13 @@ impl RobotConfig {
         if !missing.is_empty() {
             return Err(RobotConfigError::Missing(missing));
         }
+        if c.wheels.source == WheelSourceKind::Ticks && !table.contains_key("ticks_per_rev") {
+            return Err(RobotConfigError::Invalid(
+                "[wheels] source = \"ticks\" needs ticks_per_rev (encoder ticks per wheel \
+                 revolution): the tick counts mean nothing without it"
+                    .into(),
+            ));
+        }
         c.validate()?;
         Ok((c, table.keys().cloned().collect()))
     }
@@ -172,7 +184,7 @@ impl RobotConfig {
                 "left_joint and right_joint must differ".into(),
             ));
         }
-        Ok(())
+        self.wheels.validate().map_err(RobotConfigError::Invalid)
     }
 
     /// The nominal kinematic parameters.
@@ -236,6 +248,28 @@ mod tests {
         assert!(with("r_left", "0.3").is_ok());
         assert!(with("r_left", "-0.3").is_err() && with("r_left", "nan").is_err());
         assert!(with("ticks_per_rev", "0").is_err());
+    }
+
+    #[test]
+    fn a_wheels_table_is_read_and_ticks_need_ticks_per_rev() {
+        let base = "r_right = 0.05\nr_left = 0.05\nwheel_base = 0.3\n";
+        let c =
+            RobotConfig::from_toml(&format!("{base}[wheels]\nsource = \"odometry\"\n")).unwrap();
+        assert_eq!(c.wheels.source, WheelSourceKind::Odometry);
+        let ticks = "[wheels]\nsource = \"ticks\"\ntopic = \"/ticks\"\n\
+                     ticks_type = \"std_msgs/msg/Int64MultiArray\"\n";
+        let e = RobotConfig::from_toml(&format!("{base}{ticks}"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("ticks_per_rev"), "{e}");
+        let c = RobotConfig::from_toml(&format!("{base}ticks_per_rev = 4096\n{ticks}")).unwrap();
+        assert_eq!(c.wheels.ticks_layout().unwrap().wrap_bits, 64);
+        let text = toml::to_string(&c).unwrap();
+        assert_eq!(RobotConfig::from_toml(&text).unwrap(), c);
+        let e = RobotConfig::from_toml(&format!("{base}[wheels]\nticks_type = \"x\"\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("Int32MultiArray"), "{e}");
     }
 
     #[test]

@@ -141,6 +141,7 @@ fn recording(
         base_from_laser: Some(robot.laser.unwrap_or_default().pose()),
         mount_origin: Some(crate::assumptions::Origin::TfStatic),
         mount_note: None,
+        wheel_values: Some(crate::recording::WheelValues::Positions),
     }
 }
 

@@ -5,9 +5,11 @@
 use super::cdr::{CdrError, CdrReader, CdrWriter};
 
 mod geometry;
+mod int_arrays;
 mod sensor;
 
 pub use geometry::{OdometryMsg, PointStampedMsg, PoseStampedMsg, TfMessage, TransformStamped};
+pub use int_arrays::read_int_array;
 pub use sensor::{ImuMsg, JointStateMsg, LaserScanMsg};
 
 /// A ROS 2 message with a CDR codec.
