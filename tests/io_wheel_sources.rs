@@ -236,6 +236,19 @@ fn encoder_ticks_that_wrap_calibrate_as_the_joint_states_do() {
         let (a, b) = (num(&ticks["final"][key]), num(&joints["final"][key]));
         assert!((a - b).abs() < 1e-5, "{key}: ticks {a}, JointState {b}");
     }
+    // diagnose says where its wheels came from too.
+    let d = odocal(&[
+        "diagnose",
+        "--measured",
+        path(&bag),
+        "--robot",
+        path(&robot),
+        "--json",
+    ]);
+    assert!(d.status.success(), "{}", String::from_utf8_lossy(&d.stderr));
+    let d: serde_json::Value = serde_json::from_slice(&d.stdout).unwrap();
+    assert_eq!(d["wheel_source"]["kind"], "ticks", "{}", d["wheel_source"]);
+    assert_eq!(d["wheel_source"]["messages"], 7501);
     // The counters did wrap: the wheels turned through far more than 2^15
     // ticks of 2π/8800 rad.
     let rec = read(

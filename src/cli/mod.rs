@@ -129,6 +129,9 @@ fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
     if a.json {
         return print_json(&d);
     }
+    if let Some(w) = &d.wheel_source {
+        eprintln!("{}", w.sentence());
+    }
     out!("verdict: {}", pipeline::diagnose::verdict_word(&d));
     for c in &d.causes {
         let params: Vec<String> = c

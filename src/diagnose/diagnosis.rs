@@ -78,6 +78,9 @@ pub struct Diagnosis {
     /// Where every nominal value came from (set by the command that ran).
     #[serde(skip_serializing_if = "crate::assumptions::Assumptions::is_empty")]
     pub assumptions: crate::assumptions::Assumptions,
+    /// Which stream the wheels came from (set by the command that ran).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wheel_source: Option<crate::recording::WheelSource>,
     /// Residual series for plots (not in the JSON summary).
     #[serde(skip)]
     pub series: ResidualSeries,

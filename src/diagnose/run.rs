@@ -68,6 +68,7 @@ pub fn run(
     let train_counts = train.counts();
     Ok(Diagnosis {
         assumptions: Default::default(),
+        wheel_source: None,
         verdict: verdict(&causes, &structure_before, p.structure_alpha),
         causes,
         gain,

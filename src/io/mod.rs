@@ -10,7 +10,9 @@
 //! - **Source.** A bag message's time is its `header.stamp`; a stamp of
 //!   exactly zero means "unset" and the message's receive time is used
 //!   instead (MCAP log time, ROS 1 record `time`, rosbag2 SQLite
-//!   `timestamp`). A CARMEN record's time is its `ipc_timestamp`.
+//!   `timestamp`). Messages without a header (the `std_msgs` tick arrays
+//!   of a `[wheels] source = "ticks"`) always take their receive time. A
+//!   CARMEN record's time is its `ipc_timestamp`.
 //! - **Invalid stamps** are errors naming the message (bag) or line (CARMEN):
 //!   a negative time, or nanoseconds ≥ 10⁹.
 //! - **Going backwards.** Each stream (scans, joint states, IMU, odometry,
@@ -27,8 +29,9 @@
 //!   with its plausibility gates widened by the gap (max speed × dt); the
 //!   calibration fills time without observations with predict-only steps of
 //!   at most 0.1 s (`calib::MAX_GAP_STEP`), wheel angles interpolated
-//!   linearly; wheel *rates* (joint states without positions) are integrated
-//!   across a gap by the trapezoid rule, i.e. at the mean of the two rates.
+//!   linearly; wheel *rates* (joint states without positions, or an odometry
+//!   twist turned into wheel rates) are integrated across a gap by the
+//!   trapezoid rule, i.e. at the mean of the two rates.
 //! - **Clocks at 0 or at Unix time.** Both read as they are. Unix stamps
 //!   (≈ 1.7·10⁹ s) keep a resolution of about 0.24 µs in `f64`. A header clock
 //!   that starts at exactly 0 is read through the log time of that first

@@ -68,10 +68,14 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
             d
         })
     } else {
-        let rec = super::read_recording(&job.measured, &cfg, robot)?;
+        let read = super::read_options(&cfg, robot);
+        let rec = crate::io::read_recording(&job.measured, &read)?;
         icp::mount(&rec, robot).and_then(|mount| {
             let mut d = run_recording(&rec, robot, &cfg.icp, &cfg.diagnose)?;
             d.assumptions = nominal.assumptions_with(&mount);
+            d.wheel_source = (rec.wheels.len() >= 2).then(|| {
+                super::wheels::describe(&read, &nominal, rec.wheels.len(), rec.wheel_values)
+            });
             Ok(d)
         })
     };
