@@ -41,6 +41,33 @@ impl Default for LaserScan {
 }
 
 impl LaserScan {
+    /// The scan with a scanner's corrections: `angle_increment` (rad, the
+    /// true spacing, its sign taken from the recording's) replaces the
+    /// recorded one, scaling `angle_min` so that the beam at angle 0 stays
+    /// there (a scanner whose beams span a wider arc than recorded, e.g. the
+    /// LEGO robot's 660 beams); `range_offset` (m) is added to every valid
+    /// range and to the validity limits, so no reading changes validity.
+    pub fn corrected(&self, angle_increment: Option<f64>, range_offset: f64) -> LaserScan {
+        let mut out = self.clone();
+        if let Some(inc) = angle_increment {
+            if self.angle_increment != 0.0 {
+                let k = inc / self.angle_increment.abs();
+                out.angle_min = self.angle_min * k;
+                out.angle_increment = self.angle_increment * k;
+            }
+        }
+        if range_offset != 0.0 {
+            for r in out.ranges.iter_mut() {
+                if self.is_valid_range(*r) {
+                    *r += range_offset as f32;
+                }
+            }
+            out.range_min += range_offset;
+            out.range_max += range_offset;
+        }
+        out
+    }
+
     /// Angle (rad) of beam `i` in the laser frame.
     pub fn beam_angle(&self, i: usize) -> f64 {
         self.angle_min + i as f64 * self.angle_increment
