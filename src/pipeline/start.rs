@@ -101,8 +101,8 @@ pub fn state(a: &mut Assumptions, est: &BatchEstimate, file: &RobotConfig) {
             t.value,
             format!(
                 "batch estimate ± {:.4} s: the wheel stamps were moved onto the laser clock \
-                 (t − {:.4} s)",
-                t.std, t.value
+                 (t_laser = t_wheel {:+.4} s)",
+                t.std, -t.value
             ),
         ),
         None => (
