@@ -92,8 +92,11 @@ fn lego_batch_finds_the_late_scans_and_its_scale_is_the_trackers() {
         .any(|n| n.as_str().unwrap().contains("wheel periods")));
     assert!(b["std_widening"].as_f64().unwrap() > 1.0);
 
-    // Its odometry against the tracker: the similarity that fits it has the
-    // tracker's scale against the landmark map.
+    // Its odometry against the tracker, which is in step with the wheels:
+    // the trajectory, on the laser clock, moved back by the time offset. At
+    // least as close as the data README's dead reckoning fitted to the
+    // tracker itself (0.349 mm/tick, width fitted: 56 mm), and the
+    // similarity that fits it has the tracker's scale against the map.
     let none = calibrate(
         &rec,
         "lego-robot",
@@ -113,12 +116,14 @@ fn lego_batch_finds_the_late_scans_and_its_scale_is_the_trackers() {
         cfg.to_str().unwrap(),
         "--align",
         "sim2",
+        "--t-offset",
+        &dt.to_string(),
         "--json",
     ]));
     let scale = e["alignment"]["scale"].as_f64().unwrap();
     assert!((1.107 - scale).abs() < 0.035, "scale {scale}");
     let ape = e["ape"]["rmse"].as_f64().unwrap();
-    assert!(ape < 0.09, "APE {ape}");
+    assert!(ape <= 0.056, "APE {ape}");
 
     let dkf = calibrate(
         &rec,
