@@ -182,6 +182,42 @@ mod tests {
     use super::*;
 
     #[test]
+    fn corrections_keep_the_centre_beam_and_move_valid_ranges_only() {
+        let inc = std::f64::consts::TAU / 1024.0;
+        let s = LaserScan {
+            angle_min: -330.0 * inc,
+            angle_increment: inc,
+            range_min: 0.02,
+            range_max: 5.6,
+            ranges: vec![1.0, f32::NAN, f32::INFINITY, 0.01, 5.59, 2.0],
+            ..Default::default()
+        };
+        let c = s.corrected(Some(1.03 * inc), 0.07);
+        // Beam 330 stays at angle 0; beam 0 sits 330 true spacings right.
+        assert!((c.angle_min + 330.0 * c.angle_increment).abs() < 1e-12);
+        assert!((c.beam_angle(0) + 330.0 * 1.03 * inc).abs() < 1e-12);
+        assert!((c.ranges[0] - 1.07).abs() < 1e-6 && (c.ranges[5] - 2.07).abs() < 1e-6);
+        assert!(c.ranges[1].is_nan() && c.ranges[2] == f32::INFINITY);
+        // Validity is unchanged: too close stays too close, the last valid
+        // reading near range_max stays valid.
+        let valid = |x: &LaserScan| {
+            (0..6)
+                .map(|i| x.is_valid_range(x.ranges[i]))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(valid(&c), valid(&s));
+        // A scan stated with a negative increment keeps its direction.
+        let mirrored = LaserScan {
+            angle_min: 330.0 * inc,
+            angle_increment: -inc,
+            ..s.clone()
+        };
+        let m = mirrored.corrected(Some(1.03 * inc), 0.0);
+        assert!((m.angle_increment + 1.03 * inc).abs() < 1e-15);
+        assert_eq!(m.ranges[0], 1.0);
+    }
+
+    #[test]
     fn invalid_ranges_never_become_points() {
         let s = LaserScan {
             angle_min: -1.0,

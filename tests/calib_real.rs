@@ -165,6 +165,37 @@ fn mines_batch_latency_and_radii_agree_with_the_tick_check() {
 }
 
 #[test]
+fn a_time_offset_beyond_the_accepted_limit_is_refused_naming_the_key() {
+    let Some(data) = shared_data("batch_time_limit") else {
+        return;
+    };
+    let dir = scratch("batch_time_limit");
+    let cfg = dir.join("c.toml");
+    std::fs::write(&cfg, "[calib.batch]\nmax_time_offset_s = 0.3\n").unwrap();
+    let rec = data.join("lego-robot/lego-robot.mcap");
+    let out = odocal(&[
+        "calibrate",
+        "--input",
+        rec.to_str().unwrap(),
+        "--robot",
+        "lego-robot",
+        "--method",
+        "batch",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("max_time_offset_s") && err.contains("lego-robot.mcap"),
+        "{err}"
+    );
+    assert!(!dir.join("o/summary.json").exists());
+}
+
+#[test]
 fn init_batch_refuses_csv_inputs() {
     let dir = scratch("init_batch_csv");
     let (m, w) = (dir.join("m.csv"), dir.join("w.csv"));

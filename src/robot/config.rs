@@ -256,6 +256,29 @@ mod tests {
     }
 
     #[test]
+    fn scanner_corrections_parse_and_are_bounded() {
+        let base = "r_right = 0.02\nr_left = 0.02\nwheel_base = 0.15\n";
+        let c = RobotConfig::from_toml(&format!(
+            "{base}[scanner]\nangle_increment = 0.00632\nrange_offset = 0.07\n"
+        ))
+        .unwrap();
+        assert_eq!(c.scanner.angle_increment, Some(0.00632));
+        assert_eq!(c.scanner.range_offset, 0.07);
+        assert!(RobotConfig::from_toml(base).unwrap().scanner.is_none());
+        for (bad, key) in [
+            ("angle_increment = 0.5", "scanner.angle_increment"),
+            ("angle_increment = -0.006", "scanner.angle_increment"),
+            ("range_offset = 70", "scanner.range_offset"),
+        ] {
+            let e = RobotConfig::from_toml(&format!("{base}[scanner]\n{bad}\n"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(key), "{e}");
+        }
+        assert!(RobotConfig::from_toml(&format!("{base}[scanner]\nscale = 1\n")).is_err());
+    }
+
+    #[test]
     fn kinematics_are_required_and_unknown_keys_are_refused() {
         let base = "r_right = 0.05\nr_left = 0.05\nwheel_base = 0.7\n";
         let (c, keys) = RobotConfig::from_toml_keys(&format!("{base}[laser]\nx = 0.1\n")).unwrap();
