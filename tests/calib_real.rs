@@ -216,3 +216,60 @@ fn init_batch_refuses_csv_inputs() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--init batch needs --input"));
     assert!(!dir.join("o/summary.json").exists());
 }
+
+/// Local (< 10 s) and all relation errors (m) of `odocal icp` on `log`.
+fn relation_errors(log: &Path, relations: &Path, dir: &Path) -> (u64, f64, f64) {
+    let tum = dir.join(format!(
+        "{}.tum",
+        log.file_name().unwrap().to_str().unwrap()
+    ));
+    let icp = ok(&odocal(&[
+        "icp",
+        "--input",
+        log.to_str().unwrap(),
+        "--out",
+        tum.to_str().unwrap(),
+        "--json",
+    ]));
+    let e = ok(&odocal(&[
+        "eval",
+        "--estimate",
+        tum.to_str().unwrap(),
+        "--reference",
+        tum.to_str().unwrap(),
+        "--relations",
+        relations.to_str().unwrap(),
+        "--json",
+    ]));
+    let r = &e["relations"];
+    (
+        icp["failed_pairs"].as_u64().unwrap(),
+        r["local"]["trans_mean"].as_f64().unwrap(),
+        r["trans_mean"].as_f64().unwrap(),
+    )
+}
+
+/// The one benchmark log the shared data has as CARMEN text and as MCAP
+/// gives the same relation errors both ways (they differ only in how the
+/// two-decimal ranges reach float32, which ICP's iterations amplify a
+/// little).
+#[test]
+fn mit_csail_from_carmen_and_from_mcap_give_the_same_relation_errors() {
+    let Some(data) = shared_data("carmen_vs_mcap") else {
+        return;
+    };
+    let dir = scratch("carmen_vs_mcap");
+    let b = data.join("slam-benchmark");
+    let rel = b.join("mit-csail.relations");
+    let clf = relation_errors(&b.join("mit-csail.clf"), &rel, &dir);
+    let mcap = relation_errors(&b.join("mit-csail.mcap"), &rel, &dir);
+    assert_eq!(clf.0, mcap.0, "failed pairs");
+    assert!(
+        (clf.1 / mcap.1 - 1.0).abs() < 0.03,
+        "local {clf:?} vs {mcap:?}"
+    );
+    assert!(
+        (clf.2 / mcap.2 - 1.0).abs() < 0.05,
+        "all {clf:?} vs {mcap:?}"
+    );
+}

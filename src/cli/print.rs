@@ -107,6 +107,15 @@ pub fn calibration(s: &CalibSummary, out: &Path) {
     if let Some(o) = &s.observability {
         observability(o);
     }
+    if let Some(b) = &s.start {
+        eprintln!(
+            "started from the batch estimate: R_R {:.5} m, R_L {:.5} m, D {:.5} m",
+            b.r_right.value, b.r_left.value, b.wheel_base.value
+        );
+        for n in &b.notes {
+            eprintln!("batch note: {n}");
+        }
+    }
     eprintln!(
         "{}: R_R {:.5} ± {:.5} m, R_L {:.5} ± {:.5} m, D {:.5} ± {:.5} m after {} steps ({:.3} ms/step)",
         s.method,
