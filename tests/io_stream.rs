@@ -246,6 +246,7 @@ fn calibrate_command(
             config: config.map(Path::to_path_buf),
             robot: None,
         },
+        init: Default::default(),
     };
     pipeline::calibrate::run(&job, &mut pipeline::NoObserver)
         .unwrap()

@@ -6,6 +6,7 @@ mod calib_censi;
 mod calib_checks;
 mod calib_end_to_end;
 mod calib_filters;
+mod calib_real;
 mod calib_resample;
 mod classic_cli;
 mod classic_compare;

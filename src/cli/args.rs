@@ -162,6 +162,10 @@ pub struct CalibrateArgs {
     /// Seed of every random draw.
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
+    /// Where an online filter starts: nominal (the robot file) or batch (the joint batch
+    /// estimate of the same recording: radii, wheel base, laser mounting, time offset).
+    #[arg(long, value_name = "nominal|batch", default_value = "nominal")]
+    pub init: odocal::pipeline::start::Start,
     /// Output directory: calibration.csv, trajectory.tum, summary.json.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -333,6 +337,7 @@ impl CalibrateArgs {
             },
             viewer: viewer(self.rrd.as_ref(), self.connect.as_ref(), self.spawn),
             common: self.common.files(),
+            init: self.init,
         })
     }
 }

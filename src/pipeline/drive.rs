@@ -55,6 +55,8 @@ pub struct IcpRunSummary {
 struct IcpStage {
     matcher: StreamMatcher,
     mount: Mount,
+    /// The robot file's scanner corrections, applied to every scan.
+    scanner: crate::robot::ScannerCorrection,
     prior: Prior,
     tally: Tally,
     wheels_seen: usize,
@@ -85,6 +87,7 @@ impl IcpStage {
         Ok(Self {
             matcher,
             mount,
+            scanner: robot.scanner,
             prior,
             tally: Tally::default(),
             wheels_seen: 0,
@@ -102,7 +105,10 @@ impl IcpStage {
         out: &mut dyn FnMut(&Motion),
     ) {
         match item {
-            Item::Scan(s) => self.matcher.push_scan(s.clone()),
+            Item::Scan(s) if self.scanner.is_none() => self.matcher.push_scan(s.clone()),
+            Item::Scan(s) => self
+                .matcher
+                .push_scan(s.corrected(self.scanner.angle_increment, self.scanner.range_offset)),
             Item::Wheel(w) => {
                 self.matcher.push_wheel(w);
                 self.wheels_seen += 1;

@@ -18,6 +18,7 @@ pub mod outputs;
 pub mod recorder;
 pub mod sense;
 pub mod simulate;
+pub mod start;
 pub mod viewer;
 pub mod wheels;
 

@@ -89,6 +89,10 @@ impl Nominal {
         ] {
             a.set(k, v, self.origin(k), hint(k));
         }
+        if !r.scanner.is_none() {
+            let note = "applied to every scan before matching".to_string();
+            a.set("scanner", r.scanner, self.origin("scanner"), Some(note));
+        }
         a
     }
 }
