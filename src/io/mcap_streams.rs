@@ -43,6 +43,9 @@ pub(crate) enum Role {
     /// TFMessage on /tf → `base_from_laser` when /tf_static has none (the
     /// first transform of each child frame).
     Tf,
+    /// Any topic, whatever its type, for a survey of the whole bag
+    /// ([`ReadOptions::all_topics`]); decoded by [`super::survey`], not here.
+    Survey,
 }
 
 /// How a bag serialises its messages: CDR (ROS 2) or ROS 1.
@@ -248,6 +251,7 @@ impl<'a> State<'a> {
                 });
                 Ok(())
             }
+            Role::Survey => Ok(()),
             Role::TfStatic | Role::Tf => {
                 let m: TfMessage = self.decode(data)?;
                 let map = if role == Role::Tf {
@@ -515,6 +519,9 @@ pub(crate) fn roles_for(
     wire: Wire,
     opts: &ReadOptions,
 ) -> Result<Vec<Role>, String> {
+    if opts.all_topics {
+        return Ok(vec![Role::Survey]);
+    }
     let t = &opts.topics;
     let schema = short_name(type_name);
     let mut roles = Vec::new();

@@ -8,6 +8,7 @@ use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
 use super::outputs::{check_outputs, lock_outputs, CalibFiles, Collect};
+use super::paste::Paste;
 use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
 use super::PipelineError;
@@ -167,12 +168,18 @@ pub fn run(
     if let Some(w) = wheel_source {
         super::wheels::state(&mut summary, w);
     }
-    files.commit(&summary)?;
+    let paste = Paste::of(&summary, robot, &input.display().to_string());
+    files.commit(&paste.with(&summary))?;
+    paste.write(&job.out)?;
     let notes = match recorder {
         Some(r) => r.finish().map_err(super::viewer::viz_error)?,
         None => Vec::new(),
     };
-    Ok(CalibrateOutcome { summary, notes })
+    Ok(CalibrateOutcome {
+        summary,
+        notes,
+        paste,
+    })
 }
 
 /// Before a calibration is reported: the encoders' wiring, the parameters'
@@ -227,7 +234,8 @@ fn check_job_outputs(job: &CalibrateJob) -> Result<Vec<OutputLock>, PipelineErro
         CalibSource::Recording(p) => vec![p],
         CalibSource::Csv { motions, wheels } => vec![motions, wheels],
     };
-    let files = CalibFiles::paths(&job.out);
+    let mut files = CalibFiles::paths(&job.out).to_vec();
+    files.extend(Paste::paths(&job.out, false));
     let mut outputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     if let Some(Viewer::File(rrd)) = &job.viewer {
         outputs.push(rrd);
