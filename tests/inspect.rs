@@ -304,3 +304,58 @@ fn inspect_refuses_what_is_not_a_recording_by_name() {
     let o = odocal(&["inspect", BUNDLED, "--write-robot", BUNDLED]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn tick_counters_are_proposed_with_their_type_and_what_the_bag_cannot_tell() {
+    let dir = scratch("inspect_ticks");
+    let bag = dir.join("ticks.mcap");
+    let args = [
+        BUNDLED,
+        bag.to_str().unwrap(),
+        "ticks",
+        "--ticks-per-rev",
+        "8800",
+        "--bits",
+        "16",
+        "--until",
+        "20",
+    ];
+    if tool("inspect_ticks", "wheel_sources.py", &args).is_none() {
+        return;
+    }
+    let robot = dir.join("robot.toml");
+    let v = inspect(&bag, &["--write-robot", robot.to_str().unwrap()]);
+    let w = &v["uses"]["wheels"];
+    assert_eq!(w["topic"], "/wheel_ticks");
+    assert_eq!(w["wheels"]["source"], "ticks");
+    assert_eq!(w["wheels"]["ticks_type"], "std_msgs/msg/Int32MultiArray");
+    assert!(w["why"].as_str().unwrap().contains("left_index"), "{w}");
+    // The written [wheels] table reads, once the kinematics, the ticks per
+    // revolution and the counters' order (data = [right, left]) are given.
+    let text = std::fs::read_to_string(&robot).unwrap();
+    let filled = text
+        .replace("# r_right = 0.0", "r_right = 0.32")
+        .replace("# r_left = 0.0", "r_left = 0.32")
+        .replace("# wheel_base = 0.0", "wheel_base = 0.65")
+        .replace("# ticks_per_rev = 0", "ticks_per_rev = 8800")
+        .replace("left_index = 0", "left_index = 1")
+        .replace("right_index = 1", "right_index = 0")
+        .replace("# ticks_wrap_bits = 16", "ticks_wrap_bits = 16");
+    std::fs::write(&robot, filled).unwrap();
+    let out = dir.join("cal");
+    let o = odocal(&[
+        "calibrate",
+        "--input",
+        bag.to_str().unwrap(),
+        "--robot",
+        robot.to_str().unwrap(),
+        "--method",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(s["wheel_source"]["kind"], "ticks", "{s}");
+}
