@@ -537,7 +537,8 @@ pub(crate) fn roles_for(
             None => {
                 let names: Vec<&str> = accepted.iter().map(|(n, _)| *n).collect();
                 Err(format!(
-                    "schema '{}' where {} was expected",
+                    "schema '{}' where {} was expected (the --config file's [topics] table \
+                     names each stream's topic; `odocal inspect REC` lists the topics and types)",
                     if schema.is_empty() { "(none)" } else { &schema },
                     names.join(" or ")
                 ))
