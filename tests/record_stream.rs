@@ -18,6 +18,9 @@ const BUNDLED: &str = concat!(
     "/scans/wheelchair-corridor.mcap"
 );
 
+/// A scan-match ellipse handed to the logger: row, time, matched pose, covariance.
+type Ellipse = (i64, f64, [f64; 3], [[f64; 2]; 2]);
+
 /// Everything a logger was handed, per entity.
 #[derive(Default, Debug)]
 struct Tape {
@@ -26,8 +29,8 @@ struct Tape {
     particles: Vec<(i64, f64, usize)>,
     estimates: Vec<(i64, f64, [f64; 3])>,
     trajectories: Vec<(TrajectoryKind, Vec<Pose2>)>,
-    /// Scan-match ellipses: row, time, matched pose, covariance.
-    ellipses: Vec<(i64, f64, [f64; 3], [[f64; 2]; 2])>,
+    /// Scan-match ellipses.
+    ellipses: Vec<Ellipse>,
     finished: usize,
 }
 
