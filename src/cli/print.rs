@@ -137,6 +137,25 @@ pub fn calibration(s: &CalibSummary, out: &Path) {
     );
 }
 
+/// What to paste: the ros2_control YAML and the laser mounting snippets.
+pub fn paste(p: &odocal::pipeline::paste::Paste, out: &Path) {
+    eprintln!(
+        "ros2_control parameters ({}):",
+        out.join(odocal::pipeline::paste::YAML_FILE).display()
+    );
+    for l in p.ros2_control.yaml.lines().filter(|l| !l.starts_with('#')) {
+        out!("{l}");
+    }
+    if let Some(l) = &p.laser_mount {
+        eprintln!(
+            "laser mounting ({}):",
+            out.join(odocal::pipeline::paste::URDF_FILE).display()
+        );
+        out!("{}", l.urdf.trim_end());
+        out!("{}", l.static_transform);
+    }
+}
+
 /// The batch estimate: every unknown with its std and observability.
 fn batch(s: &CalibSummary, b: &odocal::calib::batch::BatchEstimate, out: &Path) {
     let obs = s.observability.as_ref();

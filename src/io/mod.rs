@@ -68,6 +68,7 @@ pub mod rosbag2_dir;
 pub mod seed_tables;
 pub mod source;
 pub mod stream_out;
+pub mod survey;
 pub mod tum;
 mod wheel_msgs;
 

@@ -52,8 +52,10 @@ pub fn run(
                 .into(),
         ));
     };
-    let js = job.out.join("summary.json");
-    super::outputs::check_outputs(&[path], &[&js])?;
+    let mut outputs = vec![job.out.join("summary.json")];
+    outputs.extend(super::paste::Paste::paths(&job.out, true));
+    let outputs: Vec<&Path> = outputs.iter().map(|p| p.as_path()).collect();
+    super::outputs::check_outputs(&[path], &outputs)?;
     let _lock = super::outputs::lock_outputs(&[job.out.as_path()])?;
     let (cfg, nominal) = job.common.load_nominal()?;
     let robot = &nominal.robot;
@@ -77,10 +79,13 @@ pub fn run(
     if let Some(w) = wheel_source {
         super::wheels::state(&mut summary, w);
     }
-    write_summary(&job.out, &summary)?;
+    let paste = super::paste::Paste::of(&summary, robot, &path.display().to_string());
+    write_summary(&job.out, &paste.with(&summary))?;
+    paste.write(&job.out)?;
     Ok(CalibrateOutcome {
         summary,
         notes: Vec::new(),
+        paste,
     })
 }
 
@@ -148,7 +153,7 @@ fn summary(
     s
 }
 
-fn write_summary(dir: &Path, s: &CalibSummary) -> Result<(), PipelineError> {
+fn write_summary(dir: &Path, s: &impl serde::Serialize) -> Result<(), PipelineError> {
     std::fs::create_dir_all(dir).map_err(|e| PipelineError::write(dir, e))?;
     let js = dir.join("summary.json");
     let text = serde_json::to_string_pretty(s).expect("summary serialises");

@@ -9,6 +9,7 @@ use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
 use super::outputs::{check_outputs, lock_outputs, CalibFiles, Collect};
+use super::paste::Paste;
 use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
 use super::PipelineError;
@@ -175,12 +176,18 @@ pub fn run(
         summary.rebase(nominal.robot.diff_drive());
         summary.start = Some(s.est);
     }
-    files.commit(&summary)?;
+    let paste = Paste::of(&summary, &nominal.robot, &input.display().to_string());
+    files.commit(&paste.with(&summary))?;
+    paste.write(&job.out)?;
     let notes = match recorder {
         Some(r) => r.finish().map_err(super::viewer::viz_error)?,
         None => Vec::new(),
     };
-    Ok(CalibrateOutcome { summary, notes })
+    Ok(CalibrateOutcome {
+        summary,
+        notes,
+        paste,
+    })
 }
 
 /// The batch start of `--init batch` (`None` for `--init nominal`).
@@ -282,7 +289,8 @@ fn check_job_outputs(job: &CalibrateJob) -> Result<Vec<OutputLock>, PipelineErro
         CalibSource::Recording(p) => vec![p],
         CalibSource::Csv { motions, wheels } => vec![motions, wheels],
     };
-    let files = CalibFiles::paths(&job.out);
+    let mut files = CalibFiles::paths(&job.out).to_vec();
+    files.extend(Paste::paths(&job.out, false));
     let mut outputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     if let Some(Viewer::File(rrd)) = &job.viewer {
         outputs.push(rrd);

@@ -84,6 +84,9 @@ pub struct CalibrateOutcome {
     pub summary: CalibSummary,
     /// What the recording left out, for the user (empty when nothing).
     pub notes: Vec<String>,
+    /// What to paste: the ros2_control parameters, the laser mounting
+    /// (also in `DIR/`).
+    pub paste: super::paste::Paste,
 }
 
 /// Where the online filters start.

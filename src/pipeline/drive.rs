@@ -76,7 +76,12 @@ impl IcpStage {
         if info.scans < 2 {
             return Err(InputError::new(
                 source,
-                format!("{} laser scans: scan matching needs at least 2", info.scans),
+                format!(
+                    "{} laser scans: scan matching needs at least 2 (the scans are read from \
+                     [topics] scan in the --config file, default /scan; `odocal inspect {source}` \
+                     lists the recording's LaserScan topics)",
+                    info.scans
+                ),
             )
             .into());
         }
@@ -372,8 +377,11 @@ pub fn run_calibration(
             format!(
                 "no wheel encoder data to calibrate: {} wheel samples ([wheels] source and topic in \
                  the robot file name the stream; for JointState, left_joint and right_joint \
-                 name the joints: '{}' and '{}')",
-                info.wheels, robot.left_joint, robot.right_joint
+                 name the joints: '{}' and '{}'; `odocal inspect {}` proposes them)",
+                info.wheels,
+                robot.left_joint,
+                robot.right_joint,
+                source.name()
             ),
         )
         .into());

@@ -272,7 +272,8 @@ fn unknown(note: Option<&str>, input: &str) -> InputError {
             "the laser mounting is unknown: {why}, and the robot file gives no [laser] table \
              (without --robot, no mounting is assumed). Set [laser] x, y, yaw (base_from_laser \
              in m, m, rad) in the robot file (--robot ROBOT.toml), or let \
-             `odocal calibrate --method batch` estimate it"
+             `odocal calibrate --method batch` estimate it (`odocal inspect {input}` shows the \
+             recording's transforms)"
         ),
     )
 }
