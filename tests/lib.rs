@@ -48,6 +48,7 @@ mod io_time;
 mod io_wheel_sources;
 mod record_stream;
 mod sim_effects;
+mod sim_memory;
 mod sim_scenario;
 mod sim_sensors;
 mod support;
