@@ -147,11 +147,15 @@ pub fn simulate(
     let run = sim::prepare(cfg, robot, effects)?;
     let mut opts = WriteOptions::for_robot(robot);
     opts.topics = topics.clone();
+    // The truth goes to its temporary file first and is renamed into place
+    // right after the bag, so that a run killed while it writes never
+    // leaves a new bag beside an old truth file.
+    let truth = truth_path.map(|tp| write_truth(&run, tp)).transpose()?;
     let mut bag = SimBag::new(&run, progress);
     io::write_mcap_streaming(out, &mut bag, &opts).map_err(|e| PipelineError::write(out, e))?;
     let counts = bag.counts();
-    if let Some(tp) = truth_path {
-        write_truth(&run, tp)?;
+    if let (Some(file), Some(tp)) = (truth, truth_path) {
+        file.commit().map_err(|e| PipelineError::write(tp, e))?;
     }
     progress(1.0);
     let header = run.truth_header();
@@ -170,9 +174,13 @@ pub fn simulate(
     })
 }
 
-/// Writes the truth file of `run` (pretty JSON, [`sim::Truth`]'s text),
-/// atomically, its series drawn while they are written.
-fn write_truth(run: &sim::SimRun, path: &Path) -> Result<(), PipelineError> {
+/// Writes the truth file of `run` (pretty JSON, [`sim::Truth`]'s text) into
+/// the temporary sibling of `path`, its series drawn while they are
+/// written; the caller commits it.
+fn write_truth(
+    run: &sim::SimRun,
+    path: &Path,
+) -> Result<io::stream_out::AtomicWriter, PipelineError> {
     let truth = run.truth_header().with(
         sim::Drawn::new(run.parameters()),
         sim::Drawn::new(run.trajectory()),
@@ -181,7 +189,7 @@ fn write_truth(run: &sim::SimRun, path: &Path) -> Result<(), PipelineError> {
         io::stream_out::AtomicWriter::create(path).map_err(|e| PipelineError::write(path, e))?;
     serde_json::to_writer_pretty(file.writer(), &truth)
         .map_err(|e| PipelineError::write(path, std::io::Error::from(e)))?;
-    file.commit().map_err(|e| PipelineError::write(path, e))
+    Ok(file)
 }
 
 /// A simulated run as the messages of its bag, made as the writer asks for
