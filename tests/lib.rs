@@ -51,6 +51,7 @@ mod io_wheel_sources;
 mod paste;
 mod record_stream;
 mod sim_effects;
+mod sim_memory;
 mod sim_scenario;
 mod sim_sensors;
 mod support;

@@ -297,9 +297,10 @@ fn output_files(out: &Path) -> Vec<PathBuf> {
 /// Reads a simulator truth file.
 pub fn load_truth(path: &Path) -> Result<Truth, PipelineError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path)
+    let file = std::fs::File::open(path)
         .map_err(|e| InputError::new(&name, format!("cannot read: {e}")))?;
-    Ok(Truth::from_json(&text).map_err(|e| InputError::new(&name, e.to_string()))?)
+    let truth = Truth::from_reader(std::io::BufReader::new(file));
+    Ok(truth.map_err(|e| InputError::new(&name, e.to_string()))?)
 }
 
 /// Runs the demo on a recording in memory into `out` (created), logging to
