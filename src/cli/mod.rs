@@ -2,6 +2,7 @@
 //! job, whose summary is printed (one JSON object with `--json`).
 
 pub mod args;
+mod fleet;
 mod print;
 
 use args::{
@@ -20,6 +21,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Eval(a) => eval(a),
         Command::Diagnose(a) => diagnose(a),
         Command::Experiment(a) => experiment(a),
+        Command::Fleet(a) => fleet::run(a),
     }
 }
 
