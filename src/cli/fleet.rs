@@ -161,9 +161,8 @@ fn print(s: &FleetSummary, a: &FleetArgs) {
         );
     }
     eprintln!(
-        "outputs in {}: {}",
-        a.out.display(),
-        "fleet.csv, fleet.json, report.md, fleet.png"
+        "outputs in {}: fleet.csv, fleet.json, report.md, fleet.png",
+        a.out.display()
     );
 }
 
