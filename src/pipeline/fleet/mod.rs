@@ -108,7 +108,10 @@ pub struct StdFactors {
 pub fn plan(job: &FleetJob) -> Result<Plan, PipelineError> {
     job.common.load_nominal()?; // refuse bad settings before any work
     let settings = cache::settings_key(job)?;
-    let mut listed = inputs::list(&job.source)?;
+    // Absolute paths, so that the table reads the same whichever engine or
+    // working directory ran it.
+    let source = std::path::absolute(&job.source).unwrap_or_else(|_| job.source.clone());
+    let mut listed = inputs::list(&source)?;
     listed.sort_by(|a, b| {
         (a.robot.as_str(), a.unix_day, &a.path)
             .partial_cmp(&(b.robot.as_str(), b.unix_day, &b.path))

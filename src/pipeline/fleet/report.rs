@@ -127,9 +127,16 @@ pub fn markdown(s: &FleetSummary) -> String {
             );
         }
     }
+    let _ = write!(
+        m,
+        "\n## Trends\n\nEach recording's std was multiplied by {:.3} (R_R), {:.3} (R_L) and \
+         {:.3} (D): the fleet's median scatter between recordings against the std the \
+         calibrations report.",
+        s.std_factors.r_right, s.std_factors.r_left, s.std_factors.wheel_base
+    );
     m.push_str(
-        "\n## Trends\n\nRates in mm/day ± std (widened by the Birge ratio when the scatter \
-         exceeds the recordings' σ); steps found in the history.\n\n\
+        " Rates in mm/day ± std (widened further by the Birge ratio when a robot's scatter \
+         exceeds that); steps found in the history.\n\n\
          | robot | recordings | R_R rate | R_L rate | D rate | steps |\n|---|---|---|---|---|---|\n",
     );
     for r in &s.robots {
