@@ -27,6 +27,8 @@ mod eval_evo;
 mod eval_inputs;
 mod eval_reference;
 mod eval_relations;
+mod fleet_cli;
+mod fleet_math;
 mod fuzz_regressions;
 mod icp_bad_input;
 mod icp_odometry_faults;

@@ -45,6 +45,8 @@ pub enum Command {
     /// Regenerate the seeds' tables: resampling, montecarlo, changing, literature,
     /// square, umbmark, heading-pf, tachometer.
     Experiment(ExperimentArgs),
+    /// Calibrate a fleet's recordings; per robot the parameter history and its alarms.
+    Fleet(super::fleet::FleetArgs),
 }
 
 #[derive(Args)]

@@ -3,6 +3,7 @@
 
 pub mod args;
 mod inspect_print;
+mod fleet;
 mod print;
 
 use args::{
@@ -23,6 +24,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Diagnose(a) => diagnose(a),
         Command::Experiment(a) => experiment(a),
         Command::Inspect(a) => inspect(a),
+        Command::Fleet(a) => fleet::run(a),
     }
 }
 

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// Experiment names `odocal experiment` knows.
-pub const EXPERIMENTS: [&str; 9] = [
+pub const EXPERIMENTS: [&str; 10] = [
     "resampling",
     "montecarlo",
     "montecarlo-scans",
@@ -25,6 +25,7 @@ pub const EXPERIMENTS: [&str; 9] = [
     "umbmark",
     "heading-pf",
     "tachometer",
+    "fleet",
 ];
 
 /// Settings of the experiments (`--settings FILE.toml`), one table each.
@@ -41,6 +42,8 @@ pub struct ExperimentSettings {
     pub heading_pf: PfExperimentParams,
     /// `montecarlo-scans`.
     pub scans: ScanMonteCarloParams,
+    /// `fleet` (`--runs` robots).
+    pub fleet: super::fleet::FleetSimParams,
 }
 
 impl ExperimentSettings {
@@ -122,6 +125,7 @@ pub fn run_experiment(
         "umbmark" => umbmark_output(inp, &settings.umbmark, &png)?,
         "heading-pf" => heading_pf_output(inp, &settings.heading_pf, &png)?,
         "tachometer" => tachometer_output(inp, &settings.square, &png)?,
+        "fleet" => super::fleet::fleet_output(inp, &settings.fleet, out, &png)?,
         _ => monte_carlo(name, inp, &settings.scans, &png)?,
     };
     write_text(out, format!("{name}.md"), &res.markdown)?;

@@ -12,6 +12,7 @@
 
 mod compare;
 mod driver;
+pub mod fleet;
 mod heading_pf;
 mod inputs;
 mod literature;

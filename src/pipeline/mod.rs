@@ -11,6 +11,7 @@ pub mod diagnose;
 pub mod drive;
 mod error;
 pub mod evaluate;
+pub mod fleet;
 pub mod icp;
 pub mod inspect;
 pub mod nominal;
