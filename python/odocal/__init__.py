@@ -154,7 +154,8 @@ def calibrate(rec: Union[PathLike, Recording, Motions, None] = None, out: Option
               method: Optional[str] = None, wheels: Optional[PathLike] = None,
               resampler: Optional[str] = None, trigger: Optional[str] = None,
               particles: Optional[int] = None, seed: Optional[int] = None,
-              robot: Optional[PathLike] = None, config: Optional[PathLike] = None) -> Calibration:
+              robot: Optional[PathLike] = None, config: Optional[PathLike] = None,
+              init: Optional[str] = None) -> Calibration:
     """Calibrate the wheel radii and wheel base (``odocal calibrate``).
 
     ``rec`` is a recording (path or :class:`Recording`), or the
@@ -162,6 +163,8 @@ def calibrate(rec: Union[PathLike, Recording, Motions, None] = None, out: Option
     ``t,left,right``). ``method``: ``adaptive-pf`` (default), ``pf``,
     ``dkf``, ``akf``, ``batch``, ``none``. Refusals (wiring, observability,
     implausible estimates) raise :class:`InputError` with the CLI's message.
+    ``init``: ``nominal`` (default) or ``batch`` (``--init batch``: an online
+    filter starts from the joint batch estimate of the same recording).
     """
     folder = _out_dir(out, "odocal-calibrate-")
     if isinstance(rec, Motions):
@@ -174,7 +177,7 @@ def calibrate(rec: Union[PathLike, Recording, Motions, None] = None, out: Option
         args = dict(input=_input_path(rec))
     summary = _core.calibrate(folder, method=method, resampler=resampler, trigger=trigger,
                               particles=particles, seed=seed, robot=_p(robot),
-                              config=_p(config), **args)
+                              config=_p(config), init=init, **args)
     res = Calibration(json.loads(summary))
     res["out"] = folder
     history = Path(folder) / "calibration.csv"

@@ -18,7 +18,8 @@ def calibrate(out: str, input: Optional[str] = None, motions: Optional[str] = No
               wheels: Optional[str] = None, method: Optional[str] = None,
               resampler: Optional[str] = None, trigger: Optional[str] = None,
               particles: Optional[int] = None, seed: Optional[int] = None,
-              robot: Optional[str] = None, config: Optional[str] = None) -> str: ...
+              robot: Optional[str] = None, config: Optional[str] = None,
+              init: Optional[str] = None) -> str: ...
 def eval(estimate: str, reference: Optional[str] = None, relations: Optional[str] = None,
          align: Optional[str] = None, t_max_diff: Optional[float] = None,
          t_offset: Optional[float] = None, interpolate: bool = False,

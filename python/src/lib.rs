@@ -189,7 +189,7 @@ fn icp(
 /// summary files in `out`.
 #[pyfunction]
 #[pyo3(signature = (out, input=None, motions=None, wheels=None, method=None, resampler=None,
-    trigger=None, particles=None, seed=None, robot=None, config=None))]
+    trigger=None, particles=None, seed=None, robot=None, config=None, init=None))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate(
     py: Python<'_>,
@@ -204,6 +204,7 @@ fn calibrate(
     seed: Option<u64>,
     robot: Option<PathBuf>,
     config: Option<PathBuf>,
+    init: Option<String>,
 ) -> PyResult<String> {
     let input = match (input, motions, wheels) {
         (Some(rec), None, None) => CalibSource::Recording(rec),
@@ -225,6 +226,7 @@ fn calibrate(
         },
         viewer: None,
         common: common(robot, config),
+        init: parse("init", init)?.unwrap_or_default(),
     };
     let done = py
         .detach(|| pipeline::calibrate::run(&job, &mut NoObserver))
