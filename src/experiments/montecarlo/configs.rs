@@ -36,3 +36,34 @@ pub fn table1_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
     }
     out
 }
+
+/// The radius-step experiment's configurations: every online filter with
+/// the change detector and, labelled `METHOD, no detector`, without it
+/// (the fixed PF has none, as in seed 000); then `none`.
+pub fn changing_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
+    let mut out = vec![];
+    for m in [Method::AdaptivePf, Method::Dkf, Method::Akf] {
+        for enabled in [true, false] {
+            let mut p = CalibParams {
+                method: m,
+                ..base.clone()
+            };
+            p.change.enabled = enabled;
+            let label = match enabled {
+                true => m.as_str().to_string(),
+                false => format!("{}, no detector", m.as_str()),
+            };
+            out.push((label, p));
+        }
+    }
+    for m in [Method::Pf, Method::None] {
+        out.push((
+            m.as_str().to_string(),
+            CalibParams {
+                method: m,
+                ..base.clone()
+            },
+        ));
+    }
+    out
+}
