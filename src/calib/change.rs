@@ -29,13 +29,22 @@ use super::normal::inverse_normal_cdf;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// Settings of the change detector (used by `adaptive-pf`, `dkf` and `akf`;
-/// the fixed `pf` is seed 000's plain filter and has none).
+/// Settings of the change detector (used by `adaptive-pf`, and by `dkf` and
+/// `akf` when `kalman` is set; the fixed `pf` is seed 000's plain filter and
+/// has none).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ChangeParams {
     /// Whether the detector runs (false: seed 000's rules alone).
     pub enabled: bool,
+    /// Whether the Kalman filters (`dkf`, `akf`) run it too. Off by default:
+    /// their parameter random walk keeps their covariance wide enough that
+    /// at the default `false_alarm` the test stays mute on a 4 mm step, and
+    /// on recordings whose residuals are far beyond their σ (the Mines
+    /// rover's 0.15 s latency) a more sensitive test fires again and again,
+    /// each time re-opening the covariance. `odocal experiment changing`
+    /// compares every filter with it on (`false_alarm` 1e-4) and off.
+    pub kalman: bool,
     /// Time constant τ of the window's exponential forgetting (s).
     pub window: f64,
     /// Probability that one evaluation fires without a change (sets the χ²₃
@@ -51,8 +60,9 @@ impl Default for ChangeParams {
     fn default() -> Self {
         Self {
             enabled: true,
+            kalman: false,
             window: 5.0,
-            false_alarm: 1e-4,
+            false_alarm: 1e-6,
             jump_sigma: [3e-3, 3e-3, 0.0],
         }
     }
@@ -316,9 +326,9 @@ pub(crate) struct KalmanChange {
 }
 
 impl KalmanChange {
-    /// `None` when the detector is off.
+    /// `None` when the detector is off for the Kalman filters.
     pub(crate) fn new(p: &ChangeParams) -> Option<Self> {
-        p.enabled.then(|| Self {
+        (p.enabled && p.kalman).then(|| Self {
             det: ChangeDetector::new(p),
             floor: p.jump_sigma,
         })
