@@ -75,9 +75,12 @@ pub struct MonteCarloTable {
     pub rows: Vec<TableRow>,
 }
 
+/// One lower-is-better figure of a run.
+type Metric = fn(&RunMetrics) -> f64;
+
 /// The metrics the paired comparison counts, each lower-is-better: name
 /// and value of one run (a run that never converged counts as never).
-const PAIRED: [(&str, fn(&RunMetrics) -> f64); 5] = [
+const PAIRED: [(&str, Metric); 5] = [
     ("radius error", |r| 0.5 * (r.err_r_right + r.err_r_left)),
     ("convergence", |r| r.convergence_s.unwrap_or(f64::INFINITY)),
     ("RMSE x,y", |r| r.rmse_xy),
@@ -86,7 +89,7 @@ const PAIRED: [(&str, fn(&RunMetrics) -> f64); 5] = [
 ];
 
 /// Runs (of the same seeds) in which `a` is strictly better than `b` on `f`.
-fn wins(a: &[RunMetrics], b: &[RunMetrics], f: fn(&RunMetrics) -> f64) -> usize {
+fn wins(a: &[RunMetrics], b: &[RunMetrics], f: Metric) -> usize {
     a.iter().zip(b).filter(|(x, y)| f(x) < f(y)).count()
 }
 
