@@ -2,8 +2,8 @@
 //! job, whose summary is printed (one JSON object with `--json`).
 
 pub mod args;
-mod inspect_print;
 mod fleet;
+mod inspect_print;
 mod print;
 
 use args::{

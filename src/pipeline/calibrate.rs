@@ -131,17 +131,7 @@ pub fn run(
             (done, a, path, Some(s.wheels.clone()))
         }
         (CalibSource::Recording(path), None) => {
-            let read = super::read_options(&cfg, robot);
-            let mut source = crate::io::open(path, &read)?;
-            let info = source.info().clone();
-            let found = super::wheels::Found {
-                wheels: info.wheels,
-                odom: info.odom,
-                bag: crate::io::sniff(path)? != crate::io::Format::Text,
-            };
-            super::wheels::require(&read, &nominal, &path.display().to_string(), found)?;
-            let (done, a) = run.recording(source.as_mut(), &mut obs)?;
-            let wheels = super::wheels::describe(&read, &nominal, info.wheels, info.wheel_values);
+            let (done, a, wheels) = run.file(path, &mut obs)?;
             (done, a, path, Some(wheels))
         }
         (CalibSource::Csv { motions, wheels }, _) => {
@@ -234,6 +224,34 @@ impl Run<'_> {
             obs,
         )?;
         Ok((done, self.nominal.assumptions_with(&icp.mount)))
+    }
+
+    /// [`Self::recording`] over the file at `path`, once its wheel stream
+    /// is known to be there; also where the wheels came from.
+    fn file(
+        &self,
+        path: &std::path::Path,
+        obs: &mut dyn RunObserver,
+    ) -> Result<
+        (
+            drive::CalibRunSummary,
+            crate::assumptions::Assumptions,
+            crate::recording::WheelSource,
+        ),
+        PipelineError,
+    > {
+        let read = super::read_options(self.cfg, self.robot);
+        let mut source = crate::io::open(path, &read)?;
+        let info = source.info().clone();
+        let found = super::wheels::Found {
+            wheels: info.wheels,
+            odom: info.odom,
+            bag: crate::io::sniff(path)? != crate::io::Format::Text,
+        };
+        super::wheels::require(&read, self.nominal, &path.display().to_string(), found)?;
+        let (done, a) = self.recording(source.as_mut(), obs)?;
+        let wheels = super::wheels::describe(&read, self.nominal, info.wheels, info.wheel_values);
+        Ok((done, a, wheels))
     }
 }
 
