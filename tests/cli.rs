@@ -105,8 +105,10 @@ fn cli_pipeline_chains_and_prints_the_contract_keys() {
         sim["scans"].as_u64().unwrap()
     );
     let header = std::fs::read_to_string(&motions).unwrap();
+    // The contract's columns first, the information split appended.
     assert!(header.starts_with(
-        "t0,t1,dx,dy,dtheta,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt,iterations,inliers,valid\n"
+        "t0,t1,dx,dy,dtheta,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt,iterations,inliers,valid,\
+         scan_share_x,scan_share_y,scan_share_theta,scan_dx,scan_dy,scan_dtheta\n"
     ));
 
     // The intermediate files carry no gyro: leave it out of both runs so that
