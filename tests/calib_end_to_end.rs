@@ -230,4 +230,45 @@ fn experiment_changing_draws_run_0_over_time_with_the_particle_count() {
         apf["err_r_right"]["median"].as_f64().unwrap() < 1e-3,
         "{apf}"
     );
+    fig5_fixed_count_baseline(&out.markdown, &v);
+}
+
+/// Seed 000's Fig. 5 baseline in `experiment changing`: the same filter with
+/// N held at the paper's 3000 through the detector's restart, re-converged
+/// after the step, and the run drawn is the table's run 0.
+fn fig5_fixed_count_baseline(md: &str, v: &serde_json::Value) {
+    let cells = |prefix: &str| -> Vec<String> {
+        let line = md
+            .lines()
+            .find(|l| l.starts_with(prefix))
+            .unwrap_or_else(|| panic!("no row {prefix:?} in\n{md}"));
+        line.split('|').map(|c| c.trim().to_string()).collect()
+    };
+    let (adaptive, fixed) = (cells("| adaptive N |"), cells("| fixed N = 3000 |"));
+    // The count never moves: not at the uniform start, not at the restart.
+    assert_eq!(fixed[4], "3000 / 3000 / 3000", "{fixed:?}");
+    // The adaptive count is below it once converged and above it after the
+    // restart.
+    let counts: Vec<usize> = adaptive[4]
+        .split(" / ")
+        .map(|c| c.parse().unwrap())
+        .collect();
+    assert!(counts[0] < 3000 && counts[1] > 3000, "{adaptive:?}");
+    let row = v["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["label"] == "adaptive-pf, fixed N = 3000")
+        .expect("fixed-count row in the table");
+    let run0 = &row["runs"][0];
+    let table_mm =
+        0.5e3 * (run0["err_r_right"].as_f64().unwrap() + run0["err_r_left"].as_f64().unwrap());
+    let (before_mm, end_mm): (f64, f64) = (fixed[2].parse().unwrap(), fixed[3].parse().unwrap());
+    // Against the simulator's radii: within 1 mm before the 4 / 2 mm step
+    // and again at the end.
+    assert!(before_mm < 1.0 && end_mm < 1.0, "{fixed:?}");
+    // The figure replays the table's run 0 (same data, same filter seed):
+    // its final error is the one the table scored, to the printed digits.
+    assert!((end_mm - table_mm).abs() < 6e-4, "{end_mm} vs {table_mm}");
+    assert!(run0["convergence_s"].as_f64().is_some(), "{run0}");
 }

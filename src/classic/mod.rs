@@ -16,6 +16,7 @@ mod laser_obs;
 mod square;
 mod square_fit;
 mod tacho;
+mod tacho_session;
 mod umbmark;
 
 pub use drive::{
@@ -36,7 +37,6 @@ pub use square::{square_report, CornerError, SquareCorner, SquareReport};
 pub use square_fit::{
     fit_square_effects, measured_square, square_odometry_corners, SquareEffectFit,
 };
-pub use tacho::{
-    fit_tachometer, simulate_tachometer_table, LinearFit, TachoCalibration, TachoReading,
-};
+pub use tacho::{fit_tachometer, LinearFit, TachoCalibration, TachoReading};
+pub use tacho_session::{session_speeds, tachometer_session, TachometerSensor};
 pub use umbmark::{umbmark, umbmark_runs, UmbmarkResult, UmbmarkRun};

@@ -2,7 +2,9 @@
 //! tachometer, fitted per wheel as `true = slope · encoder + intercept`
 //! (least squares, encoder reading as regressor), then applied to encoder rates.
 
-use super::encoder::{rad_s_to_rpm, rpm_to_rad_s, EncoderChain};
+#[cfg(test)]
+use super::encoder::EncoderChain;
+use super::encoder::{rad_s_to_rpm, rpm_to_rad_s};
 use super::error::{check_finite, ClassicError};
 use crate::recording::WheelSample;
 use serde::Serialize;
@@ -151,37 +153,16 @@ impl TachoCalibration {
     }
 }
 
-/// The table a tachometer session would give on wheels whose encoders over-read
-/// as the `encoder_gain` effect describes, ω_meas = ω (1 + k |ω|) (k in s/rad),
-/// read out through `chain` (whole pulses per period) at the given true speeds (rpm).
-pub fn simulate_tachometer_table(
-    chain: &EncoderChain,
-    k_right: f64,
-    k_left: f64,
-    tacho_rpm: &[f64],
-) -> Vec<TachoReading> {
-    let read = |rpm: f64, k: f64| {
-        let w = rpm_to_rad_s(rpm);
-        chain.rpm_reading(rad_s_to_rpm(w * (1.0 + k * w.abs())))
-    };
-    tacho_rpm
-        .iter()
-        .map(|&t| TachoReading {
-            tachometer_rpm: t,
-            right_encoder_rpm: read(t, k_right),
-            left_encoder_rpm: read(t, k_left),
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
+    use super::super::tacho_session::{tachometer_session, TachometerSensor};
     use super::*;
 
     #[test]
     fn encoder_gain_is_undone_within_the_fit_residual() {
         let speeds = [33.0, 53.0, 72.0, 92.0, 114.0, 137.0];
-        let t = simulate_tachometer_table(&EncoderChain::default(), 0.003, 0.004, &speeds);
+        let exact = TachometerSensor::exact();
+        let t = tachometer_session(&EncoderChain::default(), [0.003, 0.004], &exact, &speeds, 0);
         assert!(t
             .iter()
             .all(|r| r.right_encoder_rpm > r.tachometer_rpm

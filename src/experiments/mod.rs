@@ -38,9 +38,10 @@ pub use literature::{
     literature, literature_run, LiteratureParams, LiteratureRow, LiteratureRun, LiteratureTable,
 };
 pub use montecarlo::{
-    changing_figure, montecarlo, montecarlo_with, scan_montecarlo, score, table1_configs,
-    table2_configs, MonteCarloParams, MonteCarloRuns, MonteCarloTable, ParticleCounts, PreparedRun,
-    RunMetrics, RunTruth, ScanMonteCarloParams, TableRow,
+    changing_configs, changing_figure, fixed_count_label, montecarlo, montecarlo_with,
+    scan_montecarlo, score, table1_configs, table2_configs, Fig5, MonteCarloParams, MonteCarloRuns,
+    MonteCarloTable, PreparedRun, RunFigures, RunMetrics, RunTruth, ScanMonteCarloParams, TableRow,
+    FIG5_FIXED_PARTICLES,
 };
 pub use output::ExperimentOutput;
 pub use repetitions::draw_hidden_truth;

@@ -87,7 +87,9 @@ pub(super) fn findings(rows: &[LiteratureRow]) -> Vec<String> {
         "The classic calibrations need dedicated runs with measured end poses (UMBmark, GA) or \
          a tachometer session and known turns (seed 001); the Adaptive-PF needs a laser but no \
          dedicated runs or ground truth. A tachometer measures wheel rotation, not radius, so \
-         seed 001's method cannot see radius errors: only its heading gain acts (on the wheel base)."
+         seed 001's method cannot see radius errors: its rpm correction only removes an \
+         encoder's rate-dependent over-read (none in these runs: it rescales the rates by the \
+         tachometer's own error), and its heading gain acts on the wheel base."
             .into(),
     );
     head

@@ -19,7 +19,12 @@ impl LiteratureTable {
              their poses measured with σ {:.1} mm and {:.2}° at the corners (GA{}) and ends \
              (UMBmark, heading gain); the Adaptive-PF and the DKF instead see laser velocities \
              (σ {:.1} mm, {:.2} mrad per scan pair × [{}, {}]) and a gyro on the same squares. \
-             Evaluation: {} irregular {} m paths per repetition, odometry with each method's final \
+             Seed 001's rpm correction is fitted to a tachometer session on the same chair: \
+             the wheels spun at {} steady speeds from 0.8 × an in-place turn's wheel rate to \
+             1.2 × a straight's, the encoders read over 1 s beside a laser tachometer with its \
+             own errors (scale σ {:.2} %, noise σ {:.2} rpm, {:.1} rpm digit); these encoders \
+             count true wheel rotation (no rate-dependent gain), so what the correction removes \
+             is the tachometer's own error. Evaluation: {} irregular {} m paths per repetition, odometry with each method's final \
              parameters (heading-pf: GA parameters fused with a heading source). Medians over the \
              repetitions; parameter errors in mm.\n",
             self.runs,
@@ -38,6 +43,10 @@ impl LiteratureTable {
             1e3 * p.laser.sigma_dtheta,
             p.laser.sigma_factor[0],
             p.laser.sigma_factor[1],
+            p.tachometer_speeds,
+            100.0 * p.tachometer.scale_sigma,
+            p.tachometer.reading_sigma_rpm,
+            p.tachometer.resolution_rpm,
             c.evaluation_runs,
             p.evaluation_length_m
         );

@@ -21,8 +21,9 @@ use super::compare::{
 use super::repetitions::{at_least_one, draw_hidden_truth};
 use crate::calib::CalibParams;
 use crate::classic::{
-    chained_steps, drive_segments, irregular_path, square_segments, ClassicError, DriveParams,
-    LaserObsParams, SimRun, Turn,
+    chained_steps, drive_segments, irregular_path, session_speeds, square_segments,
+    tachometer_session, ClassicError, DriveParams, EncoderChain, LaserObsParams, SimRun,
+    TachometerSensor, Turn,
 };
 use crate::robot::DiffDrive;
 use serde::{Deserialize, Serialize};
@@ -45,6 +46,10 @@ pub struct LiteratureParams {
     pub laser: LaserObsParams,
     /// Particle count of the Adaptive-PF; `None` = the calibrator settings'.
     pub particles: Option<usize>,
+    /// The laser tachometer of seed 001's session (its own errors).
+    pub tachometer: TachometerSensor,
+    /// Speeds of the session (≥ 2), spread over the chair's wheel rates.
+    pub tachometer_speeds: usize,
     /// A new user boards after calibration: R_R, R_L grow by this (m) on a
     /// second set of evaluation paths (seed 000's Fig. 6b: 4 and 2 mm);
     /// [0, 0] = no such table.
@@ -74,6 +79,8 @@ impl Default for LiteratureParams {
             },
             laser: LaserObsParams::default(),
             particles: None,
+            tachometer: TachometerSensor::default(),
+            tachometer_speeds: 6,
             load_change: [0.004, 0.002],
         }
     }
@@ -95,14 +102,17 @@ impl LiteratureParams {
             && self.drive.speed > 0.0
             && self.drive.turn_rate > 0.0
             && self.drive.rate_hz > 0.0
-            && self.particles != Some(0);
+            && self.particles != Some(0)
+            && self.tachometer_speeds >= 2;
+        self.tachometer.validate()?;
         if ok {
             Ok(())
         } else {
             Err(ClassicError::invalid(
                 "literature",
                 "errors must be in [0, 0.2), lengths, speeds and rates > 0, \
-                 runs_per_direction ≥ 2, evaluation_runs ≥ 1, particles ≥ 1",
+                 runs_per_direction ≥ 2, evaluation_runs ≥ 1, particles ≥ 1, \
+                 tachometer_speeds ≥ 2",
             ))
         }
     }
@@ -145,8 +155,8 @@ struct Repetition<'a> {
     nominal: &'a DiffDrive,
     truth: DiffDrive,
     p: &'a LiteratureParams,
-    /// The comparison's settings for this repetition: its seed, and the
-    /// drive's encoder resolution when it has one.
+    /// The comparison's settings for this repetition: its seed, the drive's
+    /// encoder resolution when it has one, and the tachometer session's table.
     cp: CompareParams,
     seed: u64,
 }
@@ -154,13 +164,15 @@ struct Repetition<'a> {
 impl<'a> Repetition<'a> {
     fn new(nominal: &'a DiffDrive, p: &'a LiteratureParams, seed: u64) -> Self {
         let truth = draw_hidden_truth(nominal, p.radius_error, p.wheel_base_error, seed);
+        let ticks_per_rev = if p.drive.ticks_per_rev > 0.0 {
+            p.drive.ticks_per_rev
+        } else {
+            p.compare.ticks_per_rev
+        };
         let cp = CompareParams {
             seed,
-            ticks_per_rev: if p.drive.ticks_per_rev > 0.0 {
-                p.drive.ticks_per_rev
-            } else {
-                p.compare.ticks_per_rev
-            },
+            ticks_per_rev,
+            tachometer: Some(tachometer_table(nominal, p, ticks_per_rev, seed)),
             ..p.compare.clone()
         };
         Self {
@@ -183,6 +195,32 @@ impl<'a> Repetition<'a> {
         };
         drive_segments(self.nominal, &self.truth, &segs, &self.p.drive, s)
     }
+}
+
+/// Seed 001's session on this chair before its squares: the wheels spun at
+/// `tachometer_speeds` speeds over its driving range, the encoders (which
+/// count true wheel rotation here: these runs have no rate-dependent encoder
+/// gain) read out over 1 s as the seed's microcontroller does, beside the
+/// tachometer with its own errors.
+fn tachometer_table(
+    nominal: &DiffDrive,
+    p: &LiteratureParams,
+    ticks_per_rev: f64,
+    seed: u64,
+) -> Vec<crate::classic::TachoReading> {
+    let chain = EncoderChain {
+        pulses_per_rev: ticks_per_rev,
+        encoder_teeth: 1.0,
+        wheel_teeth: 1.0,
+        period_s: 1.0,
+    };
+    let speeds = session_speeds(
+        nominal,
+        p.drive.speed,
+        p.drive.turn_rate,
+        p.tachometer_speeds,
+    );
+    tachometer_session(&chain, [0.0, 0.0], &p.tachometer, &speeds, seed)
 }
 
 /// One repetition with hidden truth drawn from `seed`: squares and evaluation

@@ -1,10 +1,22 @@
 //! The calibrator configurations seed 000's tables compare.
 
-use crate::calib::{CalibParams, Method, Scheme, Trigger};
+use crate::calib::{CalibParams, CountRule, Method, Scheme, Trigger};
 
 /// False-alarm probability of the change detector in the radius-step
 /// experiment, for every filter.
 pub const CHANGING_FALSE_ALARM: f64 = 1e-4;
+
+/// The fixed particle count seed 000's Fig. 5 compares the adaptive one with.
+pub const FIG5_FIXED_PARTICLES: usize = 3000;
+
+/// Label of the radius-step experiment's Adaptive-PF with its count held at
+/// [`FIG5_FIXED_PARTICLES`].
+pub fn fixed_count_label() -> String {
+    format!(
+        "{}, fixed N = {FIG5_FIXED_PARTICLES}",
+        Method::AdaptivePf.as_str()
+    )
+}
 
 /// Seed 000's Table II configurations: adaptive-pf, pf, dkf, akf, none.
 pub fn table2_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
@@ -45,7 +57,9 @@ pub fn table1_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
 /// the change detector (the same test for all three, at a false-alarm
 /// probability of 1e-4 so that the Kalman filters' wider covariance does
 /// not mute it) and, labelled `METHOD, no detector`, without it (the fixed
-/// PF has none, as in seed 000); then `none`.
+/// PF has none, as in seed 000); then `none`. Right after the Adaptive-PF
+/// comes the same filter, detector and every other setting kept, with its
+/// count fixed at [`FIG5_FIXED_PARTICLES`] (seed 000's Fig. 5 baseline).
 pub fn changing_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
     let mut out = vec![];
     for m in [Method::AdaptivePf, Method::Dkf, Method::Akf] {
@@ -61,7 +75,15 @@ pub fn changing_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
                 true => m.as_str().to_string(),
                 false => format!("{}, no detector", m.as_str()),
             };
-            out.push((label, p));
+            out.push((label, p.clone()));
+            if m == Method::AdaptivePf && enabled {
+                let mut q = CalibParams {
+                    particles: Some(FIG5_FIXED_PARTICLES),
+                    ..p
+                };
+                q.adaptive.rule = CountRule::Fixed;
+                out.push((fixed_count_label(), q));
+            }
         }
     }
     for m in [Method::Pf, Method::None] {

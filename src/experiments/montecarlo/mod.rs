@@ -10,8 +10,10 @@ mod scans;
 mod score;
 mod table;
 
-pub use changing::{changing_figure, ParticleCounts};
-pub use configs::{changing_configs, table1_configs, table2_configs};
+pub use changing::{changing_figure, Fig5, RunFigures};
+pub use configs::{
+    changing_configs, fixed_count_label, table1_configs, table2_configs, FIG5_FIXED_PARTICLES,
+};
 pub(super) use output::monte_carlo;
 pub use scans::{scan_montecarlo, ScanMonteCarloParams};
 pub use score::{score, RunMetrics, RunTruth};

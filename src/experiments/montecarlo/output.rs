@@ -3,8 +3,9 @@
 
 use super::scans::ScanMonteCarloParams;
 use super::{
-    changing_configs, changing_figure, montecarlo, scan_montecarlo, table1_configs, table2_configs,
-    MonteCarloParams, MonteCarloTable, TableRow,
+    changing_configs, changing_figure, fixed_count_label, montecarlo, scan_montecarlo,
+    table1_configs, table2_configs, Fig5, MonteCarloParams, MonteCarloTable, TableRow,
+    FIG5_FIXED_PARTICLES,
 };
 use crate::calib::synth::RadiusStep;
 use crate::calib::CalibParams;
@@ -70,11 +71,34 @@ const PANELS: [MedianPanel<TableRow>; 3] = [
 /// `changing-run0.png`.
 fn changing_note(s: &Setup, png: &Path) -> Result<String, PipelineError> {
     let fig = png.with_file_name("changing-run0.png");
-    let mut md = String::from("\nRun 0 over time (radius estimates against the truth, the Adaptive-PF's particle count): `changing-run0.png`.\n");
-    if let Some(c) = changing_figure(&s.mc, &s.configs, &fig)? {
+    let mut md = format!(
+        "\nRun 0 over time (radius estimates against the truth; the Adaptive-PF against the \
+         same filter with N fixed at {FIG5_FIXED_PARTICLES}, as in seed 000's Fig. 5: radius \
+         error, particle count, time per step): `changing-run0.png`.\n"
+    );
+    if let Some(Fig5 {
+        adaptive: a,
+        fixed: f,
+    }) = changing_figure(&s.mc, &s.configs, &fig)?
+    {
         md += &format!(
-            "Adaptive-PF particles in run 0: {} before the step, up to {} after it, {} at the end (one particle per 0.01 mm of the radius cloud's width, ±3σ of each radius summed, clamped to [adaptive.n_min, adaptive.n_max]; a detected jump restarts from at least the initial count).\n",
-            c.before, c.peak, c.end
+            "Adaptive-PF particles in run 0: {} before the step, up to {} after it, {} at the end \
+             (one particle per 0.01 mm of the radius cloud's width, ±3σ of each radius summed, \
+             clamped to [adaptive.n_min, adaptive.n_max]; a detected jump restarts from at least \
+             the initial count).\n\n\
+             | run 0 | radius error before the step (mm) | at the end (mm) | particles before / peak / end | ms per step (mean over the run) |\n\
+             |---|---|---|---|---|\n\
+             | adaptive N | {:.3} | {:.3} | {} / {} / {} | {:.3} |\n\
+             | fixed N = {FIG5_FIXED_PARTICLES} | {:.3} | {:.3} | {} / {} / {} | {:.3} |\n\n\
+             Radius error: the mean of |R_R − truth| and |R_L − truth|. Step times are wall \
+             time of one run on whatever else the machine runs (the figure plots the median \
+             step of each second, which a descheduled step does not move): their ratio is the \
+             finding, not their value (`cargo bench --bench pf` has steady figures). Over all \
+             runs the two are the table's rows `adaptive-pf` and `{}`.\n",
+            a.before, a.peak, a.end,
+            a.error_before_mm, a.error_end_mm, a.before, a.peak, a.end, a.ms_per_step,
+            f.error_before_mm, f.error_end_mm, f.before, f.peak, f.end, f.ms_per_step,
+            fixed_count_label(),
         );
     }
     Ok(md)
