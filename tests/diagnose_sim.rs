@@ -60,4 +60,6 @@ fn simulated_null_recording_blind_through_icp() {
         d.verdict, d.causes, d.noise_scale, d.structure_before
     );
     assert!(d.causes.is_empty(), "{:?}", d.causes);
+    assert!(d.faults.is_empty(), "{:?}", d.faults);
+    assert_eq!(d.verdict, Verdict::NoDiscrepancy, "{:?}", d.remaining);
 }

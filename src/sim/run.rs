@@ -68,7 +68,11 @@ pub fn prepare(
         seed: cfg.seed,
         duration_s: duration,
         nominal: robot.clone(),
-        effect_specs: effects.iter().map(|e| e.to_string()).collect(),
+        effect_specs: effects
+            .iter()
+            .map(|e| e.to_string())
+            .chain(cfg.faults.iter().map(|f| f.to_string()))
+            .collect(),
         effects: effects.to_vec(),
         parameters: true_parameters(&true_robot, duration),
         laser_mount: true_robot.laser,
@@ -101,7 +105,7 @@ fn true_robot(
     robot
         .validate()
         .map_err(|e| SimError::Config(e.to_string()))?;
-    let true_robot = TrueRobot::new(robot, effects);
+    let true_robot = TrueRobot::new(robot, effects).with_faults(&cfg.faults);
     if !true_robot.radii_positive(cfg.duration_s) {
         return Err(SimError::Config(
             "the effects make a wheel radius or the wheel base non-positive".into(),

@@ -42,11 +42,16 @@ impl WheelTrack {
         let mut right = Vec::with_capacity(drive.steps() + 1);
         let mut left = Vec::with_capacity(drive.steps() + 1);
         let (mut r, mut l) = (0.0, 0.0);
+        // True wheel angles (rad), for faults that depend on them.
+        let (mut ar, mut al) = (0.0, 0.0);
         right.push(r);
         left.push(l);
         for k in 0..drive.steps() {
             let t = (k as f64 + 0.5) * dt;
-            let (wr, wl) = robot.wheel_rates(t, drive.v[k], drive.w[k]);
+            let rates = robot.wheel_rates(t, drive.v[k], drive.w[k]);
+            let (wr, wl) = robot.faulty_rates(rates, (ar, al), drive.pose_at(t)[0]);
+            ar += wr * dt;
+            al += wl * dt;
             r += robot.measured_rate(wr) * dt;
             l += robot.measured_rate(wl) * dt;
             right.push(r);
@@ -86,7 +91,7 @@ pub fn encoder_samples(
     let count = |phi: f64, phase: f64| ((phi + phase) / q).floor() - (phase / q).floor();
     sample_times(cfg.rate_hz, duration, 0.0)
         .map(|t| {
-            let (r, l) = track.at(robot.departures().encoder_taken(t));
+            let (r, l) = robot.wire(track.at(robot.encoder_taken(t)));
             WheelSample {
                 stamp: t,
                 right: count(r, p_r) * q,
