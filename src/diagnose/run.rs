@@ -375,6 +375,11 @@ fn select_confirmed(
 /// that error by a per cent or two either way.
 const TRAJECTORY_TOLERANCE: f64 = 0.05;
 
+/// Absolute increase (m) of a trajectory error that counts as worse on top
+/// of [`TRAJECTORY_TOLERANCE`]: once an extension has brought the error down
+/// to a centimetre or so, refitting moves it by that much relative to itself.
+const TRAJECTORY_FLOOR: f64 = 0.01;
+
 /// What the held-out part must show for an effect to be kept.
 struct Confirm<'a> {
     /// Least drop of the held-out χ².
@@ -411,18 +416,27 @@ fn confirmed(held: Part, sel: &Selection, c: &Confirm) -> usize {
         let next = Departures::of(&step.effects);
         let drop = sse(&prev, &step.scale) - sse(&next, &step.scale);
         // A latency says which clock the laser keeps against the wheels, not
-        // which one the reference keeps: the odometry is compared unshifted.
+        // which one the reference keeps: the odometry is compared unshifted,
+        // and a latency entering is not judged by the reference at all.
         let unshifted = |x: &Departures| Departures {
             latency: 0.0,
             ..x.clone()
         };
         let (a, b) = (unshifted(&prev), unshifted(&next));
-        let worse = trajectory_gain(held.replay, c.reference, &a, &b, c.split, c.window)
-            .is_some_and(|t| {
-                let worse = |b: f64, a: f64| a > b * (1.0 + TRAJECTORY_TOLERANCE);
-                let ate = matches!((t.ate_before, t.ate_after), (Some(b), Some(a)) if worse(b, a));
-                ate || worse(t.rpe_before, t.rpe_after)
-            });
+        let clock = step
+            .effects
+            .last()
+            .is_some_and(|e| e.kind() == EffectKind::Latency);
+        let worse = !clock
+            && trajectory_gain(held.replay, c.reference, &a, &b, c.split, c.window).is_some_and(
+                |t| {
+                    let worse =
+                        |b: f64, a: f64| a > b * (1.0 + TRAJECTORY_TOLERANCE) + TRAJECTORY_FLOOR;
+                    let ate =
+                        matches!((t.ate_before, t.ate_after), (Some(b), Some(a)) if worse(b, a));
+                    ate || worse(t.rpe_before, t.rpe_after)
+                },
+            );
         if drop < c.margin || worse {
             break;
         }

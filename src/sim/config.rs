@@ -28,7 +28,8 @@ pub struct SimConfig {
     /// Rate (Hz) at which the true motion is integrated (exact arcs per step).
     pub integration_hz: f64,
     /// Faults outside the effect table hidden in the run (`simulate --effect`
-    /// takes their SPECs too).
+    /// takes their SPECs too); left out of the settings written when none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub faults: Vec<crate::effects::FaultEffect>,
 }
 

@@ -139,7 +139,6 @@ pub fn cases(duration: f64) -> Vec<Case> {
     use Group::*;
     let step = step_spec(duration, 0.3, 0.004, -0.003);
     let step2 = step_spec(duration, 0.5, -0.003, 0.0);
-    let steps = [step.as_str(), step2.as_str()];
     let mut v = vec![Case {
         label: "none".into(),
         group: Null,
@@ -148,6 +147,16 @@ pub fn cases(duration: f64) -> Vec<Case> {
         expect: Vec::new(),
         allowed: Vec::new(),
     }];
+    v.extend(single_cases(&step));
+    v.extend(combination_cases(&step, &step2));
+    v.extend(fault_cases(duration));
+    v
+}
+
+/// Every table effect alone.
+fn single_cases(step: &str) -> Vec<Case> {
+    use Group::*;
+    let mut v = Vec::new();
     for (label, spec) in [
         (
             "radius_scale (+1.5 %, −1 %)",
@@ -159,7 +168,7 @@ pub fn cases(duration: f64) -> Vec<Case> {
         ),
         ("wheel_base_scale (+4 %)", "wheel_base_scale:scale=0.04"),
         ("wheel_base_scale (−3 %)", "wheel_base_scale:scale=-0.03"),
-        ("radius_step (+4, −3 mm)", step.as_str()),
+        ("radius_step (+4, −3 mm)", step),
         (
             "radius_drift (−0.08, −0.03 m/h)",
             "radius_drift:right=-0.08,left=-0.03",
@@ -175,6 +184,14 @@ pub fn cases(duration: f64) -> Vec<Case> {
     ] {
         v.push(table_case(Single, label, &[spec]));
     }
+    v
+}
+
+/// Two radius steps, pairs and triples of table effects.
+fn combination_cases(step: &str, step2: &str) -> Vec<Case> {
+    use Group::*;
+    let steps = [step, step2];
+    let mut v = Vec::new();
     v.push(table_case(Single, "two radius steps", &steps));
     for (label, specs) in [
         (
@@ -190,7 +207,7 @@ pub fn cases(duration: f64) -> Vec<Case> {
         ),
         (
             "radius_scale + radius_step",
-            &["radius_scale:right=0.012,left=-0.008", step.as_str()][..],
+            &["radius_scale:right=0.012,left=-0.008", step][..],
         ),
         (
             "gyro_bias + turn_slip",
@@ -212,11 +229,17 @@ pub fn cases(duration: f64) -> Vec<Case> {
         Triple,
         "radius_step + laser_offset + gyro_bias",
         &[
-            step.as_str(),
+            step,
             "laser_offset:x=0.05,y=0.02,yaw=0.02",
             "gyro_bias:bias=0.005",
         ],
     ));
+    v
+}
+
+/// The faults outside the table.
+fn fault_cases(duration: f64) -> Vec<Case> {
+    let mut v = Vec::new();
     let change = format!("latency_change:time={:.1},delay=0.06", 0.5 * duration);
     for (label, spec, expect, allowed) in [
         (
