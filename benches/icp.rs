@@ -1,12 +1,20 @@
 //! One LMS111 pair (541 beams, 270°) in a room with furniture: matcher
-//! throughput in pairs per second on one core.
+//! throughput in pairs per second on one core. And per benchmark log
+//! (Intel, MIT-CSAIL, FR079, ACES under `$ODOCAL_DATA/slam-benchmark`, read
+//! once): the time per scan pair of matching the first 1,000 scans with the
+//! log's odometry as prior, as `odocal icp` does (decoding excluded).
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use std::path::PathBuf;
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nalgebra::Point2;
 use odocal::geom::{self, pose, Pose2};
+use odocal::icp::match_recording;
 use odocal::icp::{IcpParams, ScanMatcher};
+use odocal::io::{read_mcap, ReadOptions};
 use odocal::scan::LaserScan;
 use odocal::sim::worlds;
+use odocal::traj::Trajectory;
 
 fn scan(world: &odocal::sim::World, p: Pose2, stamp: f64) -> LaserScan {
     let mut buf = vec![0.0; 541];
@@ -57,5 +65,41 @@ fn bench(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench);
+fn data_dir() -> PathBuf {
+    std::env::var_os("ODOCAL_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"))
+}
+
+/// Scans matched per log and iteration.
+const LOG_SCANS: usize = 1000;
+
+fn logs(c: &mut Criterion) {
+    let mut g = c.benchmark_group("icp_log");
+    g.sample_size(10);
+    for name in ["intel", "mit-csail", "fr079", "aces"] {
+        let path = data_dir().join(format!("slam-benchmark/{name}.mcap"));
+        let Ok(rec) = read_mcap(&path, &ReadOptions::default()) else {
+            eprintln!(
+                "SKIP icp bench {name}: {} not read (set ODOCAL_DATA)",
+                path.display()
+            );
+            continue;
+        };
+        let scans = &rec.scans[..LOG_SCANS.min(rec.scans.len())];
+        let mut odom = Trajectory::default();
+        for p in &rec.odom {
+            odom.push(p.stamp, p.pose);
+        }
+        let mount = rec.base_from_laser.unwrap_or_else(Pose2::identity);
+        let params = IcpParams::default();
+        g.throughput(Throughput::Elements(scans.len() as u64 - 1));
+        g.bench_function(format!("{name}_per_pair"), |b| {
+            b.iter(|| match_recording(scans, mount, Some(&odom), &params).unwrap())
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, logs);
 criterion_main!(benches);

@@ -18,6 +18,7 @@ pub mod effects;
 pub mod error;
 pub mod eval;
 pub mod experiments;
+pub mod fleet;
 pub mod geom;
 pub mod icp;
 pub mod io;

@@ -65,7 +65,38 @@ pub struct Motion {
     pub inliers: u32,
     /// `None` when the match is trustworthy, else why not.
     pub failure: Option<PairFailure>,
+    /// What the estimate owes to the scan and what to the matcher's prior
+    /// term (the odometry); `None` when not known (motions from elsewhere),
+    /// taken as all scan.
+    pub split: Option<InfoSplit>,
 }
+
+/// The information split of a motion: per direction, how much of the
+/// estimate the scan measured, and the scan's own estimate.
+///
+/// A scan matcher with a prior term at the odometry estimates
+/// `x̂ = K x_s + (I − K) x_p` (linearised at the optimum): `x_s` the scan's
+/// own estimate, `x_p` the prior's centre, `K = (I + C P)⁻¹` with `C` the
+/// scan-only covariance and `P` the prior's precision. Along a corridor `K`
+/// falls to 0 and `x̂` is the odometry: fed to a calibration of that
+/// odometry it would pull the estimate towards the nominal model. `x_s`
+/// with covariance `C` carries the scan's information alone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InfoSplit {
+    /// Diagonal of `K` in the base frame at `t0`, for (dx, dy, dθ): the
+    /// fraction, in [0, 1], of each direction's estimate that the scan
+    /// measured (1: the scan alone; 0: the prior alone).
+    pub scan_share: [f64; 3],
+    /// The scan's own estimate `x_s` of (dx, dy, dθ) (m, m, rad), whose
+    /// covariance is the motion's `cov`.
+    pub scan_only: [f64; 3],
+}
+
+/// Below this share of the forward estimate owed to the scan, a motion gives
+/// no forward-velocity observation: the prior (odometry) measured most of it,
+/// and the scan's own estimate along that direction rests on a
+/// linearisation far from where the scan constrains it.
+pub const MIN_SCAN_SHARE: f64 = 0.5;
 
 impl Motion {
     /// A valid motion over `[t0, t1]` (s) from a base-frame increment, with
@@ -82,6 +113,22 @@ impl Motion {
             iterations: 0,
             inliers: 0,
             failure: None,
+            split: None,
+        }
+    }
+
+    /// The scan's own increment (dx, dy, dθ) and, along the direction of
+    /// travel (the chord at dθ/2), the share of the estimate the scan
+    /// measured: the estimate itself and 1 without a split.
+    pub fn scan_measured(&self) -> ([f64; 3], f64) {
+        match self.split {
+            None => ([self.dx, self.dy, self.dtheta], 1.0),
+            Some(s) => {
+                let h = 0.5 * s.scan_only[2];
+                let (c2, s2) = (h.cos().powi(2), h.sin().powi(2));
+                let share = s.scan_share[0] * c2 + s.scan_share[1] * s2;
+                (s.scan_only, share)
+            }
         }
     }
 
@@ -102,7 +149,8 @@ pub struct VelocityObs {
     pub v: f64,
     /// Turn rate W_m (rad/s).
     pub w: f64,
-    /// σ of `v` (m/s).
+    /// σ of `v` (m/s); infinite when the scan did not measure the forward
+    /// motion (then `v` is no observation).
     pub sigma_v: f64,
     /// σ of `w` (rad/s).
     pub sigma_w: f64,
@@ -110,10 +158,14 @@ pub struct VelocityObs {
 
 impl VelocityObs {
     /// Velocities from a valid motion: the constant (V, W) whose arc over dt
-    /// best explains the motion (`V = arc length/dt`, `W = dθ/dt`, the arc
-    /// length from the displacement projected on the arc's chord direction
-    /// dθ/2, see [`arc_along_chord`]), with σ propagated
-    /// from the covariance (`σ_V = sqrt(cov_xx)/dt`, `σ_W = sqrt(cov_θθ)/dt`).
+    /// best explains the scan's own estimate of the motion (see [`InfoSplit`]:
+    /// never the part the matcher's odometry prior supplied; `V = arc
+    /// length/dt`, `W = dθ/dt`, the arc length from the displacement
+    /// projected on the arc's chord direction dθ/2, see [`arc_along_chord`]),
+    /// with σ propagated from the (scan-only) covariance (`σ_V =
+    /// sqrt(cov_xx)/dt`, `σ_W = sqrt(cov_θθ)/dt`). Where the scan measured
+    /// less than [`MIN_SCAN_SHARE`] of the forward estimate (a corridor's
+    /// axis), `σ_V` is infinite: no forward observation, only the turn rate.
     /// `None` for failed pairs or dt ≤ 0, so a failed match never becomes a
     /// confident observation.
     pub fn from_motion(m: &Motion) -> Option<Self> {
@@ -121,8 +173,13 @@ impl VelocityObs {
         if !m.is_valid() || !(dt > 0.0) || !dt.is_finite() {
             return None;
         }
-        let (ds, dth) = arc_along_chord(m.dx, m.dy, m.dtheta);
-        let sv = m.cov[(0, 0)].max(0.0).sqrt() / dt;
+        let ([dx, dy, dtheta], share) = m.scan_measured();
+        let (ds, dth) = arc_along_chord(dx, dy, dtheta);
+        let sv = if share >= MIN_SCAN_SHARE {
+            m.cov[(0, 0)].max(0.0).sqrt() / dt
+        } else {
+            f64::INFINITY
+        };
         let sw = m.cov[(2, 2)].max(0.0).sqrt() / dt;
         let obs = Self {
             t0: m.t0,
@@ -132,10 +189,8 @@ impl VelocityObs {
             sigma_v: sv,
             sigma_w: sw,
         };
-        [obs.v, obs.w, obs.sigma_v, obs.sigma_w]
-            .iter()
-            .all(|x| x.is_finite())
-            .then_some(obs)
+        let sv_ok = obs.sigma_v.is_finite() || share < MIN_SCAN_SHARE;
+        ([obs.v, obs.w, obs.sigma_w].iter().all(|x| x.is_finite()) && sv_ok).then_some(obs)
     }
 }
 
@@ -172,6 +227,7 @@ mod tests {
             iterations: 5,
             inliers: 500,
             failure: None,
+            split: None,
         }
     }
 
@@ -191,6 +247,36 @@ mod tests {
         // Turning in place with an offset across the chord: no travel.
         let (s, _) = arc_along_chord(-0.01 * 0.5f64.sin(), 0.01 * 0.5f64.cos(), 1.0);
         assert!(s.abs() < 1e-15);
+    }
+
+    #[test]
+    fn velocities_come_from_the_scan_s_own_estimate() {
+        // The estimate leans on the prior (0.02 m) where the scan says
+        // 0.024 m: the observation takes the scan's value.
+        let own = Motion {
+            split: Some(InfoSplit {
+                scan_share: [0.8, 1.0, 1.0],
+                scan_only: [0.024, 0.0, 0.004],
+            }),
+            ..motion()
+        };
+        let o = VelocityObs::from_motion(&own).unwrap();
+        assert!((o.v - 1.2).abs() < 1e-4, "{o:?}");
+        assert!(o.sigma_v.is_finite());
+        // A corridor's axis, measured by the prior: no forward observation,
+        // the turn rate still.
+        let axis = Motion {
+            split: Some(InfoSplit {
+                scan_share: [0.1, 1.0, 1.0],
+                scan_only: [0.5, 0.0, 0.004],
+            }),
+            ..motion()
+        };
+        let o = VelocityObs::from_motion(&axis).unwrap();
+        assert!(
+            o.sigma_v.is_infinite() && (o.w - 0.2).abs() < 1e-12,
+            "{o:?}"
+        );
     }
 
     #[test]

@@ -41,6 +41,33 @@ impl Default for LaserScan {
 }
 
 impl LaserScan {
+    /// The scan with a scanner's corrections: `angle_increment` (rad, the
+    /// true spacing, its sign taken from the recording's) replaces the
+    /// recorded one, scaling `angle_min` so that the beam at angle 0 stays
+    /// there (a scanner whose beams span a wider arc than recorded, e.g. the
+    /// LEGO robot's 660 beams); `range_offset` (m) is added to every valid
+    /// range and to the validity limits, so no reading changes validity.
+    pub fn corrected(&self, angle_increment: Option<f64>, range_offset: f64) -> LaserScan {
+        let mut out = self.clone();
+        if let Some(inc) = angle_increment {
+            if self.angle_increment != 0.0 {
+                let k = inc / self.angle_increment.abs();
+                out.angle_min = self.angle_min * k;
+                out.angle_increment = self.angle_increment * k;
+            }
+        }
+        if range_offset != 0.0 {
+            for r in out.ranges.iter_mut() {
+                if self.is_valid_range(*r) {
+                    *r += range_offset as f32;
+                }
+            }
+            out.range_min += range_offset;
+            out.range_max += range_offset;
+        }
+        out
+    }
+
     /// Angle (rad) of beam `i` in the laser frame.
     pub fn beam_angle(&self, i: usize) -> f64 {
         self.angle_min + i as f64 * self.angle_increment
@@ -153,6 +180,42 @@ pub fn angle_tolerance(increment: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn corrections_keep_the_centre_beam_and_move_valid_ranges_only() {
+        let inc = std::f64::consts::TAU / 1024.0;
+        let s = LaserScan {
+            angle_min: -330.0 * inc,
+            angle_increment: inc,
+            range_min: 0.02,
+            range_max: 5.6,
+            ranges: vec![1.0, f32::NAN, f32::INFINITY, 0.01, 5.59, 2.0],
+            ..Default::default()
+        };
+        let c = s.corrected(Some(1.03 * inc), 0.07);
+        // Beam 330 stays at angle 0; beam 0 sits 330 true spacings right.
+        assert!((c.angle_min + 330.0 * c.angle_increment).abs() < 1e-12);
+        assert!((c.beam_angle(0) + 330.0 * 1.03 * inc).abs() < 1e-12);
+        assert!((c.ranges[0] - 1.07).abs() < 1e-6 && (c.ranges[5] - 2.07).abs() < 1e-6);
+        assert!(c.ranges[1].is_nan() && c.ranges[2] == f32::INFINITY);
+        // Validity is unchanged: too close stays too close, the last valid
+        // reading near range_max stays valid.
+        let valid = |x: &LaserScan| {
+            (0..6)
+                .map(|i| x.is_valid_range(x.ranges[i]))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(valid(&c), valid(&s));
+        // A scan stated with a negative increment keeps its direction.
+        let mirrored = LaserScan {
+            angle_min: 330.0 * inc,
+            angle_increment: -inc,
+            ..s.clone()
+        };
+        let m = mirrored.corrected(Some(1.03 * inc), 0.0);
+        assert!((m.angle_increment + 1.03 * inc).abs() < 1e-15);
+        assert_eq!(m.ranges[0], 1.0);
+    }
 
     #[test]
     fn invalid_ranges_never_become_points() {

@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 const SRC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/src");
 
 /// Modules that hold algorithms only.
-const MATH: [&str; 9] = [
-    "geom", "scan", "robot", "icp", "calib", "classic", "sim", "eval", "diagnose",
+const MATH: [&str; 10] = [
+    "geom", "scan", "robot", "icp", "calib", "classic", "sim", "eval", "diagnose", "fleet",
 ];
 /// What a math module must not import.
 const ABOVE_MATH: [&str; 4] = ["io", "pipeline", "viz", "experiments"];

@@ -219,6 +219,11 @@ fn experiment_changing_draws_run_0_over_time_with_the_particle_count() {
         .filter_map(|w| w.parse().ok())
         .collect();
     assert!(nums[2] > nums[1], "{line}");
+    // The count follows the cloud: below the initial 8,000 before the step
+    // (not pinned at a clamp either) and down again once it re-converges.
+    let n_min = CalibParams::default().adaptive.n_min;
+    assert!(nums[1] < 8000 && nums[1] > n_min, "{line}");
+    assert!(nums[3] < nums[2], "{line}");
     let v: serde_json::Value = serde_json::from_str(&out.json).unwrap();
     let apf = &v["rows"][0];
     assert_eq!(apf["label"], "adaptive-pf");

@@ -57,6 +57,7 @@ fn adaptive_pf_and_kalman_baselines_converge_to_the_truth() {
     for seed in [11u64, 12] {
         let (d, st) = synth(seed, 60.0, None);
         let k = d.truth;
+        let mut worst_end = 0.0f64;
         for m in [Method::AdaptivePf, Method::Dkf, Method::Akf] {
             let r = calibrate(m, seed, &st);
             let f = r.final_drive();
@@ -83,11 +84,22 @@ fn adaptive_pf_and_kalman_baselines_converge_to_the_truth() {
             let end = r.trajectory.poses.last().unwrap();
             let t_end = *r.trajectory.stamps.last().unwrap();
             let truth = d.reference.pose_at(t_end).unwrap();
-            assert!((end.translation.vector - truth.translation.vector).norm() < 0.5);
+            let miss = (end.translation.vector - truth.translation.vector).norm();
+            assert!(miss < 0.5, "{}: end {miss} m off", m.as_str());
+            worst_end = worst_end.max(miss);
         }
-        // The uncalibrated model is far worse than any of them.
-        let none = calibrate(Method::None, seed, &st).final_drive();
-        assert_eq!(none, NOMINAL);
+        // The uncalibrated model keeps its prior and ends far worse than any
+        // of them: the drawn truth is millimetres from the nominal radii,
+        // which over a 60 s drive puts the nominal odometry metres off.
+        let none = calibrate(Method::None, seed, &st);
+        assert_eq!(none.final_drive(), NOMINAL);
+        let end = none.trajectory.poses.last().unwrap();
+        let truth = d.reference.pose_at(*none.trajectory.stamps.last().unwrap());
+        let miss = (end.translation.vector - truth.unwrap().translation.vector).norm();
+        assert!(
+            miss > 10.0 * worst_end && miss > 1.0,
+            "nominal odometry ends {miss} m off, calibrated ones at most {worst_end} m"
+        );
     }
 }
 
@@ -269,4 +281,53 @@ fn wheel_base_holds_still_where_it_is_unobservable() {
         }
     }
     assert!(failed.is_empty(), "{failed:?}");
+}
+
+/// Seed 000's Table I on our data, small: the fixed PF with every
+/// resampling scheme and trigger on the same synthetic runs. The seed finds
+/// the four schemes close, the max-weight trigger the least accurate, and
+/// picks systematic + N_eff. Checked here: max-weight is the least accurate
+/// trigger for every scheme (its median radius error above both others'),
+/// and systematic + N_eff is as accurate as the best configuration within
+/// the run-to-run spread (its median radius error within 1.5× the best
+/// median). That systematic + N_eff is strictly the best does not hold on
+/// our data: the schemes tie (README, Table I).
+#[test]
+fn a_small_table_i_keeps_the_seeds_findings() {
+    use odocal::experiments::{montecarlo, table1_configs, MonteCarloParams};
+    let mut mc = MonteCarloParams {
+        runs: 6,
+        seed: 3,
+        ..Default::default()
+    };
+    mc.synth.duration = 30.0;
+    let base = CalibParams {
+        particles: Some(2000),
+        ..Default::default()
+    };
+    let t = montecarlo(&mc, &table1_configs(&base));
+    let err = |label: &str| {
+        let r = t.rows.iter().find(|r| r.label == label).unwrap();
+        0.5 * (r.err_r_right.median + r.err_r_left.median)
+    };
+    for s in Scheme::ALL {
+        let [neff, max, every] =
+            ["neff", "max-weight", "every"].map(|tr| err(&format!("{}/{tr}", s.as_str())));
+        eprintln!(
+            "{}: neff {neff:.5} max-weight {max:.5} every {every:.5}",
+            s.as_str()
+        );
+        assert!(
+            max > neff && max > every,
+            "{}: {neff} {max} {every}",
+            s.as_str()
+        );
+    }
+    let best = t
+        .rows
+        .iter()
+        .map(|r| err(&r.label))
+        .fold(f64::INFINITY, f64::min);
+    let sys = err("systematic/neff");
+    assert!(sys <= 1.5 * best, "systematic/neff {sys} vs best {best}");
 }

@@ -222,7 +222,8 @@ fn experiment_seed_tables_square_and_tachometer() {
         "--json",
     ]));
     files(&out, "square");
-    // Seed 001's closure error: 0.47 m in x, 0.38 m in y.
+    // Seed 001's closure error as its text states it: 0.47 m in x, 0.38 m
+    // in y, from the table's last corner (odometry against actual).
     assert!((v["measured"]["closure_dx"].as_f64().unwrap() + 0.47).abs() < 1e-12);
     assert!((v["measured"]["closure_dy"].as_f64().unwrap() - 0.38).abs() < 1e-12);
     let (before, after) = (
@@ -242,7 +243,10 @@ fn experiment_seed_tables_square_and_tachometer() {
         "--json",
     ]));
     files(&out, "tachometer");
-    assert!((v["heading_gain"]["gain"].as_f64().unwrap() - 90.0 / 28.0).abs() < 1e-12);
+    // Seed 001 publishes the gain rounded to one decimal: "a proportional
+    // gain of 3.2" (from its five 90° trials).
+    let gain = v["heading_gain"]["gain"].as_f64().unwrap();
+    assert!((gain - 3.2).abs() <= 0.05, "heading gain {gain}");
     let slope = v["tachometer"]["right"]["slope"].as_f64().unwrap();
     assert!(slope > 0.9 && slope < 1.0);
     assert_eq!(v["speed_pairs"].as_array().unwrap().len(), 6);

@@ -105,8 +105,10 @@ fn cli_pipeline_chains_and_prints_the_contract_keys() {
         sim["scans"].as_u64().unwrap()
     );
     let header = std::fs::read_to_string(&motions).unwrap();
+    // The contract's columns first, the information split appended.
     assert!(header.starts_with(
-        "t0,t1,dx,dy,dtheta,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt,iterations,inliers,valid\n"
+        "t0,t1,dx,dy,dtheta,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt,iterations,inliers,valid,\
+         scan_share_x,scan_share_y,scan_share_theta,scan_dx,scan_dy,scan_dtheta\n"
     ));
 
     // The intermediate files carry no gyro: leave it out of both runs so that
@@ -450,22 +452,31 @@ fn check_run_rrd(test: &str, rrd: &Path, scans: usize, steps: usize, map: bool) 
     if map {
         entities.insert(entity::MAP.into(), json!({"static": true, "rows": 1}));
     }
-    for t in [
-        entity::TRAJ_ICP,
-        entity::TRAJ_RAW,
-        entity::TRAJ_CALIBRATED,
-        entity::TRAJ_REFERENCE,
-    ] {
+    // Each trajectory: its full line (static) and the line grown along the
+    // time line (at most 300 rows, the default).
+    for kind in odocal::viz::TrajectoryKind::ALL {
         entities.insert(
-            t.into(),
+            kind.full_entity().into(),
             json!({"static": true, "rows": 1, "instances": {"LineStrips2D:strips": 1}}),
         );
+        entities.insert(kind.entity().into(), json!({"timelines": [entity::TIME]}));
     }
-    entities.insert(
-        entity::SCAN_POINTS.into(),
-        json!({"rows": scans, "first": {"scan": 0}, "last": {"scan": scans - 1}}),
-    );
-    for e in [entity::ICP_ITERATIONS, entity::ICP_COV_TRACE] {
+    // The robot at every scan, its laser and heading, the scan in the laser frame.
+    for e in [entity::ROBOT, entity::SCAN_POINTS] {
+        entities.insert(
+            e.into(),
+            json!({"rows": scans, "first": {"scan": 0}, "last": {"scan": scans - 1}}),
+        );
+    }
+    for e in [entity::LASER, entity::ROBOT_HEADING] {
+        entities.insert(e.into(), json!({"static": true, "rows": 1}));
+    }
+    // One ellipse per scan match (these runs have no failed pair).
+    for e in [
+        entity::ICP_ITERATIONS,
+        entity::ICP_COV_TRACE,
+        entity::ICP_COVARIANCE,
+    ] {
         entities.insert(e.into(), json!({"rows": scans - 1, "first": {"scan": 1}}));
     }
     for e in [

@@ -222,7 +222,7 @@ fn csv_inputs(d: &Path, row: &str) -> (PathBuf, PathBuf) {
     let good = "0.0,0.1,0.05,0,0.01,1e-6,0,0,1e-6,0,1e-6,5,100,1";
     std::fs::write(
         &m,
-        format!("{}\n{good}\n{row}\n", odocal::io::csv::MOTIONS_HEADER),
+        format!("{}\n{good}\n{row}\n", odocal::io::csv::MOTIONS_HEADER_CORE),
     )
     .unwrap();
     let w = d.join("wheels.csv");

@@ -59,6 +59,9 @@ fn simulated_null_recording_blind_through_icp() {
         "null: {:?} {:?} {:?} {:?}",
         d.verdict, d.causes, d.noise_scale, d.structure_before
     );
+    // Nothing hidden: the verdict must say the nominal model agrees, not
+    // merely name no cause (an `unexplained` verdict names none either).
+    assert_eq!(d.verdict, Verdict::NoDiscrepancy, "{:?}", d.candidates);
     assert!(d.causes.is_empty(), "{:?}", d.causes);
     assert!(d.faults.is_empty(), "{:?}", d.faults);
     assert_eq!(d.verdict, Verdict::NoDiscrepancy, "{:?}", d.remaining);

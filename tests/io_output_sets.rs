@@ -32,7 +32,15 @@ fn strays(dir: &Path) -> Vec<String> {
         .unwrap()
         .flatten()
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| !["calibration.csv", "trajectory.tum", "summary.json"].contains(&n.as_str()))
+        .filter(|n| {
+            ![
+                "calibration.csv",
+                "trajectory.tum",
+                "summary.json",
+                "ros2_control.yaml",
+            ]
+            .contains(&n.as_str())
+        })
         .collect()
 }
 
@@ -42,6 +50,12 @@ fn one_run(dir: &Path) -> String {
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     let history = std::fs::read_to_string(dir.join("calibration.csv")).unwrap();
+    let yaml = std::fs::read_to_string(dir.join("ros2_control.yaml")).unwrap();
+    assert_eq!(
+        yaml,
+        summary["ros2_control"]["yaml"].as_str().unwrap(),
+        "summary and controller parameters from different runs"
+    );
     let rows: Vec<&str> = history.lines().skip(1).collect();
     assert_eq!(
         summary["iterations"].as_u64().unwrap() as usize,
@@ -102,7 +116,13 @@ fn a_run_failing_mid_way_leaves_the_previous_set_and_no_temporaries() {
         .wait_with_output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let before: Vec<Vec<u8>> = ["calibration.csv", "trajectory.tum", "summary.json"]
+    let set = [
+        "calibration.csv",
+        "trajectory.tum",
+        "summary.json",
+        "ros2_control.yaml",
+    ];
+    let before: Vec<Vec<u8>> = set
         .iter()
         .map(|f| std::fs::read(out.join(f)).unwrap())
         .collect();
@@ -116,7 +136,7 @@ fn a_run_failing_mid_way_leaves_the_previous_set_and_no_temporaries() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("cut.mcap"), "{err}");
-    let after: Vec<Vec<u8>> = ["calibration.csv", "trajectory.tum", "summary.json"]
+    let after: Vec<Vec<u8>> = set
         .iter()
         .map(|f| std::fs::read(out.join(f)).unwrap())
         .collect();

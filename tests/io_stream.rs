@@ -246,6 +246,7 @@ fn calibrate_command(
             config: config.map(Path::to_path_buf),
             robot: None,
         },
+        init: Default::default(),
     };
     pipeline::calibrate::run(&job, &mut pipeline::NoObserver)
         .unwrap()
@@ -450,19 +451,27 @@ fn simulate_writes_scans_as_it_casts_them_with_the_in_memory_bytes() {
     cfg.sim.scenario.name = "square".into();
     let effects = [odocal::effects::Effect::parse("gyro_bias:bias=0.01").unwrap()];
     let out = d.join("streamed.mcap");
+    let truth_file = d.join("streamed.json");
     let mut fractions = Vec::new();
-    let (summary, _) = pipeline::simulate::simulate(
+    let summary = pipeline::simulate::simulate(
         &cfg.sim,
         &cfg.topics,
         &robot,
         &effects,
         &out,
-        None,
+        Some(&truth_file),
         &mut |f| fractions.push(f),
     )
     .unwrap();
-    let (rec, _) = odocal::sim::simulate(&cfg.sim, &robot, &effects, &mut |_| {}).unwrap();
+    let (rec, truth) = odocal::sim::simulate(&cfg.sim, &robot, &effects, &mut |_| {}).unwrap();
     assert_eq!(summary.scans, rec.scans.len());
+    // The truth file, its series written as they are drawn, is the text of
+    // the whole truth serialised at once.
+    assert!(
+        std::fs::read_to_string(&truth_file).unwrap() == truth.to_json(),
+        "streamed truth file differs"
+    );
+    assert_eq!(summary.path_length_m, truth.trajectory().path_length());
     assert!(rec.scans.len() > odocal::sim::LaserSim::BLOCK * 2);
     let mut opts = odocal::io::WriteOptions::for_robot(&robot);
     opts.topics = cfg.topics.clone();

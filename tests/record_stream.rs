@@ -18,6 +18,9 @@ const BUNDLED: &str = concat!(
     "/scans/wheelchair-corridor.mcap"
 );
 
+/// A scan-match ellipse handed to the logger: row, time, matched pose, covariance.
+type Ellipse = (i64, f64, [f64; 3], [[f64; 2]; 2]);
+
 /// Everything a logger was handed, per entity.
 #[derive(Default, Debug)]
 struct Tape {
@@ -26,6 +29,8 @@ struct Tape {
     particles: Vec<(i64, f64, usize)>,
     estimates: Vec<(i64, f64, [f64; 3])>,
     trajectories: Vec<(TrajectoryKind, Vec<Pose2>)>,
+    /// Scan-match ellipses.
+    ellipses: Vec<Ellipse>,
     finished: usize,
 }
 
@@ -33,11 +38,24 @@ impl Logger for Tape {
     fn map(&mut self, _: &[[Point2<f64>; 2]]) -> Result<(), VizError> {
         Ok(())
     }
-    fn scan(&mut self, at: Stamp, p: &Pose2, pts: &[Point2<f64>]) -> Result<(), VizError> {
-        self.scans.push((at.scan, at.time, geom::xyt(p), pts.len()));
+    fn scan(
+        &mut self,
+        at: Stamp,
+        base: &Pose2,
+        laser: &Pose2,
+        pts: &[Point2<f64>],
+    ) -> Result<(), VizError> {
+        self.scans
+            .push((at.scan, at.time, geom::xyt(&(base * laser)), pts.len()));
         Ok(())
     }
-    fn trajectory(&mut self, kind: TrajectoryKind, poses: &[Pose2]) -> Result<(), VizError> {
+    fn trajectory(
+        &mut self,
+        kind: TrajectoryKind,
+        times: &[f64],
+        poses: &[Pose2],
+    ) -> Result<(), VizError> {
+        assert_eq!(times.len(), poses.len());
         self.trajectories.push((kind, poses.to_vec()));
         Ok(())
     }
@@ -51,6 +69,15 @@ impl Logger for Tape {
     }
     fn icp(&mut self, at: Stamp, iterations: u32, trace: f64) -> Result<(), VizError> {
         self.icp.push((at.scan, at.time, iterations, trace));
+        Ok(())
+    }
+    fn icp_covariance(
+        &mut self,
+        at: Stamp,
+        pose: &Pose2,
+        cov: [[f64; 2]; 2],
+    ) -> Result<(), VizError> {
+        self.ellipses.push((at.scan, at.time, geom::xyt(pose), cov));
         Ok(())
     }
     fn finish(&mut self) -> Result<(), VizError> {
@@ -147,6 +174,15 @@ fn a_bag_and_the_same_recording_in_memory_are_recorded_alike_and_whole() {
     assert_eq!(st.icp.len(), pairs);
     assert_eq!(pairs + 1, rec.scans.len());
     assert_eq!(st.particles.len(), st.estimates.len());
+    // An ellipse for every scan match that succeeded (the bundled run has no
+    // failed pair), on the ICP row of its pair, with the pair's covariance.
+    assert_eq!(st.ellipses.len(), pairs);
+    for (e, i) in st.ellipses.iter().zip(&st.icp) {
+        assert_eq!((e.0, e.1), (i.0, i.1));
+        // Its x, y block: part of the covariance whose trace ICP logged.
+        let xy = e.3[0][0] + e.3[1][1];
+        assert!(xy > 0.0 && xy <= i.3 * (1.0 + 1e-12), "{e:?} {i:?}");
+    }
     // The four trajectories; raw odometry and reference as integrated and read.
     assert_eq!(st.trajectories.len(), 4);
     let get = |k: TrajectoryKind| &st.trajectories.iter().find(|(x, _)| *x == k).unwrap().1;

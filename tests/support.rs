@@ -57,3 +57,11 @@ pub fn scratch(test: &str) -> PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// Runs the `odocal` binary with `args`.
+pub fn odocal(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_odocal"))
+        .args(args)
+        .output()
+        .expect("run odocal")
+}

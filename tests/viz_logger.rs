@@ -40,7 +40,7 @@ pub fn feed(log: &mut dyn Logger, shape: &RunShape) -> Result<(), VizError> {
         let at = Stamp::new(i as i64, 10.0 + 0.1 * i as f64);
         let p = pose(0.05 * i as f64, 0.01 * i as f64, 0.002 * i as f64);
         poses.push(p);
-        log.scan(at, &p, &pts)?;
+        log.scan(at, &p, &pose(-0.45, 0.0, std::f64::consts::PI), &pts)?;
         if i == 0 {
             continue;
         }
@@ -63,9 +63,11 @@ pub fn feed(log: &mut dyn Logger, shape: &RunShape) -> Result<(), VizError> {
             },
         )?;
         log.icp(at, 5 + (i % 7) as u32, 1e-4)?;
+        log.icp_covariance(at, &p, [[4e-6, 1e-6], [1e-6, 2e-6]])?;
     }
+    let times: Vec<f64> = (0..shape.scans).map(|i| 10.0 + 0.1 * i as f64).collect();
     for kind in TrajectoryKind::ALL {
-        log.trajectory(kind, &poses)?;
+        log.trajectory(kind, &times, &poses)?;
     }
     log.finish()
 }

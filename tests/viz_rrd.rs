@@ -7,6 +7,7 @@ use crate::support::{python_with, scratch};
 use crate::viz_logger::{feed, RunShape};
 use odocal::viz::{
     entity, systematic_subsample, Logger, RerunLogger, RerunOptions, RerunSink, Stamp,
+    TrajectoryKind,
 };
 use serde_json::{json, Value};
 use std::path::Path;
@@ -74,22 +75,38 @@ fn rerun_recording_matches_what_was_logged() {
         json!({"static": true, "rows": 1,
         "instances": {"LineStrips2D:strips": shape.map_segments}}),
     );
-    for t in [
-        entity::TRAJ_ICP,
-        entity::TRAJ_RAW,
-        entity::TRAJ_CALIBRATED,
-        entity::TRAJ_REFERENCE,
-    ] {
+    // Each trajectory: the whole line (static) and the line grown to each
+    // pose, on the time line only (23 poses: one row each).
+    for kind in TrajectoryKind::ALL {
         entities.insert(
-            t.into(),
+            kind.full_entity().into(),
             json!({"static": true, "rows": 1,
             "instances": {"LineStrips2D:strips": 1}}),
         );
+        entities.insert(
+            kind.entity().into(),
+            json!({"rows": shape.scans, "timelines": [entity::TIME],
+            "instances": {"LineStrips2D:strips": shape.scans, "LineStrips2D:colors": shape.scans},
+            "first": {"time": 10.0}, "last": {"time": last_t}}),
+        );
+    }
+    // The robot moves under its transform; laser and heading hang on it.
+    let mut robot = temporal(shape.scans, 0);
+    robot["instances"] = json!({"Transform3D:translation": shape.scans,
+        "Transform3D:rotation_axis_angle": shape.scans});
+    robot["first"]["time"] = json!(10.0);
+    entities.insert(entity::ROBOT.into(), robot);
+    for e in [entity::LASER, entity::ROBOT_HEADING] {
+        entities.insert(e.into(), json!({"static": true, "rows": 1}));
     }
     let mut scan = temporal(shape.scans, 0);
     scan["instances"] = json!({"Points2D:positions": shape.scans * shape.beams});
     scan["first"]["time"] = json!(10.0);
     entities.insert(entity::SCAN_POINTS.into(), scan);
+    // One ellipse per scan match, 33 points (closed).
+    let mut ell = temporal(steps, 1);
+    ell["instances"] = json!({"LineStrips2D:strips": steps});
+    entities.insert(entity::ICP_COVARIANCE.into(), ell);
     let mut parts = temporal(steps, 1);
     parts["instances"] = json!({"Points2D:positions": steps * shown,
         "Points2D:colors": steps * shown, "Points2D:radii": steps * shown});
@@ -116,6 +133,8 @@ fn rerun_recording_matches_what_was_logged() {
         "timelines": [entity::SCAN, entity::TIME],
         "exact": true,
         "entities": entities,
+        // The layout it opens on: the world, the estimates, the cloud, ICP.
+        "blueprint": ["/world", "/", "/calib/particles", "/icp"],
     });
     if !run_check("rerun_recording_matches_what_was_logged", &rrd, &expect) {
         return;
@@ -134,7 +153,9 @@ fn rerun_recording_matches_what_was_logged() {
         .output()
         .unwrap();
     assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("world/scan: 23 rows, want 24"));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("world/robot/laser/scan: 23 rows, want 24")
+    );
 }
 
 #[test]

@@ -7,7 +7,10 @@ EXPECT is a JSON object:
   {
     "version": "0.36.3",                  # optional: required rerun-sdk version
     "timelines": ["scan", "time"],        # every temporal row must carry these
+                                          # (an entity may list its own "timelines")
     "exact": true,                        # no entities beyond the listed ones
+    "blueprint": ["/world", ...],         # optional: view origins the stored
+                                          # blueprint must have
     "entities": {
       "world/map":  {"static": true, "rows": 1},
       "world/scan": {"rows": 10, "instances": {"Points2D:positions": 5410},
@@ -15,6 +18,8 @@ EXPECT is a JSON object:
       ...
     }
   }
+The recording's blueprint (a separate store in the file) is not counted among the
+entities; its view origins are listed under "blueprint" in the summary.
 "rows" counts logged rows (one per log call or per send_columns row); "instances"
 sums the list lengths of a component column over all rows. "first"/"last" are
 the smallest/largest values on a timeline (sequence as int, duration in s).
@@ -114,7 +119,7 @@ def check(found, expect):
         else:
             if "rows" in want and got["rows"] != want["rows"]:
                 problems.append(f"{ent}: {got['rows']} rows, want {want['rows']}")
-            missing = want_tls - set(got["timelines"])
+            missing = set(want.get("timelines", want_tls)) - set(got["timelines"])
             if got["rows"] and missing:
                 problems.append(f"{ent}: timelines {got['timelines']} lack {sorted(missing)}")
         for comp, n in want.get("instances", {}).items():
@@ -131,6 +136,21 @@ def check(found, expect):
         if extra:
             problems.append(f"unexpected entities: {extra}")
     return problems
+
+
+def blueprint_origins(path):
+    """The space origins of the views of the recording's stored blueprint."""
+    reader = rrx.RrdReader(path)
+    origins = set()
+    for bp in reader.blueprints():
+        for chunk in reader.stream(store=bp):
+            rb = chunk.to_record_batch()
+            for name in rb.schema.names:
+                if name.endswith("space_origin"):
+                    for v in rb.column(name).to_pylist():
+                        vals = v if isinstance(v, list) else [v]
+                        origins.update(norm(str(x)) for x in vals if x is not None)
+    return sorted(origins)
 
 
 def verify(path):
@@ -156,8 +176,13 @@ def main(argv):
         problems.append(f"rerun-sdk {rerun.__version__}, want {want_version}")
     found = scan(path)
     problems += check(found, expect)
+    origins = blueprint_origins(path)
+    for want in expect.get("blueprint", []):
+        if norm(want) not in origins:
+            problems.append(f"blueprint: no view of {want} (views of {origins})")
     problems += verify(path)
-    summary = {"rerun_sdk": rerun.__version__, "entities": found, "ok": not problems}
+    summary = {"rerun_sdk": rerun.__version__, "entities": found, "blueprint": origins,
+               "ok": not problems}
     print(json.dumps(summary, indent=1, sort_keys=True))
     for p in problems:
         print("MISMATCH", p, file=sys.stderr)

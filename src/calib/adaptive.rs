@@ -17,7 +17,8 @@ pub enum CountRule {
     /// Fixed count.
     Fixed,
     /// Seed 000: N = dispersion / `per_particle`, the dispersion being the
-    /// larger weighted standard deviation of R_R and R_L.
+    /// width of the radius cloud (`dispersion_sigmas` weighted standard
+    /// deviations of R_R plus as many of R_L).
     #[default]
     Dispersion,
     /// KLD-sampling: enough particles that the KL divergence between the
@@ -33,6 +34,12 @@ pub struct AdaptiveParams {
     pub rule: CountRule,
     /// Radius dispersion per particle (m): seed 000's "one particle per 0.01 mm".
     pub per_particle: f64,
+    /// How many standard deviations of a radius make its dispersion (the
+    /// width of the interval its particles fill: 6 = ±3σ, 99.7 % of a
+    /// Gaussian cloud). Seed 000 does not say which spread it means; the
+    /// standard deviation alone (1) gives fewer particles than any sensible
+    /// floor from the first resampling on, so the count would never move.
+    pub dispersion_sigmas: f64,
     /// Lower clamp of the particle count.
     pub n_min: usize,
     /// Upper clamp of the particle count.
@@ -61,7 +68,8 @@ impl Default for AdaptiveParams {
         Self {
             rule: CountRule::Dispersion,
             per_particle: 1e-5,
-            n_min: 2000,
+            dispersion_sigmas: 6.0,
+            n_min: 300,
             n_max: 20_000,
             alpha: 1e-4,
             residual_tau: 1.0,
@@ -80,6 +88,9 @@ impl AdaptiveParams {
         let pos = |x: f64| x.is_finite() && x > 0.0;
         if !pos(self.per_particle) {
             return Err("adaptive.per_particle must be > 0".into());
+        }
+        if !pos(self.dispersion_sigmas) {
+            return Err("adaptive.dispersion_sigmas must be > 0".into());
         }
         if self.n_min == 0 || self.n_max < self.n_min {
             return Err("adaptive.n_min must be ≥ 1 and ≤ n_max".into());
@@ -102,8 +113,12 @@ impl AdaptiveParams {
         Ok(())
     }
 
-    /// Seed 000's count: `ceil(dispersion / per_particle)`, clamped.
-    pub fn dispersion_count(&self, dispersion: f64) -> usize {
+    /// Seed 000's count, `ceil(dispersion / per_particle)` clamped to
+    /// [`n_min`, `n_max`], for weighted standard deviations `std_r_right`,
+    /// `std_r_left` (m) of the radius particles: the dispersion is
+    /// `dispersion_sigmas · (std_r_right + std_r_left)`.
+    pub fn dispersion_count(&self, std_r_right: f64, std_r_left: f64) -> usize {
+        let dispersion = self.dispersion_sigmas * (std_r_right + std_r_left);
         let n = (dispersion / self.per_particle).ceil();
         if n.is_finite() {
             (n.max(0.0) as usize).clamp(self.n_min, self.n_max)
@@ -205,31 +220,35 @@ mod tests {
     use super::*;
 
     #[test]
-    fn dispersion_count_is_one_particle_per_hundredth_mm_clamped() {
+    fn dispersion_count_is_one_particle_per_hundredth_mm_of_cloud_width() {
         let p = AdaptiveParams::default();
-        assert_eq!(p.dispersion_count(0.05), 5000);
-        assert_eq!(p.dispersion_count(1e-6), p.n_min);
-        assert_eq!(p.dispersion_count(1.0), p.n_max);
-        assert_eq!(p.dispersion_count(f64::NAN), p.n_max);
+        // σ 0.5 mm and 0.3 mm: ±3σ widths 3.0 + 1.8 = 4.8 mm = 480 × 0.01 mm.
+        assert_eq!(p.dispersion_count(0.5e-3, 0.3e-3), 480);
+        // The uniform start over 30 mm (σ = 30/√12 = 8.66 mm each): 10,392.
+        let s = 0.030 / 12f64.sqrt();
+        assert_eq!(p.dispersion_count(s, s), 10_393);
+        assert_eq!(p.dispersion_count(1e-6, 1e-6), p.n_min);
+        assert_eq!(p.dispersion_count(1.0, 0.0), p.n_max);
+        assert_eq!(p.dispersion_count(f64::NAN, 0.0), p.n_max);
     }
 
     #[test]
-    fn kld_count_matches_fox_table() {
-        // Fox 2001: ε = 0.05, z = 2.326 (δ = 0.01): k = 2 → ~ 54? Direct formula check.
+    fn kld_count_matches_the_chi_square_table() {
+        // Fox 2001, eq. 8: n = χ²_{k−1, 1−δ} / (2ε). For k − 1 = 100 bins
+        // and δ = 0.01 the tabulated quantile is 135.807 (Abramowitz and
+        // Stegun, Table 26.8), so n = 1358.07 with ε = 0.05; the
+        // Wilson–Hilferty form the code uses agrees to 0.1 %.
         let p = AdaptiveParams {
             n_min: 1,
             n_max: 1_000_000,
             ..Default::default()
         };
-        let k = 101usize;
-        let km1 = 100.0f64;
-        let z = 2.326_347_874_040_840_8;
-        let a = 2.0 / (9.0 * km1);
-        let want = (km1 / 0.1 * (1.0 - a + a.sqrt() * z).powi(3)).ceil() as usize;
-        assert_eq!(p.kld_count(k), want);
-        // More bins → more particles; the χ² quantile exceeds its mean k−1.
-        assert!(p.kld_count(1000) > p.kld_count(100));
-        assert!(p.kld_count(k) as f64 > km1 / 0.1);
+        let n = p.kld_count(101) as f64;
+        assert!((n - 1358.07).abs() < 1.5, "{n}");
+        // k − 1 = 10: χ²_{10, 0.99} = 23.209 → 232.09.
+        let n10 = p.kld_count(11) as f64;
+        assert!((n10 - 232.09).abs() < 0.01 * 232.09, "{n10}");
+        assert_eq!(p.kld_count(1), p.n_min);
     }
 
     #[test]

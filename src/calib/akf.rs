@@ -3,6 +3,7 @@
 //! with the velocity model's noise (`NoiseParams::model_sigma_v`,
 //! `model_sigma_w`, the same the particle filters use) as process noise.
 
+use super::change::KalmanChange;
 use super::kalman::kalman_estimate;
 use super::kalman::{model, observability, prior, turn_jacobian, turn_rate_for_observability};
 use super::params::CalibParams;
@@ -23,6 +24,7 @@ pub struct AugmentedKf {
     floor: f64,
     dof: f64,
     w_obs: f64,
+    change: Option<KalmanChange>,
 }
 
 impl AugmentedKf {
@@ -50,6 +52,7 @@ impl AugmentedKf {
             floor: params.noise.sigma_floor,
             dof: params.noise.robust_dof,
             w_obs: params.noise.observability_turn_rate,
+            change: KalmanChange::new(&params.change),
         }
     }
 }
@@ -73,6 +76,11 @@ impl Calibrator for AugmentedKf {
         let mut q = self.q;
         q[4] *= obs * obs;
         self.p = f * self.p * f.transpose() + M5::from_diagonal(&q);
+        if let Some(c) = &mut self.change {
+            let model_var = [self.q[0], self.q[1]];
+            let pt = self.p.fixed_view::<3, 3>(2, 2).into_owned();
+            c.observe(s, &theta, &pt, obs, (self.floor, self.dof), model_var);
+        }
         // Update: one scalar update per usable measurement (Joseph form).
         for m in s.measurements().iter().filter(|m| usable(m)) {
             let k = match m.kind {
@@ -94,6 +102,13 @@ impl Calibrator for AugmentedKf {
         self.p = 0.5 * (self.p + self.p.transpose());
         for i in 2..5 {
             self.x[i] = self.x[i].max(1e-6);
+        }
+        if let Some(c) = &mut self.change {
+            let theta = Vector3::new(self.x[2], self.x[3], self.x[4]);
+            let mut pt = self.p.fixed_view::<3, 3>(2, 2).into_owned();
+            if c.end_step(&theta, &mut pt) {
+                self.p.fixed_view_mut::<3, 3>(2, 2).copy_from(&pt);
+            }
         }
         kalman_estimate(
             s.t1,

@@ -6,6 +6,7 @@
 //! quantisation, slip), without which the parameter filter would trust each
 //! step's wheel-rate prediction as exact and chase its noise.
 
+use super::change::KalmanChange;
 use super::kalman::{
     kalman_estimate, model, observability, prior, turn_jacobian, turn_rate_for_observability,
 };
@@ -26,6 +27,7 @@ pub struct DualKf {
     dof: f64,
     w_obs: f64,
     model_var: [f64; 2],
+    change: Option<KalmanChange>,
 }
 
 impl DualKf {
@@ -44,6 +46,7 @@ impl DualKf {
                 params.noise.model_sigma_v.powi(2),
                 params.noise.model_sigma_w.powi(2),
             ],
+            change: KalmanChange::new(&params.change),
         }
     }
 }
@@ -57,6 +60,10 @@ impl Calibrator for DualKf {
         // Parameter filter, time update: random walk (D's scaled by it).
         self.p_theta +=
             Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, obs * obs)) * self.q_theta;
+        if let Some(c) = &mut self.change {
+            let fd = (self.floor, self.dof);
+            c.observe(s, &self.theta, &self.p_theta, obs, fd, self.model_var);
+        }
         // State filter update with the measurements (scalar updates, V and W
         // independent given θ), each robustly weighted.
         let mut x = [v0, w0];
@@ -97,6 +104,9 @@ impl Calibrator for DualKf {
         }
         self.p_theta = 0.5 * (self.p_theta + self.p_theta.transpose());
         self.theta = self.theta.map(|t| t.max(1e-6));
+        if let Some(c) = &mut self.change {
+            c.end_step(&self.theta, &mut self.p_theta);
+        }
         kalman_estimate(
             s.t1,
             self.theta.into(),

@@ -10,6 +10,7 @@ pub mod batch;
 mod change;
 mod dkf;
 mod evidence;
+mod fuse;
 mod kalman;
 mod kernels;
 mod nominal;

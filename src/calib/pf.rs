@@ -10,13 +10,12 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
 use super::adaptive::{occupied_bins, AdaptiveParams, CountRule};
-use super::change::{ChangeDetector, Jump};
+use super::change::ChangeDetector;
 use super::kernels::{self, MIN_LENGTH};
 use super::params::{CalibParams, Method, Ranges};
 use super::pool::NormalPool;
 use super::resample::{Resampler, Scheme};
-use super::robust::student_t_weight;
-use super::steps::{usable, CalibStep, Kind};
+use super::steps::CalibStep;
 use super::trigger::Trigger;
 use super::weights::Weights;
 use super::{Calibrator, Estimate};
@@ -208,11 +207,17 @@ impl ParticleFilter {
         self.jumps
     }
 
-    /// Reduces the step's usable measurements to one term per velocity. Each
-    /// measurement's precision `1/S` (S = σ² floored + model variance) is
-    /// scaled by its Student-t weight against the prior prediction, whose
-    /// variance includes the parameter spread; the innovations also feed the
-    /// change detector. Returns the update and the prior mean turn rate.
+    /// Reduces the step's usable measurements to one term per velocity.
+    /// The measurements of one velocity (ICP's W and the gyro's W) are fused
+    /// first, each with its own σ (floored) scaled by its Student-t weight
+    /// against the prior prediction (whose variance includes the parameter
+    /// spread and the model's); the velocity model's variance is then added
+    /// once to the fused measurement: the model's error (encoder
+    /// quantisation, slip) is one error shared by every measurement of that
+    /// velocity, not one per measurement, which would count it as
+    /// independent evidence twice. The fused innovations also feed the
+    /// change detector. Returns the update and the turn rate that decides
+    /// D's observability.
     fn measurements(&mut self, s: &CalibStep) -> (Update, f64) {
         let (wr, wl) = (s.omega_right, s.omega_left);
         let Belief { mean: m, cov } = self.belief;
@@ -222,40 +227,24 @@ impl ParticleFilter {
         let obs = super::kalman::observability(w_seen, self.observability_turn_rate);
         // W as the predict pass models it (D's entry scaled by `obs`).
         let jw = super::kalman::turn_jacobian(&theta, &jw, w_hat, obs);
-        let var_v = jv.dot(&(cov * jv)).max(0.0);
-        let var_w = jw.dot(&(cov * jw)).max(0.0);
-        if let Some(det) = &mut self.change {
-            det.begin_step(s.dt());
-        }
+        let pred = super::fuse::Prediction {
+            value: [v_hat, w_hat],
+            var: [jv.dot(&(cov * jv)).max(0.0), jw.dot(&(cov * jw)).max(0.0)],
+            model_var: self.model_var,
+        };
+        let fused = super::fuse::fuse(s, &pred, self.floor, self.robust_dof);
         let mut u = Update::default();
-        let (mut kvz, mut kwz) = (0.0, 0.0);
-        for m in s.measurements().iter().filter(|m| usable(m)) {
-            let (pred, var_pred, j, model) = match m.kind {
-                Kind::V => (v_hat, var_v, jv, self.model_var[0]),
-                Kind::W => (w_hat, var_w, jw, self.model_var[1]),
-            };
-            let r = m.sigma.max(self.floor).powi(2) + model;
-            let nu = m.value - pred;
-            let prec = student_t_weight(nu * nu / (r + var_pred), self.robust_dof) / r;
-            match m.kind {
-                Kind::V => {
-                    u.kv += 0.5 * prec;
-                    kvz += 0.5 * prec * m.value;
-                }
-                Kind::W => {
-                    u.kw += 0.5 * prec;
-                    kwz += 0.5 * prec * m.value;
-                }
-            }
-            if let Some(det) = &mut self.change {
-                det.add(nu, [j[0], j[1], j[2]], prec);
+        for (k, f) in fused.iter().enumerate() {
+            let Some(f) = f else { continue };
+            let prec = 1.0 / (f.var + self.model_var[k]);
+            if k == 0 {
+                (u.kv, u.zv) = (0.5 * prec, f.value);
+            } else {
+                (u.kw, u.zw) = (0.5 * prec, f.value);
             }
         }
-        if u.kv > 0.0 {
-            u.zv = kvz / u.kv;
-        }
-        if u.kw > 0.0 {
-            u.zw = kwz / u.kw;
+        if let Some(det) = &mut self.change {
+            det.observe(s.dt(), &fused, &pred, [jv, jw]);
         }
         (u, w_seen)
     }
@@ -396,7 +385,7 @@ impl ParticleFilter {
         };
         match a.rule {
             CountRule::Fixed => n,
-            CountRule::Dispersion => a.dispersion_count(est.std_r_right.max(est.std_r_left)),
+            CountRule::Dispersion => a.dispersion_count(est.std_r_right, est.std_r_left),
             CountRule::Kld => {
                 self.resampler.resample(
                     Scheme::Systematic,
@@ -487,19 +476,6 @@ impl ParticleFilter {
         std::mem::swap(&mut self.p, &mut self.spare);
         self.weights.reset_uniform(n);
     }
-
-    /// The spread to re-inflate with after a detected jump: per radius the
-    /// larger of the configured σ and the window's estimate of the jump,
-    /// bounded by 10 % of the parameter; the wheel base gets its configured σ.
-    fn jump_spread(&self, jump: &Jump) -> [f64; 3] {
-        std::array::from_fn(|k| {
-            let est = if k < 2 { jump.delta[k].abs() } else { 0.0 };
-            let est = if est.is_finite() { est } else { 0.0 };
-            self.jump_sigma[k]
-                .max(est)
-                .min(0.1 * self.belief.mean[k].abs())
-        })
-    }
 }
 
 /// Cholesky factor of a 3×3 covariance; a covariance that is not positive
@@ -554,7 +530,7 @@ impl Calibrator for ParticleFilter {
         if let Some(jump) = self.change.as_mut().and_then(|c| c.end_step(&cov)) {
             // A change: keep what the weights say, then re-inflate the spread
             // and the count so the cloud can find the new parameters.
-            let spread = self.jump_spread(&jump);
+            let spread = jump.spread(&self.jump_sigma, &self.belief.mean);
             let n_new = self.initial.max(self.p.len());
             self.resample(n_new, Some(spread));
             self.jumps += 1;

@@ -84,6 +84,10 @@ pub struct CalibSummary {
     /// top-level keys.
     #[serde(flatten)]
     pub batch: Option<super::batch::BatchEstimate>,
+    /// The batch estimate an online filter started from (`--init batch`),
+    /// under `start`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start: Option<super::batch::BatchEstimate>,
 }
 
 /// Result of [`run`].
@@ -108,6 +112,15 @@ impl CalibrationRun {
 }
 
 impl CalibSummary {
+    /// The multipliers against `nominal` (the robot file's values, when the
+    /// run started elsewhere).
+    pub fn rebase(&mut self, nominal: DiffDrive) {
+        let f = self.final_params;
+        self.multipliers.right_wheel_radius = f.r_right / nominal.r_right;
+        self.multipliers.left_wheel_radius = f.r_left / nominal.r_left;
+        self.multipliers.wheel_separation = f.wheel_base / nominal.wheel_base;
+    }
+
     /// The summary of `method` after `iterations` steps that took `total_s`
     /// (s) in all, ending with the estimate `last`; without any step, the
     /// nominal parameters with zero std.
@@ -145,6 +158,7 @@ impl CalibSummary {
             wheel_source: None,
             odometry_scale: None,
             batch: None,
+            start: None,
             multipliers: Multipliers {
                 left_wheel_radius: ratio(final_params.r_left, nominal.r_left),
                 right_wheel_radius: ratio(final_params.r_right, nominal.r_right),

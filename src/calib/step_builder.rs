@@ -149,11 +149,16 @@ impl StepBuilder {
                 self.fill(covered, o.t0, out);
             }
             if let Some(mut s) = self.make(o.t0, o.t1) {
-                s.push(Measurement {
-                    kind: Kind::V,
-                    value: o.v,
-                    sigma: o.sigma_v,
-                });
+                // An infinite σ_V: the scan did not measure the forward
+                // motion (the matcher's odometry prior did), so the step
+                // carries no V rather than the odometry fed back to itself.
+                if o.sigma_v.is_finite() {
+                    s.push(Measurement {
+                        kind: Kind::V,
+                        value: o.v,
+                        sigma: o.sigma_v,
+                    });
+                }
                 s.push(Measurement {
                     kind: Kind::W,
                     value: o.w,

@@ -187,6 +187,22 @@ mod tests {
     }
 
     #[test]
+    fn an_observation_without_a_forward_measurement_gives_only_its_turn_rate() {
+        let obs = [VelocityObs {
+            t0: 0.25,
+            t1: 0.87,
+            v: 0.5,
+            w: 0.1,
+            sigma_v: f64::INFINITY,
+            sigma_w: 0.02,
+        }];
+        let s = steps(&obs, &wheels(), &[], 0.01);
+        let m = s.iter().find(|s| s.t0 == 0.25).unwrap().measurements();
+        assert_eq!(m.len(), 1);
+        assert_eq!((m[0].kind, m[0].value, m[0].sigma), (Kind::W, 0.1, 0.02));
+    }
+
+    #[test]
     fn observations_outside_the_wheel_span_are_dropped() {
         let o = |t0, t1| VelocityObs {
             t0,

@@ -8,6 +8,7 @@ use odocal::pipeline::demo::DemoJob;
 use odocal::pipeline::diagnose::DiagnoseJob;
 use odocal::pipeline::evaluate::EvalJob;
 use odocal::pipeline::icp::IcpJob;
+use odocal::pipeline::inspect::InspectJob;
 use odocal::pipeline::simulate::SimulateJob;
 use odocal::pipeline::{self, PipelineError, Viewer};
 use std::path::PathBuf;
@@ -38,9 +39,14 @@ pub enum Command {
     Eval(EvalArgs),
     /// Find what the nominal model gets wrong against the measurements, name the cause.
     Diagnose(DiagnoseArgs),
+    /// What a recording holds and what odocal would read from it: topics, transforms,
+    /// the laser mounting, what each command misses, a proposed robot file.
+    Inspect(InspectArgs),
     /// Regenerate the seeds' tables: resampling, montecarlo, changing, literature,
     /// square, umbmark, heading-pf, tachometer.
     Experiment(ExperimentArgs),
+    /// Calibrate a fleet's recordings; per robot the parameter history and its alarms.
+    Fleet(super::fleet::FleetArgs),
 }
 
 #[derive(Args)]
@@ -162,6 +168,10 @@ pub struct CalibrateArgs {
     /// Seed of every random draw.
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
+    /// Where an online filter starts: nominal (the robot file) or batch (the joint batch
+    /// estimate of the same recording: radii, wheel base, laser mounting, time offset).
+    #[arg(long, value_name = "nominal|batch", default_value = "nominal")]
+    pub init: odocal::pipeline::start::Start,
     /// Output directory: calibration.csv, trajectory.tum, summary.json.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -179,6 +189,31 @@ pub struct CalibrateArgs {
     pub json: bool,
     #[command(flatten)]
     pub common: Common,
+}
+
+#[derive(Args)]
+pub struct InspectArgs {
+    /// Recording: ROS 2 MCAP, ROS 1 bag, rosbag2 SQLite or folder, CARMEN log.
+    pub input: PathBuf,
+    /// Write the proposed robot file here (TOML, atomically).
+    #[arg(long, value_name = "FILE")]
+    pub write_robot: Option<PathBuf>,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+impl InspectArgs {
+    /// The job these arguments ask for.
+    pub fn job(&self) -> InspectJob {
+        InspectJob {
+            input: self.input.clone(),
+            common: self.common.files(),
+            write_robot: self.write_robot.clone(),
+        }
+    }
 }
 
 #[derive(Args)]
@@ -333,6 +368,7 @@ impl CalibrateArgs {
             },
             viewer: viewer(self.rrd.as_ref(), self.connect.as_ref(), self.spawn),
             common: self.common.files(),
+            init: self.init,
         })
     }
 }

@@ -2,10 +2,13 @@
 //! job, whose summary is printed (one JSON object with `--json`).
 
 pub mod args;
+mod fleet;
+mod inspect_print;
 mod print;
 
 use args::{
-    CalibrateArgs, Command, DemoArgs, DiagnoseArgs, EvalArgs, ExperimentArgs, IcpArgs, SimulateArgs,
+    CalibrateArgs, Command, DemoArgs, DiagnoseArgs, EvalArgs, ExperimentArgs, IcpArgs, InspectArgs,
+    SimulateArgs,
 };
 use odocal::pipeline::{self, Progress};
 use print::out;
@@ -20,7 +23,18 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Eval(a) => eval(a),
         Command::Diagnose(a) => diagnose(a),
         Command::Experiment(a) => experiment(a),
+        Command::Inspect(a) => inspect(a),
+        Command::Fleet(a) => fleet::run(a),
     }
+}
+
+fn inspect(a: InspectArgs) -> anyhow::Result<()> {
+    let i = pipeline::inspect::run(&a.job())?;
+    if a.json {
+        return print_json(&i);
+    }
+    inspect_print::inspection(&i);
+    Ok(())
 }
 
 fn print_json<T: serde::Serialize>(v: &T) -> anyhow::Result<()> {
@@ -104,9 +118,10 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
         eprintln!("note: {n}");
     }
     if a.json {
-        return print_json(&done.summary);
+        return print_json(&done.paste.with(&done.summary));
     }
     print::calibration(&done.summary, &a.out);
+    print::paste(&done.paste, &a.out);
     Ok(())
 }
 

@@ -70,6 +70,12 @@ pub fn trajectory_metrics(t: &odocal::eval::TrajectoryMetrics) {
         t.alignment.kind,
         t.alignment.reason
     );
+    if t.alignment.kind.starts_with("sim") {
+        out!(
+            "scale            {:.4} (the reference's metric against the estimate's)",
+            t.alignment.scale
+        );
+    }
     stats("APE (m)", Some(&t.ape));
     if t.ape_rot_deg.is_some() {
         stats("APE rot (deg)", t.ape_rot_deg.as_ref());
@@ -101,6 +107,15 @@ pub fn calibration(s: &CalibSummary, out: &Path) {
     if let Some(o) = &s.observability {
         observability(o);
     }
+    if let Some(b) = &s.start {
+        eprintln!(
+            "started from the batch estimate: R_R {:.5} m, R_L {:.5} m, D {:.5} m",
+            b.r_right.value, b.r_left.value, b.wheel_base.value
+        );
+        for n in &b.notes {
+            eprintln!("batch note: {n}");
+        }
+    }
     eprintln!(
         "{}: R_R {:.5} ± {:.5} m, R_L {:.5} ± {:.5} m, D {:.5} ± {:.5} m after {} steps ({:.3} ms/step)",
         s.method,
@@ -120,6 +135,25 @@ pub fn calibration(s: &CalibSummary, out: &Path) {
         s.multipliers.wheel_separation,
         out.display()
     );
+}
+
+/// What to paste: the ros2_control YAML and the laser mounting snippets.
+pub fn paste(p: &odocal::pipeline::paste::Paste, out: &Path) {
+    eprintln!(
+        "ros2_control parameters ({}):",
+        out.join(odocal::pipeline::paste::YAML_FILE).display()
+    );
+    for l in p.ros2_control.yaml.lines().filter(|l| !l.starts_with('#')) {
+        out!("{l}");
+    }
+    if let Some(l) = &p.laser_mount {
+        eprintln!(
+            "laser mounting ({}):",
+            out.join(odocal::pipeline::paste::URDF_FILE).display()
+        );
+        out!("{}", l.urdf.trim_end());
+        out!("{}", l.static_transform);
+    }
 }
 
 /// The batch estimate: every unknown with its std and observability.
@@ -157,7 +191,10 @@ fn batch(s: &CalibSummary, b: &odocal::calib::batch::BatchEstimate, out: &Path) 
     line("laser_yaw", b.laser.yaw, "rad");
     match b.time_offset {
         Some(t) => line("time_offset", t, "s"),
-        None => out!("time_offset  not estimated (the input carries no wheel time)"),
+        None => out!("time_offset  not estimated (the input carries no wheel time, or [calib.batch] time_offset = false)"),
+    }
+    for n in &b.notes {
+        out!("note: {n}");
     }
     eprintln!(
         "diff_drive_controller multipliers: right_wheel_radius {:.5}, left_wheel_radius {:.5}, wheel_separation {:.5}; summary in {}",

@@ -36,7 +36,8 @@ pub struct GyroRow {
 /// Chains runs of consecutive valid motions (each starting where the last
 /// ended) into motions spanning at least `min_dt` s: the SE(2) composition
 /// of the increments, covariances added (their rotation between the parts
-/// ignored: they only weight the rows). Streams stamped in bursts (odometry
+/// ignored: they only weight the rows), each increment the scan's own
+/// ([`Motion::scan_measured`]). Streams stamped in bursts (odometry
 /// logged in packets) then compare over intervals the bursts cannot split.
 /// `min_dt` ≤ 0 returns the motions unchanged; a run shorter than `min_dt`
 /// at a gap or at the end is dropped.
@@ -51,7 +52,10 @@ pub fn merge_motions(motions: &[Motion], min_dt: f64) -> Vec<Motion> {
             acc = None;
             continue;
         }
-        let inc = crate::geom::pose(m.dx, m.dy, m.dtheta);
+        // The scan's own increment: never the part the matcher's odometry
+        // prior supplied (see `InfoSplit`).
+        let [sx, sy, st] = m.scan_measured().0;
+        let inc = crate::geom::pose(sx, sy, st);
         acc = match acc.take() {
             Some((mut a, p)) if (a.t1 - m.t0).abs() < 1e-9 => {
                 a.t1 = m.t1;
@@ -70,6 +74,7 @@ pub fn merge_motions(motions: &[Motion], min_dt: f64) -> Vec<Motion> {
                 dx,
                 dy,
                 dtheta,
+                split: None,
                 ..a
             });
         }
@@ -273,6 +278,7 @@ mod tests {
             iterations: 1,
             inliers: 100,
             failure: (!valid).then_some(crate::motion::PairFailure::NotConverged),
+            split: None,
             ..Motion::from_increment(t0, t1, inc, Matrix3::identity() * 1e-6)
         }
     }

@@ -268,6 +268,7 @@ fn icp_motions(
                 iterations: 5,
                 inliers: 400,
                 failure: None,
+                split: None,
             }
         })
         .collect()

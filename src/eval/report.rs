@@ -38,6 +38,14 @@ pub struct AlignmentUsed {
     pub kind: String,
     /// Why this alignment.
     pub reason: String,
+    /// The scale the alignment applied to the estimate (1 for rigid ones):
+    /// with `sim2`/`sim3`, the reference's metric against the estimate's.
+    #[serde(default = "unit")]
+    pub scale: f64,
+}
+
+fn unit() -> f64 {
+    1.0
 }
 
 /// How poses were paired by time, and why (JSON `pairing`).
@@ -289,6 +297,7 @@ fn align_as_asked(
         let used = AlignmentUsed {
             kind: "origin-heading".into(),
             reason,
+            scale: s.scaling(),
         };
         return Ok((apply_all(matched, &s), s, used));
     }
@@ -296,6 +305,7 @@ fn align_as_asked(
     let used = AlignmentUsed {
         kind: kind.as_str().into(),
         reason,
+        scale: s.scaling(),
     };
     Ok((aligned, s, used))
 }

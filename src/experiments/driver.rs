@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// Experiment names `odocal experiment` knows.
-pub const EXPERIMENTS: [&str; 10] = [
+pub const EXPERIMENTS: [&str; 11] = [
     "resampling",
     "montecarlo",
     "montecarlo-scans",
@@ -27,6 +27,7 @@ pub const EXPERIMENTS: [&str; 10] = [
     "heading-pf",
     "tachometer",
     "diagnose",
+    "fleet",
 ];
 
 /// Settings of the experiments (`--settings FILE.toml`), one table each.
@@ -45,6 +46,8 @@ pub struct ExperimentSettings {
     pub scans: ScanMonteCarloParams,
     /// `diagnose` (the blind suite).
     pub diagnose: BlindParams,
+    /// `fleet` (`--runs` robots).
+    pub fleet: super::fleet::FleetSimParams,
 }
 
 impl ExperimentSettings {
@@ -128,6 +131,7 @@ pub fn run_experiment(
         "heading-pf" => heading_pf_output(inp, &settings.heading_pf, &png)?,
         "tachometer" => tachometer_output(inp, &settings.square, &png)?,
         "diagnose" => blind_output(inp, &settings.diagnose, out, &png)?,
+        "fleet" => super::fleet::fleet_output(inp, &settings.fleet, out, &png)?,
         _ => monte_carlo(name, inp, &settings.scans, &png)?,
     };
     write_text(out, format!("{name}.md"), &res.markdown)?;

@@ -13,6 +13,7 @@
 pub mod blind;
 mod compare;
 mod driver;
+pub mod fleet;
 mod heading_pf;
 mod inputs;
 mod literature;

@@ -8,7 +8,7 @@ use super::reference::Reference;
 use super::register::{register, RegisterSettings, Registration, Scratch};
 use super::threshold::AdaptiveThreshold;
 use crate::geom::{self, Pose2};
-use crate::motion::{Motion, PairFailure};
+use crate::motion::{InfoSplit, Motion, PairFailure};
 use crate::scan::LaserScan;
 use nalgebra::{Matrix3, Vector3};
 use std::collections::VecDeque;
@@ -76,7 +76,8 @@ pub struct ScanMatcher {
     /// Start stamp (s) of the current run of pairs whose given prior was
     /// replaced by the constant-velocity guess.
     substituted_since: Option<f64>,
-    keyframes: VecDeque<(Pose2, ScanPoints)>,
+    /// The local map's keyframes: pose and the scan's points and lines.
+    keyframes: VecDeque<(Pose2, Reference)>,
     cur: ScanPoints,
     src: Vec<[f64; 2]>,
     kept: Vec<usize>,
@@ -417,6 +418,7 @@ impl ScanMatcher {
     /// motion is kept for the trajectory but flagged, so it never becomes a
     /// velocity observation.
     fn accept(&mut self, t0: f64, t1: f64, best: Attempt) -> Motion {
+        let split = best.split.map(|s| self.motion_split(s));
         let Attempt {
             reg,
             ref_from_cur,
@@ -460,7 +462,24 @@ impl ScanMatcher {
             } else {
                 None
             },
+            split,
             ..Motion::from_increment(t0, t1, &motion, cov)
+        }
+    }
+
+    /// The information split of the motion from the last scan to a pose
+    /// registered in the reference frame, given that pose's scan-only
+    /// estimate and `K` there: the scan-only motion from the last pose, and
+    /// `K` turned into the base frame at the last scan.
+    fn motion_split(&self, (scan_pose, k): ([f64; 3], Matrix3<f64>)) -> InfoSplit {
+        let own = geom::pose(scan_pose[0], scan_pose[1], scan_pose[2]);
+        let (s, c) = geom::heading(&self.ref_from_last).sin_cos();
+        // Base-frame coordinates at the last scan: Rᵀ on x, y.
+        let r = Matrix3::new(c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0);
+        let kb = r * k * r.transpose();
+        InfoSplit {
+            scan_share: std::array::from_fn(|i| kb[(i, i)].clamp(0.0, 1.0)),
+            scan_only: geom::xyt(&geom::between(&self.ref_from_last, &own)),
         }
     }
 
@@ -529,6 +548,9 @@ impl ScanMatcher {
         let conflict = reg.uncertainty.map_or(0.0, |u| {
             prior_conflict(&reg.pose, &init, &set.prior_precision, &u.cov)
         });
+        let split = reg
+            .uncertainty
+            .map(|u| info_split(&reg.pose, &init, &set.prior_precision, &u.cov));
         // Only points with a surface of their own can ever be matched
         // (clutter, isolated returns and open ends never are): the inlier
         // fraction counts those.
@@ -557,6 +579,7 @@ impl ScanMatcher {
             init: *prior,
             source,
             conflict,
+            split,
         }
     }
 
@@ -686,7 +709,8 @@ impl ScanMatcher {
             if self.keyframes.len() >= self.params.keyframes {
                 self.keyframes.pop_front();
             }
-            self.keyframes.push_back((ref_from_cur, self.cur.clone()));
+            self.keyframes
+                .push_back((ref_from_cur, self.own.lines_only()));
             self.reference
                 .set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
         }
@@ -714,7 +738,8 @@ impl ScanMatcher {
         }
         if self.params.local_map {
             self.keyframes.clear();
-            self.keyframes.push_back((ref_from_cur, self.cur.clone()));
+            self.keyframes
+                .push_back((ref_from_cur, self.own.lines_only()));
             self.reference
                 .set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
             self.ref_from_last = ref_from_cur;
@@ -730,8 +755,14 @@ impl ScanMatcher {
         let p = &self.params;
         let st = p.prior_trans_tol + p.prior_rel_tol * prior.translation.vector.norm();
         let cov = Matrix3::from_diagonal(&Vector3::new(st * st, st * st, p.prior_rot_tol.powi(2)));
+        // Nothing of it was measured by the scan.
+        let [dx, dy, dtheta] = geom::xyt(prior);
         Motion {
             failure: Some(f),
+            split: Some(InfoSplit {
+                scan_share: [0.0; 3],
+                scan_only: [dx, dy, dtheta],
+            }),
             ..Motion::from_increment(t0, t1, prior, cov)
         }
     }
@@ -765,6 +796,9 @@ struct Attempt {
     /// what the scan alone says (see [`prior_conflict`]); 0 without a prior
     /// term.
     conflict: f64,
+    /// The scan-only pose `[x, y, θ]` and `K = (I + C P)⁻¹` in the
+    /// reference frame (see [`info_split`]).
+    split: Option<([f64; 3], Matrix3<f64>)>,
 }
 
 impl Attempt {
@@ -796,6 +830,37 @@ fn prior_conflict(pose: &[f64; 3], init: &[f64; 3], prec: &[f64; 3], cov: &Matri
         d2
     } else {
         0.0
+    }
+}
+
+/// The information split of a registration's `pose` (all in the reference
+/// frame) between the scan and a prior term centred at `init` with
+/// precision `prec` (diagonal, 1/m², 1/m², 1/rad²), given the scan-only
+/// covariance `cov`: the scan-only optimum `pose + cov·P·off` (`off` =
+/// `pose − init`, as in [`prior_conflict`]) and `K = (I + cov·P)⁻¹`, with
+/// which `pose = K·scan + (I − K)·init` to first order. `K = I` without a
+/// prior term; where `cov` is not finite (a direction the scan leaves
+/// free), that direction's share is 0 and the pose is kept.
+fn info_split(
+    pose: &[f64; 3],
+    init: &[f64; 3],
+    prec: &[f64; 3],
+    cov: &Matrix3<f64>,
+) -> ([f64; 3], Matrix3<f64>) {
+    let off = Vector3::new(
+        pose[0] - init[0],
+        pose[1] - init[1],
+        geom::wrap_angle(pose[2] - init[2]),
+    );
+    let p = Matrix3::from_diagonal(&Vector3::from(*prec));
+    let cp = cov * p;
+    let own = Vector3::from(*pose) + cp * off;
+    let k = (Matrix3::identity() + cp).try_inverse();
+    match k {
+        Some(k) if k.iter().all(|v| v.is_finite()) && own.iter().all(|v| v.is_finite()) => {
+            ([own.x, own.y, geom::wrap_angle(own.z)], k)
+        }
+        _ => (*pose, Matrix3::zeros()),
     }
 }
 
@@ -848,7 +913,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn prior_conflict_is_the_innovation_mahalanobis_distance() {
+    fn prior_conflict_and_info_split_recover_the_scan_only_estimate() {
         // Scan-only estimate xs with covariance c, prior at init with
         // precision p: the fused optimum, then the closed form against the
         // explicit (xs − init)ᵀ (c + P⁻¹)⁻¹ (xs − init).
@@ -864,6 +929,17 @@ mod tests {
         let s = c + pm.try_inverse().unwrap();
         let want = (d.transpose() * s.try_inverse().unwrap() * d)[(0, 0)];
         assert!((got - want).abs() < 1e-9 * want, "{got} {want}");
+        // The information split of that fused optimum recovers the
+        // scan-only estimate, and K·xs + (I − K)·init is the fused optimum.
+        let (own, k) = info_split(&fused.into(), &init.into(), &prec, &c);
+        for i in 0..3 {
+            assert!((own[i] - xs[i]).abs() < 1e-9, "{own:?} {xs}");
+        }
+        let back = k * xs + (Matrix3::identity() - k) * init;
+        assert!((back - fused).norm() < 1e-9, "{back} {fused}");
+        // Along the direction the scan measures poorly (y: variance 1e-2
+        // against the prior's 4e-4), most of the estimate is the prior's.
+        assert!(k[(1, 1)] < 0.1 && k[(0, 0)] > 0.5, "{k}");
         // No prior term: no conflict.
         assert_eq!(
             prior_conflict(&fused.into(), &init.into(), &[0.0; 3], &c),

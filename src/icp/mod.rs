@@ -9,7 +9,8 @@
 //!   optional beam stride / voxel thinning of the source scan.
 //! - `reference`: the local map (or previous scan) with a line fitted through
 //!   every point's surface neighbourhood (at most `normal_window + 1` beams,
-//!   and about `normal_length` m of surface) and a kd-tree, built once.
+//!   and about `normal_length` m of surface) and a grid for nearest-neighbour
+//!   queries (`grid`), built once.
 //! - `metric`: the point-to-line error and its Jacobian, the one metric of
 //!   registration and covariance.
 //! - `register`: foot on the nearest point's fitted line + Geman–McClure
@@ -47,6 +48,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod covariance;
+mod grid;
 mod matcher;
 mod metric;
 mod params;

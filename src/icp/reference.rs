@@ -1,6 +1,7 @@
 //! What a scan is matched against: points in a fixed frame with their surface
 //! links, a local line fitted through every point's surface neighbourhood, and
-//! a kd-tree; all built once per reference (never per iteration).
+//! a grid for nearest-neighbour queries (`grid`); all built once per
+//! reference (never per iteration).
 //!
 //! Why fitted lines rather than the polyline through the raw points: range
 //! noise turns the polyline into a zigzag whose segments tilt by
@@ -11,9 +12,9 @@
 //! reference noise. A line fitted through `2k + 1` linked neighbours averages
 //! the noise out of both its position and its direction.
 
+use super::grid::PointGrid;
 use super::metric;
 use super::preprocess::ScanPoints;
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 /// The local surface of one reference point.
 #[derive(Debug, Clone, Copy, Default)]
@@ -29,8 +30,29 @@ struct Line {
     after: bool,
     /// Whether a usable line was fitted.
     ok: bool,
+    /// Whether a line was fitted at all (`ok` also needs its scatter within
+    /// the reference's limit).
+    fitted: bool,
+    /// Whether its score counts towards the reference's typical scatter
+    /// (windows of at least 3 points).
+    scored: bool,
     /// Mean squared distance of the fitted points from the line (m²).
     score: f64,
+}
+
+impl Line {
+    /// The line moved by the rotation (`c`, `s` = cos, sin) and translation
+    /// `t`.
+    fn moved(&self, c: f64, s: f64, t: [f64; 2]) -> Self {
+        let rot = |v: [f64; 2]| [c * v[0] - s * v[1], s * v[0] + c * v[1]];
+        let rc = rot(self.c);
+        Self {
+            c: [rc[0] + t[0], rc[1] + t[1]],
+            n: rot(self.n),
+            t: rot(self.t),
+            ..*self
+        }
+    }
 }
 
 /// Lines scattering more than this factor times the scan's median mean
@@ -39,13 +61,21 @@ const SCATTER_LIMIT: f64 = 9.0;
 /// Floor of the typical fit scatter (m), for noise-free scans.
 const MIN_SCATTER: f64 = 1e-3;
 
+/// Cell size (m) of the nearest-neighbour grid: a few beam spacings at
+/// indoor ranges, so that a query on a wall finds its neighbour in the 3 × 3
+/// cells around it.
+const GRID_CELL: f64 = 0.2;
+
 /// A reference point set with its local lines and nearest-neighbour index.
 #[derive(Default)]
 pub struct Reference {
     pts: Vec<[f64; 2]>,
     link: Vec<bool>,
     lines: Vec<Line>,
-    tree: Option<ImmutableKdTree<f64, 2>>,
+    /// Nearest-neighbour index over `pts`; `None` until built.
+    grid: Option<PointGrid>,
+    /// The last grid, kept to reuse its buffers.
+    spare: PointGrid,
     /// Most points after the first in one line fit.
     window: usize,
     /// Surface length (m) a line fit should span; 0 = always `window`.
@@ -102,61 +132,86 @@ impl Reference {
 
     /// True when there is nothing to match against.
     pub fn is_empty(&self) -> bool {
-        self.pts.is_empty() || self.tree.is_none()
+        self.pts.is_empty() || self.grid.as_ref().is_none_or(PointGrid::is_empty)
     }
 
-    /// Replaces the content with `scan`'s points and rebuilds lines and tree.
+    /// Replaces the content with `scan`'s points and rebuilds lines and search grid.
     pub fn set(&mut self, scan: &ScanPoints) {
         self.set_lines(scan);
-        self.rebuild_tree();
+        self.rebuild_index();
     }
 
     /// Replaces the content with `scan`'s points and fits their lines, but
-    /// builds no search tree (for [`normal`](Self::normal) only).
+    /// builds no search index (for [`normal`](Self::normal) only).
     pub fn set_lines(&mut self, scan: &ScanPoints) {
         self.pts.clear();
         self.link.clear();
         self.pts.extend_from_slice(&scan.pts);
         self.link.extend_from_slice(&scan.link);
         self.fit_lines();
-        self.tree = None;
+        self.drop_index();
     }
 
-    /// Replaces the content with several point sets, each mapped by a pose
-    /// `frame_from_set` first; links never cross from one set to the next.
+    /// Forgets the search index, keeping its buffers for the next one.
+    fn drop_index(&mut self) {
+        if let Some(g) = self.grid.take() {
+            self.spare = g;
+        }
+    }
+
+    /// Replaces the content with several references whose lines are
+    /// fitted (a local map's keyframes, each from [`set_lines`](Self::set_lines)),
+    /// each mapped by a pose `frame_from_set` first; links never cross from
+    /// one set to the next. The lines are moved rather than fitted again (a
+    /// fit is invariant under the move), and the scatter limit is applied
+    /// over all of them, as a fit of the whole would.
     pub fn set_many<'a>(
         &mut self,
-        sets: impl Iterator<Item = (&'a crate::geom::Pose2, &'a ScanPoints)>,
+        sets: impl Iterator<Item = (&'a crate::geom::Pose2, &'a Reference)>,
     ) {
         self.pts.clear();
         self.link.clear();
-        for (pose, s) in sets {
+        self.lines.clear();
+        for (pose, r) in sets {
             let (c, sn) = (pose.rotation.cos_angle(), pose.rotation.sin_angle());
             let t = pose.translation.vector;
             self.pts.extend(
-                s.pts
+                r.pts
                     .iter()
                     .map(|p| [c * p[0] - sn * p[1] + t.x, sn * p[0] + c * p[1] + t.y]),
             );
-            self.link.extend_from_slice(&s.link);
+            self.link.extend_from_slice(&r.link);
             if let Some(l) = self.link.last_mut() {
                 *l = false;
             }
+            self.lines
+                .extend(r.lines.iter().map(|l| l.moved(c, sn, [t.x, t.y])));
         }
-        self.rebuild();
+        self.scatter.clear();
+        let scored = self.lines.iter().filter(|l| l.scored).map(|l| l.score);
+        self.scatter.extend(scored);
+        self.limit_scatter();
+        self.rebuild_index();
     }
 
-    fn rebuild(&mut self) {
-        self.fit_lines();
-        self.rebuild_tree();
+    /// A copy of the points, links and lines only (no search index, no
+    /// scratch): a keyframe for [`set_many`](Self::set_many).
+    pub fn lines_only(&self) -> Self {
+        Self {
+            pts: self.pts.clone(),
+            link: self.link.clone(),
+            lines: self.lines.clone(),
+            window: self.window,
+            length: self.length,
+            ..Default::default()
+        }
     }
 
-    fn rebuild_tree(&mut self) {
-        self.tree = if self.pts.is_empty() {
-            None
-        } else {
-            ImmutableKdTree::new_from_slice(&self.pts).ok()
-        };
+    fn rebuild_index(&mut self) {
+        self.drop_index();
+        let mut g = std::mem::take(&mut self.spare);
+        g.build(&self.pts, GRID_CELL);
+        self.grid = Some(g);
     }
 
     /// Fits a line through each point's surface neighbourhood: of all the
@@ -188,16 +243,16 @@ impl Reference {
                 }
                 let lo_first = j.saturating_sub(m).max(start);
                 let lo_last = j.min(end - m);
-                let mut best: Option<(f64, Fit)> = None;
-                for a in lo_first..=lo_last {
-                    let (score, f) = self.windows[a - start];
-                    if best.as_ref().is_none_or(|(s, _)| score < *s) {
-                        best = Some((score, f));
+                if lo_first > lo_last {
+                    continue;
+                }
+                let mut best = lo_first - start;
+                for a in lo_first + 1 - start..=lo_last - start {
+                    if self.windows[a].0 < self.windows[best].0 {
+                        best = a;
                     }
                 }
-                let Some((score, f)) = best else {
-                    continue;
-                };
+                let (score, f) = self.windows[best];
                 let mut t = f.direction();
                 let (pa, pb) = (self.pts[start], self.pts[end]);
                 if (pb[0] - pa[0]) * t[0] + (pb[1] - pa[1]) * t[1] < 0.0 {
@@ -210,6 +265,8 @@ impl Reference {
                     before: j > start,
                     after: j < end,
                     ok: true,
+                    fitted: true,
+                    scored: m >= 2,
                     score,
                 };
                 if m >= 2 {
@@ -218,16 +275,24 @@ impl Reference {
             }
             start = end + 1;
         }
+        self.limit_scatter();
+    }
+
+    /// Marks usable the fitted lines whose scatter is within
+    /// `SCATTER_LIMIT` times the median of `self.scatter` (the scored
+    /// lines' scores).
+    fn limit_scatter(&mut self) {
         if self.scatter.is_empty() {
+            for l in &mut self.lines {
+                l.ok = l.fitted;
+            }
             return;
         }
         let mid = self.scatter.len() / 2;
         let typical = *self.scatter.select_nth_unstable_by(mid, f64::total_cmp).1;
         let limit = SCATTER_LIMIT * typical.max(MIN_SCATTER * MIN_SCATTER);
         for l in &mut self.lines {
-            if l.score > limit {
-                l.ok = false;
-            }
+            l.ok = l.fitted && l.score <= limit;
         }
     }
 
@@ -304,29 +369,24 @@ impl Reference {
     /// estimate towards zero motion.
     #[cfg(test)]
     pub fn closest(&self, q: [f64; 2]) -> Option<Closest> {
-        let (j, d2) = self.nearest(q)?;
+        let (j, d2) = self.nearest(q, f64::INFINITY)?;
         self.correspondence(q, j, d2)
     }
 
     /// Index and squared distance (m²) of the reference point nearest to `q`
-    /// (kd-tree search).
-    pub fn nearest(&self, q: [f64; 2]) -> Option<(usize, f64)> {
-        let nn = self
-            .tree
-            .as_ref()?
-            .query(&q)
-            .nearest_one::<SquaredEuclidean<f64>>()
-            .execute();
-        Some((nn.item as usize, nn.distance))
+    /// among those closer than `max_dist` m (grid search); `None` when there is
+    /// none.
+    pub fn nearest(&self, q: [f64; 2], max_dist: f64) -> Option<(usize, f64)> {
+        self.grid.as_ref()?.nearest(q, max_dist)
     }
 
     /// Same as [`nearest`](Self::nearest) when the nearest point is known to
     /// be near index `hint` (the previous iteration's): walks along the
-    /// linked surface to the locally nearest point, no tree search. Only
+    /// linked surface to the locally nearest point, no grid search. Only
     /// valid while the query moves little between calls.
     pub fn walk(&self, q: [f64; 2], hint: usize) -> Option<(usize, f64)> {
         if hint >= self.pts.len() {
-            return self.nearest(q);
+            return self.nearest(q, f64::INFINITY);
         }
         let d2 = |j: usize| (self.pts[j][0] - q[0]).powi(2) + (self.pts[j][1] - q[1]).powi(2);
         let (mut j, mut best) = (hint, d2(hint));
@@ -495,9 +555,9 @@ mod tests {
         assert!(r.closest([5.2, 5.1]).is_none());
         assert!(r.closest([-0.2, 0.1]).is_none());
         assert!(r.closest([1.2, 0.1]).is_none());
-        // the walk from a hint finds the same point as the tree
+        // the walk from a hint finds the same point as the grid
         let (j, d2) = r.walk([0.9, 0.1], 0).unwrap();
-        assert_eq!((j, d2), r.nearest([0.9, 0.1]).unwrap());
+        assert_eq!((j, d2), r.nearest([0.9, 0.1], 1.0).unwrap());
         let w = r.correspondence([0.9, 0.1], j, d2).unwrap();
         assert!((w.target[0] - 0.9).abs() < 1e-12);
     }

@@ -90,14 +90,15 @@ pub struct Scratch {
     hints: Vec<usize>,
     /// Reference line each source point was matched to (held when frozen).
     lines: Vec<usize>,
-    abs_res: Vec<f64>,
+    /// Bit patterns of the absolute residuals (scratch of the median).
+    abs_res: Vec<u64>,
 }
 
 /// Registers `source` (points in their own frame, with the unit normals of
 /// their own surface, NaN when unknown) onto `reference` starting from
 /// `init` = `[x, y, θ]`. Each iteration:
 /// 1. [`associate`]: move every source point by the current pose, find the
-///    nearest reference point (kd-tree, or a walk along the surface from the
+///    nearest reference point (grid search, or a walk along the surface from the
 ///    previous iteration's once the steps are small) and the foot on its
 ///    fitted line, and drop pairs whose point-to-line distance exceeds the
 ///    gate or whose normals differ by more than the allowed angle,
@@ -220,13 +221,14 @@ fn associate(
     corrs: &mut Vec<Correspondence>,
 ) {
     corrs.clear();
+    let reach = set.threshold + set.max_gap;
     for (((&p, hint), line), &ns) in source
         .iter()
         .zip(memory.hints.iter_mut())
         .zip(memory.lines.iter_mut())
         .zip(normals)
     {
-        let Some(cl) = find(reference, at.apply(p).x, hint, line, memory.search) else {
+        let Some(cl) = find(reference, at.apply(p).x, hint, line, memory.search, reach) else {
             continue;
         };
         if !admits(&cl, at.rotate(ns), set) {
@@ -244,13 +246,16 @@ fn associate(
 
 /// The correspondence of the moved point `q`: on the line it had when
 /// frozen, else on the line of its nearest reference point (walked to from
-/// `hint` when hints are in use). Updates `hint` and `line`.
+/// `hint` when hints are in use). A search finds only points within
+/// `max_dist` m (beyond it `admits` refuses every correspondence). Updates
+/// `hint` and `line`.
 fn find(
     reference: &Reference,
     q: [f64; 2],
     hint: &mut usize,
     line: &mut usize,
     search: Search,
+    max_dist: f64,
 ) -> Option<Closest> {
     let found = if search.frozen {
         if *line == usize::MAX {
@@ -261,9 +266,13 @@ fn find(
         let near = if search.use_hints && *hint != usize::MAX {
             reference.walk(q, *hint)
         } else {
-            reference.nearest(q)
+            reference.nearest(q, max_dist)
         };
-        let (j, d2) = near?;
+        let Some((j, d2)) = near else {
+            *hint = usize::MAX;
+            *line = usize::MAX;
+            return None;
+        };
         *hint = j;
         reference.correspondence(q, j, d2)
     };
@@ -291,14 +300,15 @@ fn admits(cl: &Closest, rn: [f64; 2], set: &RegisterSettings) -> bool {
 /// Never widening again keeps the iteration a descent (and convergent).
 fn robust_scale(
     corrs: &[Correspondence],
-    abs_res: &mut Vec<f64>,
+    abs_res: &mut Vec<u64>,
     set: &RegisterSettings,
     kappa: f64,
 ) -> f64 {
+    // Non-negative floats order as their bit patterns: an integer selection.
     abs_res.clear();
-    abs_res.extend(corrs.iter().map(|k| k.residual.abs()));
+    abs_res.extend(corrs.iter().map(|k| k.residual.abs().to_bits()));
     let mid = abs_res.len() / 2;
-    let mad = *abs_res.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let mad = f64::from_bits(*abs_res.select_nth_unstable(mid).1);
     (KAPPA_PER_SIGMA * 1.4826 * mad)
         .clamp(set.min_kappa, set.threshold / 3.0)
         .min(kappa)

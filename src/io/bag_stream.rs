@@ -18,6 +18,9 @@ use crate::error::InputError;
 pub(crate) struct Raw {
     pub roles: Vec<Role>,
     pub topic: String,
+    /// The topic's message type as the bag names it (`pkg/msg/Type` or
+    /// ROS 1's `pkg/Type`).
+    pub type_name: std::sync::Arc<str>,
     /// Where the message is, for errors (e.g. "message 12", "row id 40").
     pub at: At,
     pub data: Vec<u8>,
@@ -188,7 +191,7 @@ impl<'o, M: RawMessages> BagStream<'o, M> {
         let roles = raw
             .roles
             .iter()
-            .filter(|r| !matches!(r, Role::Tf | Role::TfStatic));
+            .filter(|r| !matches!(r, Role::Tf | Role::TfStatic | Role::Survey));
         for role in roles {
             self.state
                 .handle(*role, &raw.data, raw.log_time)
@@ -300,6 +303,7 @@ fn first_pass<M: RawMessages>(mut m: M, opts: &ReadOptions) -> Result<StreamInfo
                 Role::Odom => info.odom += 1,
                 Role::RefOdometry | Role::RefPose | Role::RefPoint => info.reference += 1,
                 Role::TfStatic | Role::Tf => handle()?,
+                Role::Survey => {}
             }
         }
     }

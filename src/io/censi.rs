@@ -167,6 +167,7 @@ pub fn to_streams(
             iterations: 0,
             inliers: 0,
             failure: None,
+            split: None,
         });
         t = t1;
     }

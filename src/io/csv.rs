@@ -3,14 +3,21 @@
 
 use super::atomic::write_atomic;
 use crate::error::InputError;
-use crate::motion::{Motion, PairFailure};
+use crate::motion::{InfoSplit, Motion, PairFailure};
 use crate::recording::WheelSample;
 use nalgebra::Matrix3;
 use std::io::{self, Write};
 use std::path::Path;
 
-/// Header of the motions CSV.
-pub const MOTIONS_HEADER: &str =
+/// Header of the motions CSV: the core columns, then the information split
+/// (`scan_share_*`: the fraction of each direction's estimate the scan
+/// measured; `scan_d*`: the scan's own estimate, see `motion::InfoSplit`).
+pub const MOTIONS_HEADER: &str = "t0,t1,dx,dy,dtheta,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt,\
+     iterations,inliers,valid,scan_share_x,scan_share_y,scan_share_theta,scan_dx,scan_dy,scan_dtheta";
+
+/// The core columns alone, as motions files without the information split
+/// have them (still read: every motion is then taken as the scan's alone).
+pub const MOTIONS_HEADER_CORE: &str =
     "t0,t1,dx,dy,dtheta,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt,iterations,inliers,valid";
 
 /// Header of the calibration history CSV.
@@ -28,12 +35,16 @@ pub fn write_motions(path: &Path, motions: &[Motion]) -> io::Result<()> {
     })
 }
 
-/// One line of the motions CSV (after [`MOTIONS_HEADER`]).
+/// One line of the motions CSV (after [`MOTIONS_HEADER`]); a motion
+/// without a split is written as the scan's alone.
 pub fn write_motion_row(w: &mut impl Write, m: &Motion) -> io::Result<()> {
     let c = &m.cov;
+    let (share, own) = m.split.map_or(([1.0; 3], [m.dx, m.dy, m.dtheta]), |s| {
+        (s.scan_share, s.scan_only)
+    });
     writeln!(
         w,
-        "{:.9},{:.9},{:.9},{:.9},{:.9},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{}",
+        "{:.9},{:.9},{:.9},{:.9},{:.9},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:.6},{:.6},{:.6},{:.9},{:.9},{:.9}",
         m.t0,
         m.t1,
         m.dx,
@@ -47,7 +58,13 @@ pub fn write_motion_row(w: &mut impl Write, m: &Motion) -> io::Result<()> {
         c[(2, 2)],
         m.iterations,
         m.inliers,
-        u8::from(m.is_valid())
+        u8::from(m.is_valid()),
+        share[0],
+        share[1],
+        share[2],
+        own[0],
+        own[1],
+        own[2],
     )
 }
 
@@ -101,8 +118,9 @@ pub fn read_motions(path: &Path) -> Result<Vec<Motion>, InputError> {
 pub fn read_motions_numbered(path: &Path) -> Result<Vec<(usize, Motion)>, InputError> {
     let (file, text) = read_text(path)?;
     let mut lines = data_lines(&text);
-    match lines.next() {
-        Some((_, h)) if h.replace(' ', "") == MOTIONS_HEADER => {}
+    let fields = match lines.next() {
+        Some((_, h)) if h.replace(' ', "") == MOTIONS_HEADER => 20,
+        Some((_, h)) if h.replace(' ', "") == MOTIONS_HEADER_CORE => 14,
         Some((n, _)) => {
             return Err(
                 InputError::new(&file, format!("expected header '{MOTIONS_HEADER}'"))
@@ -110,10 +128,11 @@ pub fn read_motions_numbered(path: &Path) -> Result<Vec<(usize, Motion)>, InputE
             )
         }
         None => return Err(InputError::new(&file, "empty motions file")),
-    }
+    };
     let mut out = Vec::new();
     for (n, l) in lines {
-        let v = numbers(l, 14, &file, n)?;
+        let v = numbers(l, fields, &file, n)?;
+        let split = split_of(&v, &file, n)?;
         let cov = Matrix3::new(v[5], v[6], v[7], v[6], v[8], v[9], v[7], v[9], v[10]);
         if out
             .last()
@@ -137,10 +156,29 @@ pub fn read_motions_numbered(path: &Path) -> Result<Vec<(usize, Motion)>, InputE
                 } else {
                     Some(PairFailure::Implausible)
                 },
+                split,
             },
         ));
     }
     Ok(out)
+}
+
+/// The information split of a motions row (`None` for core columns only);
+/// shares outside [0, 1] are refused.
+fn split_of(v: &[f64], file: &str, n: usize) -> Result<Option<InfoSplit>, InputError> {
+    if v.len() < 20 {
+        return Ok(None);
+    }
+    let scan_share = [v[14], v[15], v[16]];
+    if scan_share.iter().any(|s| !(0.0..=1.0).contains(s)) {
+        return Err(
+            InputError::new(file, "scan_share_* must lie in [0, 1]").at(format!("line {n}"))
+        );
+    }
+    Ok(Some(InfoSplit {
+        scan_share,
+        scan_only: [v[17], v[18], v[19]],
+    }))
 }
 
 /// Reads wheel data: either angles `t,left,right` (rad) or mean rates over
@@ -247,12 +285,21 @@ mod tests {
             iterations: 7,
             inliers: 480,
             failure,
+            split: Some(InfoSplit {
+                scan_share: [0.25, 1.0, 0.5],
+                scan_only: [0.02, -0.001, 0.0031],
+            }),
         };
         let ms = vec![m(0.0, None), m(0.02, Some(PairFailure::Degenerate))];
         write_motions(&d.join("m.csv"), &ms).unwrap();
         let back = read_motions(&d.join("m.csv")).unwrap();
         assert_eq!(back.len(), 2);
         assert!(back[0].is_valid() && !back[1].is_valid());
+        let (a, b) = (ms[0].split.unwrap(), back[0].split.unwrap());
+        assert_eq!(a.scan_share, b.scan_share);
+        for k in 0..3 {
+            assert!((a.scan_only[k] - b.scan_only[k]).abs() < 1e-9);
+        }
         assert!((back[0].cov[(2, 2)] - 3e-7).abs() < 1e-15);
         assert!((back[0].dtheta - 0.003).abs() < 1e-12);
         std::fs::remove_dir_all(&d).unwrap();

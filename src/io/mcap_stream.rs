@@ -37,8 +37,8 @@ struct Catalog<'o> {
     opts: &'o ReadOptions,
     name: String,
     schemas: HashMap<u16, Arc<mcap::Schema<'static>>>,
-    /// Per channel: topic, roles, messages seen so far.
-    channels: HashMap<u16, (String, Vec<Role>, usize)>,
+    /// Per channel: topic, type, roles, messages seen so far.
+    channels: HashMap<u16, (String, Arc<str>, Vec<Role>, usize)>,
     total: usize,
 }
 
@@ -154,11 +154,17 @@ impl Catalog<'_> {
                 let roles = channel_roles(&channel, self.opts).map_err(|m| {
                     Fail::Input(InputError::new(&self.name, m).topic(&channel.topic))
                 })?;
-                self.channels.insert(ch.id, (channel.topic, roles, 0));
+                let ty: Arc<str> = channel
+                    .schema
+                    .as_ref()
+                    .map_or("", |s| s.name.as_str())
+                    .into();
+                self.channels.insert(ch.id, (channel.topic, ty, roles, 0));
             }
             mcap::records::Record::Message { header, data } => {
                 self.total += 1;
-                let Some((topic, roles, count)) = self.channels.get_mut(&header.channel_id) else {
+                let Some((topic, ty, roles, count)) = self.channels.get_mut(&header.channel_id)
+                else {
                     return Err(Fail::Format(format!(
                         "message refers to unknown channel {}",
                         header.channel_id
@@ -172,6 +178,7 @@ impl Catalog<'_> {
                 return Ok(Some(Raw {
                     roles: roles.clone(),
                     topic: topic.clone(),
+                    type_name: ty.clone(),
                     at: At::Message(index),
                     data: data.into_owned(),
                     log_time: header.log_time,

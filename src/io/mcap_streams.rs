@@ -43,6 +43,9 @@ pub(crate) enum Role {
     /// TFMessage on /tf → `base_from_laser` when /tf_static has none (the
     /// first transform of each child frame).
     Tf,
+    /// Any topic, whatever its type, for a survey of the whole bag
+    /// ([`ReadOptions::all_topics`]); decoded by [`super::survey`], not here.
+    Survey,
 }
 
 /// How a bag serialises its messages: CDR (ROS 2) or ROS 1.
@@ -248,6 +251,7 @@ impl<'a> State<'a> {
                 });
                 Ok(())
             }
+            Role::Survey => Ok(()),
             Role::TfStatic | Role::Tf => {
                 let m: TfMessage = self.decode(data)?;
                 let map = if role == Role::Tf {
@@ -515,6 +519,9 @@ pub(crate) fn roles_for(
     wire: Wire,
     opts: &ReadOptions,
 ) -> Result<Vec<Role>, String> {
+    if opts.all_topics {
+        return Ok(vec![Role::Survey]);
+    }
     let t = &opts.topics;
     let schema = short_name(type_name);
     let mut roles = Vec::new();
@@ -530,7 +537,8 @@ pub(crate) fn roles_for(
             None => {
                 let names: Vec<&str> = accepted.iter().map(|(n, _)| *n).collect();
                 Err(format!(
-                    "schema '{}' where {} was expected",
+                    "schema '{}' where {} was expected (the --config file's [topics] table \
+                     names each stream's topic; `odocal inspect REC` lists the topics and types)",
                     if schema.is_empty() { "(none)" } else { &schema },
                     names.join(" or ")
                 ))

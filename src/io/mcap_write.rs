@@ -98,16 +98,31 @@ const LATCHED_QOS: &str =
 depth: 1\n  durability: 1\n  history: 1\n  lifespan: {nsec: 0, sec: 0}\n  liveliness: 1\n  \
 liveliness_lease_duration: {nsec: 0, sec: 0}\n  reliability: 1";
 
-/// The streams in the order their channels are declared.
+/// The streams of a bag, in the order their channels are declared.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-enum Stream {
+pub enum BagStream {
+    /// The static base-to-laser transform (one message).
     TfStatic,
+    /// Reference poses.
     Reference,
+    /// Gyro samples.
     Imu,
+    /// Wheel joint states.
     Joints,
+    /// Laser scans.
     Scan,
+    /// Wheel odometry.
     Odom,
 }
+
+/// The streams that carry samples, in declaration order.
+const SAMPLE_STREAMS: [BagStream; 5] = [
+    BagStream::Reference,
+    BagStream::Imu,
+    BagStream::Joints,
+    BagStream::Scan,
+    BagStream::Odom,
+];
 
 /// Writes `rec` to `path` (atomically).
 pub fn write_mcap(path: &Path, rec: &Recording, opts: &WriteOptions) -> Result<(), WriteError> {
@@ -121,50 +136,138 @@ pub fn write_mcap(path: &Path, rec: &Recording, opts: &WriteOptions) -> Result<(
 
 /// The MCAP bytes [`write_mcap`] writes.
 pub fn encode_mcap(rec: &Recording, opts: &WriteOptions) -> Result<Vec<u8>, mcap::McapError> {
-    let mut feed = SliceFeed(&rec.scans);
-    let mut bytes = encode_into(Cursor::new(Vec::new()), rec, &mut feed, opts)?.into_inner();
+    let mut src = InMemory::new(rec);
+    let mut bytes = encode_into(Cursor::new(Vec::new()), &mut src, opts)?.into_inner();
     canonicalize_summary(&mut bytes);
     Ok(bytes)
 }
 
-/// Laser scans handed to the writer in stamp order: held in memory, or cast
-/// on demand by a simulator, so that a long recording need not fit in memory.
-pub trait ScanFeed {
-    /// Number of scans.
-    fn len(&self) -> usize;
-    /// Whether there are no scans.
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-    /// Stamp of scan `i` (s); stamps must not decrease.
-    fn stamp(&self, i: usize) -> f64;
-    /// Scan `i`; the writer asks for `i = 0, 1, 2, …` in turn.
-    fn scan(&mut self, i: usize) -> &LaserScan;
+/// The messages of a bag handed to the writer: each stream's messages in
+/// their order in the file (stamps non-decreasing), asked for one by one in
+/// that order, so that a source may make them on demand (a simulator) and a
+/// long recording need not fit in memory. The writer interleaves the streams
+/// by stamp (ties in [`BagStream`] order).
+pub trait BagSource {
+    /// The `base_from_laser` the static transform states, if any.
+    fn base_from_laser(&self) -> Option<Pose2>;
+    /// Whether any reference pose has a heading (the reference is then
+    /// written as odometry, else as points).
+    fn reference_has_heading(&self) -> bool;
+    /// The earliest stamp (s) of any message: the static transform's.
+    fn start(&self) -> f64;
+    /// Number of messages of sample stream `s`.
+    fn count(&self, s: BagStream) -> usize;
+    /// Stamp (s) of message `j` of sample stream `s`, non-decreasing in `j`.
+    fn stamp(&self, s: BagStream, j: usize) -> f64;
+    /// Reference pose `j`.
+    fn reference(&mut self, j: usize) -> StampedPose;
+    /// Odometry pose `j`.
+    fn odom(&mut self, j: usize) -> StampedPose;
+    /// Gyro rate `j` (rad/s).
+    fn gyro(&mut self, j: usize) -> f64;
+    /// Wheel sample `j` and its rates (rad/s, left and right).
+    fn wheel(&mut self, j: usize) -> (WheelSample, (f64, f64));
+    /// Laser scan `j`.
+    fn scan(&mut self, j: usize) -> &LaserScan;
 }
 
-/// Scans already in memory.
-struct SliceFeed<'a>(&'a [LaserScan]);
+/// A recording in memory as a [`BagSource`]: each stream in stamp order
+/// (a stable sort, so that its messages keep their order at equal stamps).
+struct InMemory<'a> {
+    rec: &'a Recording,
+    /// For each stream, its indices in `rec` in stamp order.
+    order: [Vec<usize>; 6],
+    velocities: Vec<(f64, f64)>,
+}
 
-impl ScanFeed for SliceFeed<'_> {
-    fn len(&self) -> usize {
-        self.0.len()
+impl<'a> InMemory<'a> {
+    fn new(rec: &'a Recording) -> Self {
+        let mut order: [Vec<usize>; 6] = Default::default();
+        for s in SAMPLE_STREAMS {
+            let mut idx: Vec<usize> = (0..Self::len(rec, s)).collect();
+            idx.sort_by(|&a, &b| Self::stamp_of(rec, s, a).total_cmp(&Self::stamp_of(rec, s, b)));
+            order[s as usize] = idx;
+        }
+        Self {
+            rec,
+            order,
+            velocities: WheelRates::new(rec.wheels.iter().copied())
+                .map(|(_, v)| v)
+                .collect(),
+        }
     }
-    fn stamp(&self, i: usize) -> f64 {
-        self.0[i].stamp
+
+    /// Messages of sample stream `s` in `rec`.
+    fn len(rec: &Recording, s: BagStream) -> usize {
+        match s {
+            BagStream::TfStatic => 0,
+            BagStream::Reference => rec.reference.len(),
+            BagStream::Imu => rec.gyro.len(),
+            BagStream::Joints => rec.wheels.len(),
+            BagStream::Scan => rec.scans.len(),
+            BagStream::Odom => rec.odom.len(),
+        }
     }
-    fn scan(&mut self, i: usize) -> &LaserScan {
-        &self.0[i]
+
+    /// Stamp of message `i` of sample stream `s` in `rec`.
+    fn stamp_of(rec: &Recording, s: BagStream, i: usize) -> f64 {
+        match s {
+            BagStream::TfStatic => f64::NAN,
+            BagStream::Reference => rec.reference[i].stamp,
+            BagStream::Imu => rec.gyro[i].stamp,
+            BagStream::Joints => rec.wheels[i].stamp,
+            BagStream::Scan => rec.scans[i].stamp,
+            BagStream::Odom => rec.odom[i].stamp,
+        }
+    }
+
+    /// Index in `rec` of message `j` of stream `s`.
+    fn at(&self, s: BagStream, j: usize) -> usize {
+        self.order[s as usize][j]
     }
 }
 
-/// Writes `rec` (its `scans` ignored: they come from `feed`) to `path`,
-/// streaming: the file grows message by message in a temporary sibling
-/// that is renamed over `path` once complete. The bytes equal those of
-/// [`write_mcap`] for the same recording with the feed's scans in it.
+impl BagSource for InMemory<'_> {
+    fn base_from_laser(&self) -> Option<Pose2> {
+        self.rec.base_from_laser
+    }
+    fn reference_has_heading(&self) -> bool {
+        self.rec.reference.iter().any(|p| p.has_heading)
+    }
+    fn start(&self) -> f64 {
+        self.rec.time_span().map_or(0.0, |(a, _)| a)
+    }
+    fn count(&self, s: BagStream) -> usize {
+        self.order[s as usize].len()
+    }
+    fn stamp(&self, s: BagStream, j: usize) -> f64 {
+        Self::stamp_of(self.rec, s, self.at(s, j))
+    }
+    fn reference(&mut self, j: usize) -> StampedPose {
+        self.rec.reference[self.at(BagStream::Reference, j)]
+    }
+    fn odom(&mut self, j: usize) -> StampedPose {
+        self.rec.odom[self.at(BagStream::Odom, j)]
+    }
+    fn gyro(&mut self, j: usize) -> f64 {
+        self.rec.gyro[self.at(BagStream::Imu, j)].wz
+    }
+    fn wheel(&mut self, j: usize) -> (WheelSample, (f64, f64)) {
+        let i = self.at(BagStream::Joints, j);
+        (self.rec.wheels[i], self.velocities[i])
+    }
+    fn scan(&mut self, j: usize) -> &LaserScan {
+        &self.rec.scans[self.at(BagStream::Scan, j)]
+    }
+}
+
+/// Writes the messages of `src` to `path`, streaming: the file grows
+/// message by message in a temporary sibling that is renamed over `path`
+/// once complete. The bytes equal those of [`write_mcap`] for a recording
+/// holding the same messages.
 pub fn write_mcap_streaming(
     path: &Path,
-    rec: &Recording,
-    feed: &mut dyn ScanFeed,
+    src: &mut dyn BagSource,
     opts: &WriteOptions,
 ) -> Result<(), WriteError> {
     let file = path.display().to_string();
@@ -173,7 +276,7 @@ pub fn write_mcap_streaming(
         source,
     };
     let mut out = AtomicWriter::create(path).map_err(io_err)?;
-    encode_into(out.writer(), rec, feed, opts).map_err(|source| WriteError::Mcap {
+    encode_into(out.writer(), src, opts).map_err(|source| WriteError::Mcap {
         file: file.clone(),
         source,
     })?;
@@ -210,12 +313,11 @@ fn canonicalize_file_summary(w: &mut BufWriter<File>) -> std::io::Result<()> {
     Ok(())
 }
 
-/// Writes the recording's messages (scans from `feed`) as an MCAP file into
-/// `out`, and returns it once the file is finished (summary not yet canonical).
+/// Writes the messages of `src` as an MCAP file into `out`, and returns it
+/// once the file is finished (summary not yet canonical).
 fn encode_into<W: Write + Seek>(
     out: W,
-    rec: &Recording,
-    feed: &mut dyn ScanFeed,
+    src: &mut dyn BagSource,
     opts: &WriteOptions,
 ) -> Result<W, mcap::McapError> {
     let mut w = mcap::WriteOptions::new()
@@ -224,20 +326,15 @@ fn encode_into<W: Write + Seek>(
         .compression(Some(mcap::Compression::Zstd))
         .compression_threads(0)
         .create(out)?;
-    let messages = Messages {
-        rec,
-        opts,
-        ref_type: reference_type(rec),
-        velocities: wheel_velocities(&rec.wheels),
-    };
-    let streams = streams(rec, feed, &opts.topics, messages.ref_type);
+    let ref_type = reference_type(src);
+    let streams = streams(src, &opts.topics, ref_type);
     let channel = declare_channels(&mut w, &streams)?;
-    let order = message_order(&streams, rec, feed);
+    let mut order = MessageOrder::new(&streams);
     let mut seq = [0u32; 6];
     let mut cdr = CdrWriter::new();
-    for (stamp, s, i) in order {
+    while let Some((stamp, s, j)) = order.next(src) {
         cdr.clear();
-        messages.encode(&mut cdr, feed, s, i, stamp);
+        encode(&mut cdr, src, opts, ref_type, (s, j, stamp));
         let k = s as usize;
         let log_time = (stamp.max(0.0) * 1e9).round() as u64;
         w.write_to_known_channel(
@@ -256,13 +353,12 @@ fn encode_into<W: Write + Seek>(
 }
 
 /// One stream of the bag: which, its topic, message type and message count.
-type StreamDecl<'a> = (Stream, &'a str, &'static str, usize);
+type StreamDecl<'a> = (BagStream, &'a str, &'static str, usize);
 
 /// Message type of the reference: odometry when any pose has a heading (or
 /// there is none), points otherwise.
-fn reference_type(rec: &Recording) -> &'static str {
-    let reference_has_heading = rec.reference.iter().any(|p| p.has_heading);
-    if reference_has_heading || rec.reference.is_empty() {
+fn reference_type(src: &dyn BagSource) -> &'static str {
+    if src.reference_has_heading() || src.count(BagStream::Reference) == 0 {
         OdometryMsg::TYPE
     } else {
         PointStampedMsg::TYPE
@@ -271,32 +367,22 @@ fn reference_type(rec: &Recording) -> &'static str {
 
 /// The streams with messages, in the order their channels are declared.
 fn streams<'a>(
-    rec: &Recording,
-    feed: &dyn ScanFeed,
+    src: &dyn BagSource,
     t: &'a TopicConfig,
     ref_type: &'static str,
 ) -> Vec<StreamDecl<'a>> {
     let mut streams: Vec<StreamDecl<'a>> = Vec::new();
-    if rec.base_from_laser.is_some() {
-        streams.push((Stream::TfStatic, &t.tf_static, TfMessage::TYPE, 1));
+    if src.base_from_laser().is_some() {
+        streams.push((BagStream::TfStatic, &t.tf_static, TfMessage::TYPE, 1));
     }
-    for (s, topic, ty, n) in [
-        (
-            Stream::Reference,
-            &t.reference,
-            ref_type,
-            rec.reference.len(),
-        ),
-        (Stream::Imu, &t.imu, ImuMsg::TYPE, rec.gyro.len()),
-        (
-            Stream::Joints,
-            &t.joint_states,
-            JointStateMsg::TYPE,
-            rec.wheels.len(),
-        ),
-        (Stream::Scan, &t.scan, LaserScanMsg::TYPE, feed.len()),
-        (Stream::Odom, &t.odom, OdometryMsg::TYPE, rec.odom.len()),
+    for (s, topic, ty) in [
+        (BagStream::Reference, &t.reference, ref_type),
+        (BagStream::Imu, &t.imu, ImuMsg::TYPE),
+        (BagStream::Joints, &t.joint_states, JointStateMsg::TYPE),
+        (BagStream::Scan, &t.scan, LaserScanMsg::TYPE),
+        (BagStream::Odom, &t.odom, OdometryMsg::TYPE),
     ] {
+        let n = src.count(s);
         if n > 0 {
             streams.push((s, topic, ty, n));
         }
@@ -305,7 +391,7 @@ fn streams<'a>(
 }
 
 /// Adds each stream's schema and channel; returns the channel ids indexed by
-/// [`Stream`].
+/// [`BagStream`].
 fn declare_channels<W: Write + Seek>(
     w: &mut mcap::Writer<W>,
     streams: &[StreamDecl<'_>],
@@ -314,7 +400,7 @@ fn declare_channels<W: Write + Seek>(
     for &(s, topic, ty, _) in streams {
         let text = schema_text(ty).unwrap_or_default();
         let schema = w.add_schema(ty, "ros2msg", text.as_bytes())?;
-        let qos = if s == Stream::TfStatic {
+        let qos = if s == BagStream::TfStatic {
             LATCHED_QOS
         } else {
             ""
@@ -325,90 +411,96 @@ fn declare_channels<W: Write + Seek>(
     Ok(channel)
 }
 
-/// Every message as (stamp, stream, index), merged in stamp order; the
-/// static transform is stamped with the earliest stamp of the recording.
-fn message_order(
-    streams: &[StreamDecl<'_>],
-    rec: &Recording,
-    feed: &dyn ScanFeed,
-) -> Vec<(f64, Stream, usize)> {
-    let first_scan = (!feed.is_empty()).then(|| feed.stamp(0));
-    let start = match (rec.time_span().map(|(a, _)| a), first_scan) {
-        (Some(a), Some(b)) => a.min(b),
-        (a, b) => a.or(b).unwrap_or(0.0),
-    };
-    let mut order: Vec<(f64, Stream, usize)> = Vec::new();
-    for &(s, _, _, n) in streams {
-        for i in 0..n {
-            let stamp = match s {
-                Stream::TfStatic => start,
-                Stream::Reference => rec.reference[i].stamp,
-                Stream::Imu => rec.gyro[i].stamp,
-                Stream::Joints => rec.wheels[i].stamp,
-                Stream::Scan => feed.stamp(i),
-                Stream::Odom => rec.odom[i].stamp,
-            };
-            order.push((stamp, s, i));
+/// Every message as (stamp, stream, index), merged from the streams (each
+/// in its own stamp order) by stamp, ties in [`BagStream`] order: the order of
+/// a sort of all messages by (stamp, stream, index), without holding them.
+/// The static transform is stamped with the earliest stamp.
+struct MessageOrder {
+    /// Messages of each stream.
+    count: [usize; 6],
+    /// The next message of each stream to write.
+    next: [usize; 6],
+}
+
+impl MessageOrder {
+    fn new(streams: &[StreamDecl<'_>]) -> Self {
+        let mut count = [0; 6];
+        for &(s, _, _, n) in streams {
+            count[s as usize] = n;
+        }
+        Self {
+            count,
+            next: [0; 6],
         }
     }
-    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
-    order
-}
 
-/// What the messages are made of: the recording, the names, the reference's
-/// message type and the wheel rates of the joint states.
-struct Messages<'a> {
-    rec: &'a Recording,
-    opts: &'a WriteOptions,
-    ref_type: &'static str,
-    velocities: Vec<(f64, f64)>,
-}
-
-impl Messages<'_> {
-    /// Writes message `i` of stream `s`, stamped `stamp`, into `cdr`.
-    fn encode(
-        &self,
-        cdr: &mut CdrWriter,
-        feed: &mut dyn ScanFeed,
-        s: Stream,
-        i: usize,
-        stamp: f64,
-    ) {
-        let (rec, opts) = (self.rec, self.opts);
-        let header = |frame: &str| Header {
-            stamp: Time::from_seconds(stamp),
-            frame_id: frame.to_string(),
-        };
-        match s {
-            Stream::TfStatic => tf_static(header(&opts.base_frame), opts, rec).write(cdr),
-            Stream::Reference if self.ref_type == PointStampedMsg::TYPE => {
-                let p = &rec.reference[i].pose.translation.vector;
-                PointStampedMsg {
-                    header: header(&opts.world_frame),
-                    point: Vec3 {
-                        x: p.x,
-                        y: p.y,
-                        z: 0.0,
-                    },
-                }
-                .write(cdr)
+    /// The next message to write, if any.
+    fn next(&mut self, src: &dyn BagSource) -> Option<(f64, BagStream, usize)> {
+        let mut best: Option<(f64, BagStream, usize)> = None;
+        for s in std::iter::once(BagStream::TfStatic).chain(SAMPLE_STREAMS) {
+            let j = self.next[s as usize];
+            if j >= self.count[s as usize] {
+                continue;
             }
-            Stream::Reference => {
-                odometry(header(&opts.world_frame), opts, &rec.reference[i]).write(cdr)
+            let stamp = match s {
+                BagStream::TfStatic => src.start(),
+                _ => src.stamp(s, j),
+            };
+            if best.is_none_or(|(b, _, _)| stamp.total_cmp(&b).is_lt()) {
+                best = Some((stamp, s, j));
             }
-            Stream::Odom => odometry(header(&opts.odom_frame), opts, &rec.odom[i]).write(cdr),
-            Stream::Imu => imu(header(&opts.base_frame), rec.gyro[i].wz).write(cdr),
-            Stream::Joints => {
-                joint_state(header(""), opts, &rec.wheels[i], self.velocities[i]).write(cdr)
-            }
-            Stream::Scan => laser_scan(header(&opts.laser_frame), feed.scan(i)).write(cdr),
         }
+        let (_, s, _) = best?;
+        self.next[s as usize] += 1;
+        best
+    }
+}
+
+/// Writes message `j` of stream `s` of `src`, stamped `stamp`, into `cdr`;
+/// the reference as `ref_type`.
+fn encode(
+    cdr: &mut CdrWriter,
+    src: &mut dyn BagSource,
+    opts: &WriteOptions,
+    ref_type: &'static str,
+    (s, j, stamp): (BagStream, usize, f64),
+) {
+    let header = |frame: &str| Header {
+        stamp: Time::from_seconds(stamp),
+        frame_id: frame.to_string(),
+    };
+    match s {
+        BagStream::TfStatic => {
+            tf_static(header(&opts.base_frame), opts, src.base_from_laser()).write(cdr)
+        }
+        BagStream::Reference if ref_type == PointStampedMsg::TYPE => {
+            let p = src.reference(j).pose.translation.vector;
+            PointStampedMsg {
+                header: header(&opts.world_frame),
+                point: Vec3 {
+                    x: p.x,
+                    y: p.y,
+                    z: 0.0,
+                },
+            }
+            .write(cdr)
+        }
+        BagStream::Reference => {
+            odometry(header(&opts.world_frame), opts, &src.reference(j)).write(cdr)
+        }
+        BagStream::Odom => odometry(header(&opts.odom_frame), opts, &src.odom(j)).write(cdr),
+        BagStream::Imu => imu(header(&opts.base_frame), src.gyro(j)).write(cdr),
+        BagStream::Joints => {
+            let (ws, rates) = src.wheel(j);
+            joint_state(header(""), opts, &ws, rates).write(cdr)
+        }
+        BagStream::Scan => laser_scan(header(&opts.laser_frame), src.scan(j)).write(cdr),
     }
 }
 
 /// The base-to-laser transform (identity when the recording has none).
-fn tf_static(header: Header, opts: &WriteOptions, rec: &Recording) -> TfMessage {
-    let b = rec.base_from_laser.unwrap_or_else(Pose2::identity);
+fn tf_static(header: Header, opts: &WriteOptions, base_from_laser: Option<Pose2>) -> TfMessage {
+    let b = base_from_laser.unwrap_or_else(Pose2::identity);
     TfMessage {
         transforms: vec![TransformStamped {
             header,
@@ -486,19 +578,38 @@ fn odometry(header: Header, opts: &WriteOptions, p: &StampedPose) -> OdometryMsg
     }
 }
 
-/// Wheel rates (rad/s) by central differences (one-sided at the ends; 0 where
-/// the stamps do not advance).
-fn wheel_velocities(w: &[WheelSample]) -> Vec<(f64, f64)> {
-    (0..w.len())
-        .map(|i| {
-            let a = &w[i.saturating_sub(1)];
-            let b = &w[(i + 1).min(w.len() - 1)];
-            let dt = b.stamp - a.stamp;
-            if dt > 0.0 {
-                ((b.left - a.left) / dt, (b.right - a.right) / dt)
-            } else {
-                (0.0, 0.0)
-            }
-        })
-        .collect()
+/// Wheel samples with their rates (rad/s, left and right) by central
+/// differences (one-sided at the ends; 0 where the stamps do not advance),
+/// drawn one sample ahead of the samples given.
+pub struct WheelRates<I: Iterator<Item = WheelSample>> {
+    samples: std::iter::Peekable<I>,
+    last: Option<WheelSample>,
+}
+
+impl<I: Iterator<Item = WheelSample>> WheelRates<I> {
+    /// The rates of `samples`, in order.
+    pub fn new(samples: I) -> Self {
+        Self {
+            samples: samples.peekable(),
+            last: None,
+        }
+    }
+}
+
+impl<I: Iterator<Item = WheelSample>> Iterator for WheelRates<I> {
+    type Item = (WheelSample, (f64, f64));
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let now = self.samples.next()?;
+        let a = self.last.unwrap_or(now);
+        let b = self.samples.peek().copied().unwrap_or(now);
+        self.last = Some(now);
+        let dt = b.stamp - a.stamp;
+        let rates = if dt > 0.0 {
+            ((b.left - a.left) / dt, (b.right - a.right) / dt)
+        } else {
+            (0.0, 0.0)
+        };
+        Some((now, rates))
+    }
 }

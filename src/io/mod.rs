@@ -68,6 +68,7 @@ pub mod rosbag2_dir;
 pub mod seed_tables;
 pub mod source;
 pub mod stream_out;
+pub mod survey;
 pub mod tum;
 mod wheel_msgs;
 
@@ -76,7 +77,8 @@ pub use format::{sniff, Format};
 pub use mcap_read::{read_mcap, read_mcap_bytes};
 pub use mcap_stream::McapStream;
 pub use mcap_write::{
-    encode_mcap, write_mcap, write_mcap_streaming, ScanFeed, WriteError, WriteOptions,
+    encode_mcap, write_mcap, write_mcap_streaming, BagSource, BagStream, WheelRates, WriteError,
+    WriteOptions,
 };
 pub use options::{ReadOptions, TopicConfig};
 pub use source::{Item, RecordingSource, SampleSource, StreamInfo};

@@ -63,6 +63,10 @@ pub struct ReadOptions {
     pub nominal: DiffDrive,
     /// Encoder ticks per wheel revolution, for tick counters.
     pub ticks_per_rev: f64,
+    /// Hand out every topic's messages, whatever their type, untouched (for
+    /// `odocal inspect`'s survey); the streams above are then not decoded.
+    #[serde(skip)]
+    pub all_topics: bool,
 }
 
 impl Default for ReadOptions {
@@ -76,6 +80,7 @@ impl Default for ReadOptions {
             nominal: robot.diff_drive(),
             ticks_per_rev: robot.ticks_per_rev,
             wheels: robot.wheels,
+            all_topics: false,
         }
     }
 }

@@ -28,6 +28,7 @@ use crate::error::InputError;
 /// are for.
 struct Connection {
     topic: String,
+    type_name: std::sync::Arc<str>,
     roles: Vec<Role>,
 }
 
@@ -211,7 +212,14 @@ impl Ros1Messages {
             })?;
         let roles = roles_for(&topic, &c, "ros1", Wire::Ros1, opts)
             .map_err(|m| InputError::new(&self.name, m).topic(&topic))?;
-        self.connections.insert(conn, Connection { topic, roles });
+        self.connections.insert(
+            conn,
+            Connection {
+                topic,
+                type_name: c.as_str().into(),
+                roles,
+            },
+        );
         Ok(())
     }
 
@@ -306,6 +314,7 @@ impl RawMessages for Ros1Messages {
             return Ok(Some(Raw {
                 roles: c.roles.clone(),
                 topic: c.topic.clone(),
+                type_name: c.type_name.clone(),
                 at: At::InChunk {
                     index,
                     chunk: chunk_pos,

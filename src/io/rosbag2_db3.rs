@@ -31,9 +31,16 @@ const CHANNEL_ROWS: usize = 64;
 /// The raw messages of a rosbag2 SQLite file, in timestamp order.
 pub(crate) struct Db3Messages {
     name: String,
-    /// topic id → (topic, roles).
-    topics: HashMap<i64, (String, Vec<Role>)>,
+    /// topic id → topic.
+    topics: HashMap<i64, Topic>,
     rows: Receiver<Result<Row, String>>,
+}
+
+/// A row of table `topics`: name, type and what its messages are for.
+struct Topic {
+    name: String,
+    type_name: std::sync::Arc<str>,
+    roles: Vec<Role>,
 }
 
 fn open_db(path: &Path, name: &str) -> Result<Connection, InputError> {
@@ -52,7 +59,7 @@ impl Db3Messages {
         let topics = read_topics(&db, &name, opts)?;
         let wanted: Vec<String> = topics
             .iter()
-            .filter(|(_, (_, roles))| !roles.is_empty())
+            .filter(|(_, t)| !t.roles.is_empty())
             .map(|(id, _)| id.to_string())
             .collect();
         let (tx, rows) = sync_channel(CHANNEL_ROWS);
@@ -86,7 +93,7 @@ fn read_topics(
     db: &Connection,
     name: &str,
     opts: &ReadOptions,
-) -> Result<HashMap<i64, (String, Vec<Role>)>, InputError> {
+) -> Result<HashMap<i64, Topic>, InputError> {
     let err = |m: String| InputError::new(name, m);
     let tables: Vec<String> = db
         .prepare("SELECT name FROM sqlite_master WHERE type = 'table'")
@@ -112,7 +119,14 @@ fn read_topics(
     for (id, topic, ty, format) in rows {
         let roles = roles_for(&topic, &ty, &format, Wire::Cdr, opts)
             .map_err(|m| InputError::new(name, m).topic(&topic))?;
-        topics.insert(id, (topic, roles));
+        topics.insert(
+            id,
+            Topic {
+                name: topic,
+                type_name: ty.as_str().into(),
+                roles,
+            },
+        );
     }
     Ok(topics)
 }
@@ -138,7 +152,7 @@ impl RawMessages for Db3Messages {
             }
             Ok(Ok(row)) => row,
         };
-        let Some((topic, roles)) = self.topics.get(&topic_id) else {
+        let Some(t) = self.topics.get(&topic_id) else {
             return Err(InputError::new(
                 &self.name,
                 format!("message of topic id {topic_id}, which table 'topics' does not list"),
@@ -148,12 +162,13 @@ impl RawMessages for Db3Messages {
         };
         let log_time = u64::try_from(stamp).map_err(|_| {
             InputError::new(&self.name, format!("negative timestamp {stamp} ns"))
-                .topic(topic.as_str())
+                .topic(t.name.as_str())
                 .at(At::Row(id).to_string())
         })?;
         Ok(Some(Raw {
-            roles: roles.clone(),
-            topic: topic.clone(),
+            roles: t.roles.clone(),
+            topic: t.name.clone(),
+            type_name: t.type_name.clone(),
             at: At::Row(id),
             data,
             log_time,

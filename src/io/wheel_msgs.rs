@@ -196,7 +196,8 @@ fn joint_index(m: &JointStateMsg, name: &str) -> Result<usize, String> {
         format!(
             "JointState has no joint '{name}' (its joints: {:?}); set left_joint and \
              right_joint in the robot file (--robot ROBOT.toml) to the wheel joints' names, \
-             or [wheels] source and topic when the wheels are reported elsewhere",
+             or [wheels] source and topic when the wheels are reported elsewhere \
+             (`odocal inspect REC` proposes them)",
             m.name
         )
     })

@@ -52,8 +52,10 @@ pub fn run(
                 .into(),
         ));
     };
-    let js = job.out.join("summary.json");
-    super::outputs::check_outputs(&[path], &[&js])?;
+    let mut outputs = vec![job.out.join("summary.json")];
+    outputs.extend(super::paste::Paste::paths(&job.out, true));
+    let outputs: Vec<&Path> = outputs.iter().map(|p| p.as_path()).collect();
+    super::outputs::check_outputs(&[path], &outputs)?;
     let _lock = super::outputs::lock_outputs(&[job.out.as_path()])?;
     let (cfg, nominal) = job.common.load_nominal()?;
     let robot = &nominal.robot;
@@ -62,21 +64,10 @@ pub fn run(
     let (problem, wheel_source) = if crate::io::sniff(path)? == crate::io::Format::CensiTuples {
         (tuples_problem(&crate::io::censi::read(path)?), None)
     } else {
-        let (problem, wheels) = recording_problem(path, &cfg, &nominal, &params.batch)?;
+        let (_, problem, wheels) = recording_problem(path, &cfg, &nominal, &params.batch)?;
         (problem, Some(wheels))
     };
-    let est = batch::estimate(&problem, &robot.diff_drive(), &params.batch, &params.checks)
-        .map_err(|e| {
-            let why = match &wheel_source {
-                Some(w) if w.kind == crate::robot::WheelSourceKind::Odometry => {
-                    " (the wheels come from a controller's twist, which lags its wheels by \
-                     the controller's velocity filtering: a lag of more than a sample is \
-                     refused like a clock offset)"
-                }
-                _ => "",
-            };
-            InputError::new(path.display().to_string(), format!("{e}{why}"))
-        })?;
+    let est = solve(path, &problem, robot, &params, wheel_source.as_ref())?;
     let mut assumptions = nominal.assumptions();
     state_laser(&mut assumptions, &est, robot.laser);
     let mut summary = summary(
@@ -88,10 +79,35 @@ pub fn run(
     if let Some(w) = wheel_source {
         super::wheels::state(&mut summary, w);
     }
-    write_summary(&job.out, &summary)?;
+    let paste = super::paste::Paste::of(&summary, robot, &path.display().to_string());
+    write_summary(&job.out, &paste.with(&summary))?;
+    paste.write(&job.out)?;
     Ok(CalibrateOutcome {
         summary,
         notes: Vec::new(),
+        paste,
+    })
+}
+
+/// The batch estimate of `problem` against the nominal `robot`; a refusal
+/// names `path` (and, for a controller's twist, why a lag is likely).
+pub(super) fn solve(
+    path: &Path,
+    problem: &Problem,
+    robot: &RobotConfig,
+    params: &crate::calib::CalibParams,
+    wheel_source: Option<&WheelSource>,
+) -> Result<BatchEstimate, PipelineError> {
+    batch::estimate(problem, &robot.diff_drive(), &params.batch, &params.checks).map_err(|e| {
+        let why = match wheel_source {
+            Some(w) if w.kind == crate::robot::WheelSourceKind::Odometry => {
+                " (the wheels come from a controller's twist, which lags its wheels by \
+                 the controller's velocity filtering: a lag of more than a sample is \
+                 refused like a clock offset)"
+            }
+            _ => "",
+        };
+        InputError::new(path.display().to_string(), format!("{e}{why}")).into()
     })
 }
 
@@ -137,7 +153,7 @@ fn summary(
     s
 }
 
-fn write_summary(dir: &Path, s: &CalibSummary) -> Result<(), PipelineError> {
+fn write_summary(dir: &Path, s: &impl serde::Serialize) -> Result<(), PipelineError> {
     std::fs::create_dir_all(dir).map_err(|e| PipelineError::write(dir, e))?;
     let js = dir.join("summary.json");
     let text = serde_json::to_string_pretty(s).expect("summary serialises");
@@ -149,13 +165,14 @@ fn write_summary(dir: &Path, s: &CalibSummary) -> Result<(), PipelineError> {
 /// recording or robot file states (else the identity, so the motions are
 /// the laser's own), each motion moved into the laser frame,
 /// `s = M⁻¹ ⊕ m ⊕ M`, composed into intervals, and the wheel angles as the
-/// track the time offset shifts; with the wheel source it was read from.
-fn recording_problem(
+/// track the time offset shifts; with the recording and the wheel source it
+/// was read from.
+pub(super) fn recording_problem(
     path: &Path,
     cfg: &Config,
     nominal: &super::Nominal,
     p: &BatchParams,
-) -> Result<(Problem, WheelSource), PipelineError> {
+) -> Result<(crate::recording::Recording, Problem, WheelSource), PipelineError> {
     let robot = &nominal.robot;
     let read = super::read_options(cfg, robot);
     let rec = crate::io::read_recording(path, &read)?;
@@ -194,7 +211,7 @@ fn recording_problem(
         intervals,
         track: Some(track),
     };
-    Ok((problem, wheels))
+    Ok((rec, problem, wheels))
 }
 
 /// A base-frame ICP motion `m` (matched with mounting `M`) as the laser's

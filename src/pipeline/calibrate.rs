@@ -3,11 +3,13 @@
 //! A bag, another recording format, a recording in memory and CSV inputs all
 //! go through the one driver ([`super::drive`]).
 
+pub use super::calibrate_job::Start;
 pub use super::calibrate_job::{CalibSource, CalibrateJob, CalibrateOutcome, CalibratorChoice};
 use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
 use super::outputs::{check_outputs, lock_outputs, CalibFiles, Collect};
+use super::paste::Paste;
 use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
 use super::PipelineError;
@@ -81,6 +83,8 @@ pub fn from_streams_observed(
 /// Runs `odocal calibrate`: ICP (for a recording) and the calibrator, the
 /// history, trajectory and summary written into the output directory
 /// atomically, the run recorded for Rerun when asked; `watch` sees the run.
+/// With `--init batch` the filter starts from the batch estimate
+/// ([`super::start`]).
 pub fn run(
     job: &CalibrateJob,
     watch: &mut dyn RunObserver,
@@ -91,7 +95,8 @@ pub fn run(
         return super::batch::run(job, watch);
     }
     let _lock = check_job_outputs(job)?;
-    let robot = &nominal.robot;
+    let started = start(job, &cfg, &nominal)?;
+    let robot = started.as_ref().map_or(&nominal.robot, |s| &s.robot);
     let params = params_for_robot(&cfg.calib, robot);
     let mut logger = open_logger(job.viewer.as_ref())?;
     let mut recorder = logger.as_deref_mut().map(|l| {
@@ -112,34 +117,24 @@ pub fn run(
     };
     let mut files = CalibFiles::create(&job.out)?;
     let mut obs = Observers(vec![&mut files, rec_obs, watch]);
-    let (done, assumptions, input, wheel_source) = match &job.input {
-        CalibSource::Recording(path) => {
-            let read = super::read_options(&cfg, robot);
-            let mut source = crate::io::open(path, &read)?;
-            let info = source.info().clone();
-            let found = super::wheels::Found {
-                wheels: info.wheels,
-                odom: info.odom,
-                bag: crate::io::sniff(path)? != crate::io::Format::Text,
-            };
-            super::wheels::require(&read, &nominal, &path.display().to_string(), found)?;
-            let (icp, done) = drive::run_calibration(
-                source.as_mut(),
-                robot,
-                &cfg.icp,
-                &params,
-                &cfg.measurements,
-                &mut obs,
-            )?;
-            let wheels = super::wheels::describe(&read, &nominal, info.wheels, info.wheel_values);
-            (
-                done,
-                nominal.assumptions_with(&icp.mount),
-                path,
-                Some(wheels),
-            )
+    let run = Run {
+        cfg: &cfg,
+        nominal: &nominal,
+        robot,
+        params: &params,
+    };
+    let (done, assumptions, input, wheel_source) = match (&job.input, &started) {
+        (CalibSource::Recording(path), Some(s)) => {
+            let mut source = crate::io::RecordingSource::new(&s.rec);
+            let (done, mut a) = run.recording(&mut source, &mut obs)?;
+            super::start::state(&mut a, &s.est, &nominal.robot);
+            (done, a, path, Some(s.wheels.clone()))
         }
-        CalibSource::Csv { motions, wheels } => {
+        (CalibSource::Recording(path), None) => {
+            let (done, a, wheels) = run.file(path, &mut obs)?;
+            (done, a, path, Some(wheels))
+        }
+        (CalibSource::Csv { motions, wheels }, _) => {
             let input = read_csv_input(motions, wheels, &cfg.icp)?;
             let done = drive::calibrate_streams(
                 &input.wheels,
@@ -160,19 +155,104 @@ pub fn run(
     vet(
         &mut summary,
         &done.evidence,
-        robot,
+        &nominal.robot,
         &params,
         &input.display().to_string(),
     )?;
     if let Some(w) = wheel_source {
         super::wheels::state(&mut summary, w);
     }
-    files.commit(&summary)?;
+    if let Some(s) = started {
+        summary.rebase(nominal.robot.diff_drive());
+        summary.start = Some(s.est);
+    }
+    let paste = Paste::of(&summary, &nominal.robot, &input.display().to_string());
+    files.commit(&paste.with(&summary))?;
+    paste.write(&job.out)?;
     let notes = match recorder {
         Some(r) => r.finish().map_err(super::viewer::viz_error)?,
         None => Vec::new(),
     };
-    Ok(CalibrateOutcome { summary, notes })
+    Ok(CalibrateOutcome {
+        summary,
+        notes,
+        paste,
+    })
+}
+
+/// The batch start of `--init batch` (`None` for `--init nominal`).
+fn start(
+    job: &CalibrateJob,
+    cfg: &super::Config,
+    nominal: &super::Nominal,
+) -> Result<Option<super::start::FromBatch>, PipelineError> {
+    match (&job.init, &job.input) {
+        (Start::Nominal, _) => Ok(None),
+        (Start::Batch, CalibSource::Recording(path)) => Ok(Some(super::start::from_batch(
+            path, cfg, nominal, &cfg.calib,
+        )?)),
+        (Start::Batch, CalibSource::Csv { .. }) => Err(PipelineError::BadArgument(
+            "--init batch needs --input REC (the batch estimate reads the scans and wheels); \
+             CSV motions carry no laser frame or wheel clock"
+                .into(),
+        )),
+    }
+}
+
+/// What one calibration run over a recording uses.
+struct Run<'a> {
+    cfg: &'a super::Config,
+    nominal: &'a super::Nominal,
+    robot: &'a RobotConfig,
+    params: &'a CalibParams,
+}
+
+impl Run<'_> {
+    /// ICP and the calibrator over `source`; the nominal values' sources
+    /// with the mounting the matcher used.
+    fn recording(
+        &self,
+        source: &mut dyn crate::io::SampleSource,
+        obs: &mut dyn RunObserver,
+    ) -> Result<(drive::CalibRunSummary, crate::assumptions::Assumptions), PipelineError> {
+        let (icp, done) = drive::run_calibration(
+            source,
+            self.robot,
+            &self.cfg.icp,
+            self.params,
+            &self.cfg.measurements,
+            obs,
+        )?;
+        Ok((done, self.nominal.assumptions_with(&icp.mount)))
+    }
+
+    /// [`Self::recording`] over the file at `path`, once its wheel stream
+    /// is known to be there; also where the wheels came from.
+    fn file(
+        &self,
+        path: &std::path::Path,
+        obs: &mut dyn RunObserver,
+    ) -> Result<
+        (
+            drive::CalibRunSummary,
+            crate::assumptions::Assumptions,
+            crate::recording::WheelSource,
+        ),
+        PipelineError,
+    > {
+        let read = super::read_options(self.cfg, self.robot);
+        let mut source = crate::io::open(path, &read)?;
+        let info = source.info().clone();
+        let found = super::wheels::Found {
+            wheels: info.wheels,
+            odom: info.odom,
+            bag: crate::io::sniff(path)? != crate::io::Format::Text,
+        };
+        super::wheels::require(&read, self.nominal, &path.display().to_string(), found)?;
+        let (done, a) = self.recording(source.as_mut(), obs)?;
+        let wheels = super::wheels::describe(&read, self.nominal, info.wheels, info.wheel_values);
+        Ok((done, a, wheels))
+    }
 }
 
 /// Before a calibration is reported: the encoders' wiring, the parameters'
@@ -227,7 +307,8 @@ fn check_job_outputs(job: &CalibrateJob) -> Result<Vec<OutputLock>, PipelineErro
         CalibSource::Recording(p) => vec![p],
         CalibSource::Csv { motions, wheels } => vec![motions, wheels],
     };
-    let files = CalibFiles::paths(&job.out);
+    let mut files = CalibFiles::paths(&job.out).to_vec();
+    files.extend(Paste::paths(&job.out, false));
     let mut outputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     if let Some(Viewer::File(rrd)) = &job.viewer {
         outputs.push(rrd);

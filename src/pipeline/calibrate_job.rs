@@ -72,6 +72,8 @@ pub struct CalibrateJob {
     pub viewer: Option<Viewer>,
     /// Configuration and robot files.
     pub common: Common,
+    /// Where an online filter starts (`--init`).
+    pub init: Start,
 }
 
 /// What `odocal calibrate` gives: the summary, and notes on what the Rerun
@@ -82,4 +84,28 @@ pub struct CalibrateOutcome {
     pub summary: CalibSummary,
     /// What the recording left out, for the user (empty when nothing).
     pub notes: Vec<String>,
+    /// What to paste: the ros2_control parameters, the laser mounting
+    /// (also in `DIR/`).
+    pub paste: super::paste::Paste,
+}
+
+/// Where the online filters start.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Start {
+    /// The robot file's values (and the recording's mounting).
+    #[default]
+    Nominal,
+    /// The joint batch estimate of the same recording.
+    Batch,
+}
+
+impl std::str::FromStr for Start {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "nominal" => Ok(Start::Nominal),
+            "batch" => Ok(Start::Batch),
+            _ => Err(format!("unknown start {s:?} (nominal|batch)")),
+        }
+    }
 }

@@ -32,6 +32,8 @@ pub struct Config {
     pub eval: EvalOptions,
     /// Diagnosis settings.
     pub diagnose: DiagnoseParams,
+    /// Fleet alarm thresholds.
+    pub fleet: crate::fleet::FleetParams,
 }
 
 fn read_text(path: &Path) -> Result<String, PipelineError> {
@@ -69,6 +71,7 @@ impl Config {
         self.icp.validate().map_err(|e| e.to_string())?;
         self.calib.validate().map_err(|e| e.to_string())?;
         self.diagnose.validate().map_err(|e| e.to_string())?;
+        self.fleet.validate()?;
         let m = &self.measurements;
         if !(m.gyro_sigma.is_finite() && m.gyro_sigma > 0.0) {
             return Err(format!(

@@ -55,6 +55,8 @@ pub struct IcpRunSummary {
 struct IcpStage {
     matcher: StreamMatcher,
     mount: Mount,
+    /// The robot file's scanner corrections, applied to every scan.
+    scanner: crate::robot::ScannerCorrection,
     prior: Prior,
     tally: Tally,
     wheels_seen: usize,
@@ -74,7 +76,12 @@ impl IcpStage {
         if info.scans < 2 {
             return Err(InputError::new(
                 source,
-                format!("{} laser scans: scan matching needs at least 2", info.scans),
+                format!(
+                    "{} laser scans: scan matching needs at least 2 (the scans are read from \
+                     [topics] scan in the --config file, default /scan; `odocal inspect {source}` \
+                     lists the recording's LaserScan topics)",
+                    info.scans
+                ),
             )
             .into());
         }
@@ -85,6 +92,7 @@ impl IcpStage {
         Ok(Self {
             matcher,
             mount,
+            scanner: robot.scanner,
             prior,
             tally: Tally::default(),
             wheels_seen: 0,
@@ -102,7 +110,10 @@ impl IcpStage {
         out: &mut dyn FnMut(&Motion),
     ) {
         match item {
-            Item::Scan(s) => self.matcher.push_scan(s.clone()),
+            Item::Scan(s) if self.scanner.is_none() => self.matcher.push_scan(s.clone()),
+            Item::Scan(s) => self
+                .matcher
+                .push_scan(s.corrected(self.scanner.angle_increment, self.scanner.range_offset)),
             Item::Wheel(w) => {
                 self.matcher.push_wheel(w);
                 self.wheels_seen += 1;
@@ -366,8 +377,11 @@ pub fn run_calibration(
             format!(
                 "no wheel encoder data to calibrate: {} wheel samples ([wheels] source and topic in \
                  the robot file name the stream; for JointState, left_joint and right_joint \
-                 name the joints: '{}' and '{}')",
-                info.wheels, robot.left_joint, robot.right_joint
+                 name the joints: '{}' and '{}'; `odocal inspect {}` proposes them)",
+                info.wheels,
+                robot.left_joint,
+                robot.right_joint,
+                source.name()
             ),
         )
         .into());

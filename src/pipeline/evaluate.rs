@@ -52,7 +52,8 @@ pub fn load_trajectory(
         return Err(InputError::new(
             &file,
             format!(
-                "no trajectory: topics {} and {} hold fewer than 2 poses{hint}",
+                "no trajectory: topics {} and {} hold fewer than 2 poses{hint} (`odocal \
+                 inspect {file}` lists the recording's pose topics)",
                 read.topics.reference, read.topics.odom
             ),
         )

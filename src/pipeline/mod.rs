@@ -11,13 +11,17 @@ pub mod diagnose;
 pub mod drive;
 mod error;
 pub mod evaluate;
+pub mod fleet;
 pub mod icp;
+pub mod inspect;
 pub mod nominal;
 pub mod observe;
 pub mod outputs;
+pub mod paste;
 pub mod recorder;
 pub mod sense;
 pub mod simulate;
+pub mod start;
 pub mod viewer;
 pub mod wheels;
 

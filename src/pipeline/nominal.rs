@@ -89,6 +89,10 @@ impl Nominal {
         ] {
             a.set(k, v, self.origin(k), hint(k));
         }
+        if !r.scanner.is_none() {
+            let note = "applied to every scan before matching".to_string();
+            a.set("scanner", r.scanner, self.origin("scanner"), Some(note));
+        }
         a
     }
 }
@@ -268,7 +272,8 @@ fn unknown(note: Option<&str>, input: &str) -> InputError {
             "the laser mounting is unknown: {why}, and the robot file gives no [laser] table \
              (without --robot, no mounting is assumed). Set [laser] x, y, yaw (base_from_laser \
              in m, m, rad) in the robot file (--robot ROBOT.toml), or let \
-             `odocal calibrate --method batch` estimate it"
+             `odocal calibrate --method batch` estimate it (`odocal inspect {input}` shows the \
+             recording's transforms)"
         ),
     )
 }

@@ -244,7 +244,7 @@ impl CalibFiles {
     }
 
     /// Commits the history and trajectory, then writes `summary.json`.
-    pub fn commit(self, summary: &CalibSummary) -> Result<(), PipelineError> {
+    pub fn commit(self, summary: &impl serde::Serialize) -> Result<(), PipelineError> {
         self.history.commit()?;
         self.trajectory.file.commit()?;
         let [_, _, js] = Self::paths(&self.dir);

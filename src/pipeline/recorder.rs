@@ -150,6 +150,9 @@ pub struct StreamRecorder<'a> {
     last_wheel: Option<WheelSample>,
     calibrated: Polyline,
     pts: Vec<Point2<f64>>,
+    /// Scan-match covariances (2×2, m²) waiting for their matched pose:
+    /// (stamp of the row, t1).
+    covariances: VecDeque<(Stamp, f64, [[f64; 2]; 2])>,
 }
 
 /// Most scans kept waiting for their ICP pose (a few are, normally).
@@ -193,6 +196,7 @@ impl<'a> StreamRecorder<'a> {
             last_wheel: None,
             calibrated: Polyline::new(opts.max_polyline),
             pts: Vec::new(),
+            covariances: VecDeque::new(),
         }
     }
 
@@ -277,10 +281,33 @@ impl<'a> StreamRecorder<'a> {
             };
             scan.points_into(&mut self.pts);
             let at = Stamp::new(i, self.time(scan.stamp));
-            let world = w * pose * self.base_from_laser;
-            let r = self.logger.scan(at, &world, &self.pts);
+            let r = self
+                .logger
+                .scan(at, &(w * pose), &self.base_from_laser, &self.pts);
             self.keep(r);
         }
+    }
+
+    /// Logs the scan-match covariances whose matched pose (at their t1) is
+    /// known, as ellipses at that pose in the world.
+    fn place_covariances(&mut self) {
+        let (Some(w), Some((tl, pl))) = (self.icp_anchor, self.last_icp) else {
+            return;
+        };
+        while self.covariances.front().is_some_and(|c| c.1 <= tl) {
+            let (at, t1, cov) = self.covariances.pop_front().expect("checked");
+            let pose = match self.prev_icp {
+                Some((tp, pp)) if tp == t1 => pp,
+                _ => pl,
+            };
+            let r = self.logger.icp_covariance(at, &(w * pose), cov);
+            self.keep(r);
+        }
+    }
+
+    /// A trajectory's stamps on the `time` timeline.
+    fn times(&self, traj: &Trajectory) -> Vec<f64> {
+        traj.stamps.iter().map(|&t| self.time(t)).collect()
     }
 
     /// Logs the trajectories and finishes the recording. Returns the notes
@@ -300,8 +327,9 @@ impl<'a> StreamRecorder<'a> {
         }
         let reference = std::mem::replace(&mut self.reference, Polyline::new(2)).finish();
         if reference.len() >= 2 {
+            let times = self.times(&reference);
             self.logger
-                .trajectory(TrajectoryKind::Reference, &reference.poses)?;
+                .trajectory(TrajectoryKind::Reference, &times, &reference.poses)?;
         }
         let lines = [
             (
@@ -323,7 +351,8 @@ impl<'a> StreamRecorder<'a> {
                 continue;
             };
             let w = self.anchor_at(t0, p0, None).unwrap_or_else(Pose2::identity);
-            self.logger.trajectory(kind, &in_world(&traj, &w))?;
+            let times = self.times(&traj);
+            self.logger.trajectory(kind, &times, &in_world(&traj, &w))?;
         }
         self.logger.finish()?;
         Ok(notes)
@@ -399,6 +428,7 @@ impl RunObserver for StreamRecorder<'_> {
             self.icp_anchor = self.anchor_at(t0, &p0, Some(t));
         }
         self.place_scans(t);
+        self.place_covariances();
     }
 
     fn motion(&mut self, m: &Motion) {
@@ -407,6 +437,13 @@ impl RunObserver for StreamRecorder<'_> {
         let at = Stamp::new(self.motions, self.time(m.t1));
         let r = self.logger.icp(at, m.iterations, m.cov.trace());
         self.keep(r);
+        let c = &m.cov;
+        let cov = [[c[(0, 0)], c[(0, 1)]], [c[(1, 0)], c[(1, 1)]]];
+        let drawable = crate::viz::shapes::ellipse(&Pose2::identity(), cov, 1.0, 1.0, 4).is_some();
+        if m.failure.is_none() && drawable && self.covariances.len() < MAX_PENDING {
+            self.covariances.push_back((at, m.t1, cov));
+        }
+        self.place_covariances();
     }
 
     fn step(&mut self, e: &Estimate, cloud: Option<CloudView<'_>>) {

@@ -4,10 +4,12 @@
 use super::{Common, PipelineError};
 use crate::effects::Effect;
 use crate::error::InputError;
-use crate::io::{self, ScanFeed, TopicConfig, WriteOptions};
+use crate::geom::Pose2;
+use crate::io::{self, BagSource, BagStream, TopicConfig, WheelRates, WriteOptions};
+use crate::recording::{StampedPose, WheelSample};
 use crate::robot::RobotConfig;
 use crate::scan::LaserScan;
-use crate::sim::{self, LaserSim, SimConfig, Truth};
+use crate::sim::{self, Clock, Encoders, Gyro, LaserSim, Reference, SensorStream, SimConfig};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -104,7 +106,7 @@ pub fn run(
             Hidden::Fault(f) => cfg.sim.faults.push(f),
         }
     }
-    let (summary, _) = simulate(
+    simulate(
         &cfg.sim,
         &cfg.topics,
         &robot,
@@ -112,8 +114,7 @@ pub fn run(
         &job.out,
         job.truth.as_deref(),
         progress,
-    )?;
-    Ok(summary)
+    )
 }
 
 /// What a SPEC of `simulate --effect` hides: a table effect or a fault
@@ -156,8 +157,9 @@ fn set_scenario(sim: &mut SimConfig, s: &str) -> Result<(), PipelineError> {
 }
 
 /// Simulates and writes `out` (MCAP) and optionally `truth_path` (JSON), both
-/// atomically. The scans are cast block by block while the bag is written,
-/// so memory does not grow with the number of scans.
+/// atomically and both streamed: every sensor is simulated sample by sample
+/// while the bag is written (the scans block by block), and the truth's
+/// series while its file is written, so memory does not grow with the run.
 pub fn simulate(
     cfg: &SimConfig,
     topics: &TopicConfig,
@@ -166,58 +168,164 @@ pub fn simulate(
     out: &Path,
     truth_path: Option<&Path>,
     progress: &mut dyn FnMut(f64),
-) -> Result<(SimulateSummary, Truth), PipelineError> {
-    let sim::SimRun {
-        recording: rec,
-        truth,
-        laser,
-    } = sim::prepare(cfg, robot, effects, progress)?;
+) -> Result<SimulateSummary, PipelineError> {
+    let run = sim::prepare(cfg, robot, effects)?;
     let mut opts = WriteOptions::for_robot(robot);
     opts.topics = topics.clone();
-    let mut feed = CastScans {
-        laser: &laser,
-        block: Vec::new(),
-        first: 0,
-        progress,
-    };
-    io::write_mcap_streaming(out, &rec, &mut feed, &opts)
-        .map_err(|e| PipelineError::write(out, e))?;
-    if let Some(tp) = truth_path {
-        io::atomic::write_bytes_atomic(tp, truth.to_json().as_bytes())
-            .map_err(|e| PipelineError::write(tp, e))?;
+    // The truth goes to its temporary file first and is renamed into place
+    // right after the bag, so that a run killed while it writes never
+    // leaves a new bag beside an old truth file.
+    let truth = truth_path.map(|tp| write_truth(&run, tp)).transpose()?;
+    let mut bag = SimBag::new(&run, progress);
+    io::write_mcap_streaming(out, &mut bag, &opts).map_err(|e| PipelineError::write(out, e))?;
+    let counts = bag.counts();
+    if let (Some(file), Some(tp)) = (truth, truth_path) {
+        file.commit().map_err(|e| PipelineError::write(tp, e))?;
     }
-    (feed.progress)(1.0);
-    let summary = SimulateSummary {
+    progress(1.0);
+    let header = run.truth_header();
+    Ok(SimulateSummary {
         out: out.display().to_string(),
         truth: truth_path.map(|p| p.display().to_string()),
-        scenario: truth.scenario.clone(),
-        seed: truth.seed,
-        duration_s: truth.duration_s,
-        scans: laser.len(),
-        wheel_samples: rec.wheels.len(),
-        gyro_samples: rec.gyro.len(),
-        reference_poses: rec.reference.len(),
-        path_length_m: truth.trajectory().path_length(),
-        effects: effects.iter().map(|e| e.to_string()).collect(),
-    };
-    Ok((summary, truth))
+        scenario: header.scenario,
+        seed: header.seed,
+        duration_s: header.duration_s,
+        scans: counts[BagStream::Scan as usize],
+        wheel_samples: counts[BagStream::Joints as usize],
+        gyro_samples: counts[BagStream::Imu as usize],
+        reference_poses: counts[BagStream::Reference as usize],
+        path_length_m: sim::path_length(run.trajectory()),
+        effects: header.effect_specs,
+    })
 }
 
-/// Scans cast on demand for the writer, one parallel block at a time.
-struct CastScans<'a, 'p> {
-    laser: &'a LaserSim,
+/// Writes the truth file of `run` (pretty JSON, [`sim::Truth`]'s text) into
+/// the temporary sibling of `path`, its series drawn while they are
+/// written; the caller commits it.
+fn write_truth(
+    run: &sim::SimRun,
+    path: &Path,
+) -> Result<io::stream_out::AtomicWriter, PipelineError> {
+    let truth = run.truth_header().with(
+        sim::Drawn::new(run.parameters()),
+        sim::Drawn::new(run.trajectory()),
+    );
+    let mut file =
+        io::stream_out::AtomicWriter::create(path).map_err(|e| PipelineError::write(path, e))?;
+    serde_json::to_writer_pretty(file.writer(), &truth)
+        .map_err(|e| PipelineError::write(path, std::io::Error::from(e)))?;
+    Ok(file)
+}
+
+/// A simulated run as the messages of its bag, made as the writer asks for
+/// them: the scans cast one parallel block at a time, the other sensors
+/// sample by sample.
+struct SimBag<'p> {
+    base_from_laser: Option<Pose2>,
+    laser: LaserSim,
     /// The current block: scans `first .. first + block.len()`.
     block: Vec<LaserScan>,
     first: usize,
+    wheels: WheelRates<SensorStream<Encoders>>,
+    gyro: SensorStream<Gyro>,
+    reference: SensorStream<Reference>,
+    /// Sample times of the reference, gyro and wheels.
+    clocks: [Clock; 3],
     progress: &'p mut dyn FnMut(f64),
 }
 
-impl ScanFeed for CastScans<'_, '_> {
-    fn len(&self) -> usize {
-        self.laser.len()
+impl<'p> SimBag<'p> {
+    fn new(run: &sim::SimRun, progress: &'p mut dyn FnMut(f64)) -> Self {
+        let (reference, gyro, wheels) = (run.reference(), run.gyro(), run.encoders());
+        Self {
+            base_from_laser: run.recording().base_from_laser,
+            laser: run.laser(),
+            block: Vec::new(),
+            first: 0,
+            clocks: [reference.clock(), gyro.clock(), wheels.clock()],
+            wheels: WheelRates::new(wheels),
+            gyro,
+            reference,
+            progress,
+        }
     }
-    fn stamp(&self, i: usize) -> f64 {
-        self.laser.stamps()[i]
+
+    /// Messages of each stream, indexed by [`BagStream`].
+    fn counts(&self) -> [usize; 6] {
+        let mut n = [0; 6];
+        for s in [
+            BagStream::Reference,
+            BagStream::Imu,
+            BagStream::Joints,
+            BagStream::Scan,
+        ] {
+            n[s as usize] = self.count(s);
+        }
+        n
+    }
+
+    /// The clock of a sensor other than the laser.
+    fn clock(&self, s: BagStream) -> Option<Clock> {
+        match s {
+            BagStream::Reference => Some(self.clocks[0]),
+            BagStream::Imu => Some(self.clocks[1]),
+            BagStream::Joints => Some(self.clocks[2]),
+            _ => None,
+        }
+    }
+}
+
+/// The next sample of a stream the writer asks for in order.
+fn next_of<T>(stream: &mut impl Iterator<Item = T>) -> T {
+    stream
+        .next()
+        .expect("the writer asks for no more samples than the stream's clock has")
+}
+
+impl BagSource for SimBag<'_> {
+    fn base_from_laser(&self) -> Option<Pose2> {
+        self.base_from_laser
+    }
+    fn reference_has_heading(&self) -> bool {
+        true
+    }
+    fn start(&self) -> f64 {
+        let firsts = [
+            BagStream::Reference,
+            BagStream::Imu,
+            BagStream::Joints,
+            BagStream::Scan,
+        ];
+        firsts
+            .into_iter()
+            .filter(|&s| self.count(s) > 0)
+            .map(|s| self.stamp(s, 0))
+            .reduce(f64::min)
+            .unwrap_or(0.0)
+    }
+    fn count(&self, s: BagStream) -> usize {
+        match s {
+            BagStream::Scan => self.laser.len(),
+            _ => self.clock(s).map_or(0, |c| c.len()),
+        }
+    }
+    fn stamp(&self, s: BagStream, j: usize) -> f64 {
+        match s {
+            BagStream::Scan => self.laser.stamp(j),
+            _ => self.clock(s).map_or(0.0, |c| c.stamp(j)),
+        }
+    }
+    fn reference(&mut self, _: usize) -> StampedPose {
+        next_of(&mut self.reference)
+    }
+    fn odom(&mut self, _: usize) -> StampedPose {
+        unreachable!("the simulator writes no wheel odometry")
+    }
+    fn gyro(&mut self, _: usize) -> f64 {
+        next_of(&mut self.gyro).wz
+    }
+    fn wheel(&mut self, _: usize) -> (WheelSample, (f64, f64)) {
+        next_of(&mut self.wheels)
     }
     fn scan(&mut self, i: usize) -> &LaserScan {
         if i < self.first || i >= self.first + self.block.len() {

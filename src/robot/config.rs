@@ -34,6 +34,29 @@ impl LaserMount {
     }
 }
 
+/// Corrections of a scanner whose recorded beam geometry or ranges are
+/// known to be off (the robot file's optional `[scanner]`): applied to
+/// every scan before matching ([`crate::scan::LaserScan::corrected`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ScannerCorrection {
+    /// The true angle between beams (rad, positive), replacing the
+    /// recording's; the beam the recording puts at angle 0 stays there.
+    /// `None`: the recording's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub angle_increment: Option<f64>,
+    /// Added to every valid range (m); a scanner that reads short has a
+    /// positive offset. Its validity limits move with it.
+    pub range_offset: f64,
+}
+
+impl ScannerCorrection {
+    /// Whether it changes nothing.
+    pub fn is_none(&self) -> bool {
+        self.angle_increment.is_none() && self.range_offset == 0.0
+    }
+}
+
 /// A differential-drive robot's nominal parameters and sensor layout.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -62,6 +85,10 @@ pub struct RobotConfig {
     /// Where the wheels are reported (`[wheels]`; absent: JointState).
     #[serde(default, skip_serializing_if = "WheelsConfig::is_default")]
     pub wheels: WheelsConfig,
+    /// Corrections of the scanner's beam angles and ranges (`[scanner]`;
+    /// absent: the recording's are taken as they are).
+    #[serde(default, skip_serializing_if = "ScannerCorrection::is_none")]
+    pub scanner: ScannerCorrection,
 }
 
 impl Default for RobotConfig {
@@ -77,6 +104,7 @@ impl Default for RobotConfig {
             right_joint: "right_wheel".into(),
             laser: Some(LaserMount::default()),
             wheels: WheelsConfig::default(),
+            scanner: ScannerCorrection::default(),
         }
     }
 }
@@ -179,6 +207,20 @@ impl RobotConfig {
                 laser.yaw
             )));
         }
+        let sc = &self.scanner;
+        if let Some(inc) = sc.angle_increment {
+            if !(inc.is_finite() && (1e-5..=0.2).contains(&inc)) {
+                return Err(RobotConfigError::Invalid(format!(
+                    "scanner.angle_increment = {inc} is outside the physical range [1e-5, 0.2] rad"
+                )));
+            }
+        }
+        if !(sc.range_offset.is_finite() && sc.range_offset.abs() <= 1.0) {
+            return Err(RobotConfigError::Invalid(format!(
+                "scanner.range_offset = {} is outside the physical range [-1, 1] m",
+                sc.range_offset
+            )));
+        }
         if self.left_joint == self.right_joint {
             return Err(RobotConfigError::Invalid(
                 "left_joint and right_joint must differ".into(),
@@ -211,6 +253,29 @@ mod tests {
         let c = RobotConfig::default();
         let text = toml::to_string(&c).unwrap();
         assert_eq!(RobotConfig::from_toml(&text).unwrap(), c);
+    }
+
+    #[test]
+    fn scanner_corrections_parse_and_are_bounded() {
+        let base = "r_right = 0.02\nr_left = 0.02\nwheel_base = 0.15\n";
+        let c = RobotConfig::from_toml(&format!(
+            "{base}[scanner]\nangle_increment = 0.00632\nrange_offset = 0.07\n"
+        ))
+        .unwrap();
+        assert_eq!(c.scanner.angle_increment, Some(0.00632));
+        assert_eq!(c.scanner.range_offset, 0.07);
+        assert!(RobotConfig::from_toml(base).unwrap().scanner.is_none());
+        for (bad, key) in [
+            ("angle_increment = 0.5", "scanner.angle_increment"),
+            ("angle_increment = -0.006", "scanner.angle_increment"),
+            ("range_offset = 70", "scanner.range_offset"),
+        ] {
+            let e = RobotConfig::from_toml(&format!("{base}[scanner]\n{bad}\n"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(key), "{e}");
+        }
+        assert!(RobotConfig::from_toml(&format!("{base}[scanner]\nscale = 1\n")).is_err());
     }
 
     #[test]

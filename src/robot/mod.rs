@@ -8,7 +8,7 @@ mod odometry;
 mod wheels;
 
 pub use bundled::{bundled_robot, BUNDLED_ROBOTS};
-pub use config::{LaserMount, RobotConfig, RobotConfigError};
+pub use config::{LaserMount, RobotConfig, RobotConfigError, ScannerCorrection};
 pub use kinematics::DiffDrive;
 pub use odometry::{wheel_odometry, wheel_rates, WheelIntegrator, WheelRate};
 pub use wheels::{TicksLayout, TicksType, WheelSourceKind, WheelsConfig};

@@ -299,7 +299,8 @@ impl SimConfig {
         }
         if self.duration_s > 24.0 * 3600.0 {
             return bad(format!(
-                "duration_s {} s is over the cap of one day (86400 s)",
+                "duration_s {} s is over the cap of one day (86400 s): a day of the \
+                 default sensors already writes a 9 GB bag and a 1.2 GB truth file",
                 self.duration_s
             ));
         }

@@ -8,6 +8,7 @@ use super::path::Path;
 use super::scenario::{Route, Scenario};
 use crate::geom::{self, wrap_angle};
 use nalgebra::Point2;
+use std::collections::VecDeque;
 
 /// Commanded body velocities per integration step and the body trajectory
 /// they produce (exact arcs), in the world frame.
@@ -36,41 +37,137 @@ impl Drive {
     /// Body pose `(x, y, θ unwrapped)` at time `t` (s), linear between steps
     /// (clamped to the run).
     pub fn pose_at(&self, t: f64) -> [f64; 3] {
-        let f = (t / self.dt).clamp(0.0, self.steps() as f64);
-        let k = (f.floor() as usize).min(self.steps().saturating_sub(1));
-        let a = f - k as f64;
+        let (k, a) = step_at(t, self.dt, self.steps());
         let lerp = |v: &[f64]| v[k] + (v[k + 1] - v[k]) * a;
         [lerp(&self.x), lerp(&self.y), lerp(&self.theta)]
     }
 }
 
-/// The command of step k given the pose at its start: `(v m/s, w rad/s)`.
-type Command<'a> = Box<dyn FnMut(usize, [f64; 3]) -> (f64, f64) + 'a>;
+/// The index of the step that holds time `t` (s) in a run of `steps` steps of
+/// `dt` s, and how far into it `t` is (0–1); times outside the run are
+/// clamped to it. Poses `k` and `k + 1` bound the step.
+pub(crate) fn step_at(t: f64, dt: f64, steps: usize) -> (usize, f64) {
+    let f = (t / dt).clamp(0.0, steps as f64);
+    let k = (f.floor() as usize).min(steps.saturating_sub(1));
+    (k, f - k as f64)
+}
 
-/// Drives the scenario for `duration` s in steps of `dt` s.
+/// What commands the chair: a path follower, or a stop-and-turn timetable.
+#[derive(Clone)]
+enum Controller {
+    Smooth(Follower),
+    StopAndTurn { sched: Schedule, dt: f64 },
+}
+
+impl Controller {
+    /// The command of step k given the pose at its start: `(v m/s, w rad/s)`.
+    fn command(&mut self, k: usize, p: [f64; 3]) -> (f64, f64) {
+        match self {
+            Self::Smooth(f) => f.command(k, p),
+            Self::StopAndTurn { sched, dt } => {
+                let (t0, t1) = (k as f64 * *dt, (k + 1) as f64 * *dt);
+                let (d0, a0) = sched.at(t0);
+                let (d1, a1) = sched.at(t1);
+                ((d1 - d0) / *dt, (a1 - a0) / *dt)
+            }
+        }
+    }
+}
+
+/// One integration step: the command over it and the pose at its end.
+#[derive(Debug, Clone, Copy)]
+pub struct Step {
+    /// Forward speed (m/s) over the step.
+    pub v: f64,
+    /// Turn rate (rad/s) over the step.
+    pub w: f64,
+    /// Pose `(x, y, θ unwrapped)` at the end of the step.
+    pub end: [f64; 3],
+}
+
+/// The drive of a run, integrated step by step on demand, so that a run of
+/// any length needs only the controller's state: [`drive`] collects it, and
+/// each sensor of a streamed run keeps a [`Tape`] of it.
+#[derive(Clone)]
+pub struct Driver {
+    ctl: Controller,
+    dt: f64,
+    steps: usize,
+    k: usize,
+    p: [f64; 3],
+}
+
+impl Driver {
+    /// The drive of `scn` for `duration` s in steps of `dt` s.
+    pub fn new(scn: &Scenario, sc: &ScenarioConfig, duration: f64, dt: f64) -> Self {
+        let steps = (duration / dt).round().max(1.0) as usize;
+        let (start, ctl) = match &scn.route {
+            Route::Smooth(path) => {
+                let start = [path.points[0].x, path.points[0].y, path.heading[0]];
+                (
+                    start,
+                    Controller::Smooth(Follower::new(path.clone(), sc, dt)),
+                )
+            }
+            Route::StopAndTurn { waypoints, closed } => {
+                let sched = Schedule::new(waypoints, *closed, sc, duration + 1.0);
+                let d = waypoints[1] - waypoints[0];
+                let start = [waypoints[0].x, waypoints[0].y, d.y.atan2(d.x)];
+                (start, Controller::StopAndTurn { sched, dt })
+            }
+        };
+        Self {
+            ctl,
+            dt,
+            steps,
+            k: 0,
+            p: start,
+        }
+    }
+
+    /// Step length (s).
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// Number of steps of the whole run.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// The pose at the end of the steps taken so far (the start pose at first).
+    pub fn pose(&self) -> [f64; 3] {
+        self.p
+    }
+}
+
+impl Iterator for Driver {
+    type Item = Step;
+
+    /// The next step, exact arcs; `None` after the last one.
+    fn next(&mut self) -> Option<Step> {
+        if self.k >= self.steps {
+            return None;
+        }
+        let (p, dt) = (self.p, self.dt);
+        let (v, w) = self.ctl.command(self.k, p);
+        let inc = geom::arc_increment(v, w, dt);
+        let (s, c) = p[2].sin_cos();
+        let (dx, dy) = (inc.translation.x, inc.translation.y);
+        self.p = [
+            p[0] + c * dx - s * dy,
+            p[1] + s * dx + c * dy,
+            p[2] + w * dt,
+        ];
+        self.k += 1;
+        Some(Step { v, w, end: self.p })
+    }
+}
+
+/// Drives the scenario for `duration` s in steps of `dt` s, every step kept.
 pub fn drive(scn: &Scenario, sc: &ScenarioConfig, duration: f64, dt: f64) -> Drive {
-    let steps = (duration / dt).round().max(1.0) as usize;
-    let (start, mut cmd): ([f64; 3], Command) = match &scn.route {
-        Route::Smooth(path) => {
-            let mut f = Follower::new(path, sc, dt);
-            let start = [path.points[0].x, path.points[0].y, path.heading[0]];
-            (start, Box::new(move |k, p| f.command(k, p)))
-        }
-        Route::StopAndTurn { waypoints, closed } => {
-            let sched = Schedule::new(waypoints, *closed, sc, duration + 1.0);
-            let d = waypoints[1] - waypoints[0];
-            let start = [waypoints[0].x, waypoints[0].y, d.y.atan2(d.x)];
-            (
-                start,
-                Box::new(move |k, _| {
-                    let (t0, t1) = (k as f64 * dt, (k + 1) as f64 * dt);
-                    let (d0, a0) = sched.at(t0);
-                    let (d1, a1) = sched.at(t1);
-                    ((d1 - d0) / dt, (a1 - a0) / dt)
-                }),
-            )
-        }
-    };
+    let driver = Driver::new(scn, sc, duration, dt);
+    let steps = driver.steps();
     let mut d = Drive {
         dt,
         v: Vec::with_capacity(steps),
@@ -79,33 +176,25 @@ pub fn drive(scn: &Scenario, sc: &ScenarioConfig, duration: f64, dt: f64) -> Dri
         y: Vec::with_capacity(steps + 1),
         theta: Vec::with_capacity(steps + 1),
     };
-    let mut p = start;
+    let p = driver.pose();
     d.x.push(p[0]);
     d.y.push(p[1]);
     d.theta.push(p[2]);
-    for k in 0..steps {
-        let (v, w) = cmd(k, p);
-        let inc = geom::arc_increment(v, w, dt);
-        let (s, c) = p[2].sin_cos();
-        let (dx, dy) = (inc.translation.x, inc.translation.y);
-        p = [
-            p[0] + c * dx - s * dy,
-            p[1] + s * dx + c * dy,
-            p[2] + w * dt,
-        ];
-        d.v.push(v);
-        d.w.push(w);
-        d.x.push(p[0]);
-        d.y.push(p[1]);
-        d.theta.push(p[2]);
+    for s in driver {
+        d.v.push(s.v);
+        d.w.push(s.w);
+        d.x.push(s.end[0]);
+        d.y.push(s.end[1]);
+        d.theta.push(s.end[2]);
     }
     d
 }
 
 /// Path-following controller: curvature feed-forward with preview plus
 /// lateral and heading feedback, then rate and magnitude limits.
-struct Follower<'a> {
-    path: &'a Path,
+#[derive(Clone)]
+struct Follower {
+    path: Path,
     idx: usize,
     v: f64,
     w: f64,
@@ -120,8 +209,8 @@ const K_HEAD: f64 = 2.45;
 /// Curvature preview (s), half the time the turn rate needs to ramp up.
 const PREVIEW: f64 = 0.3;
 
-impl<'a> Follower<'a> {
-    fn new(path: &'a Path, sc: &ScenarioConfig, dt: f64) -> Self {
+impl Follower {
+    fn new(path: Path, sc: &ScenarioConfig, dt: f64) -> Self {
         Self {
             path,
             idx: 0,
@@ -153,7 +242,7 @@ impl<'a> Follower<'a> {
         if k < self.hold_steps {
             return (0.0, 0.0);
         }
-        let path = self.path;
+        let path = &self.path;
         let pos = Point2::new(p[0], p[1]);
         // Progress: hill-climb to the nearest sample ahead.
         while let Some(j) = self.next(self.idx) {
@@ -195,50 +284,77 @@ impl<'a> Follower<'a> {
 }
 
 /// Open-loop stop-and-turn timetable: cumulative distance driven and angle
-/// turned as functions of time, with trapezoidal speed profiles.
+/// turned as functions of time, with trapezoidal speed profiles. Its phases
+/// are laid out leg by leg as time advances and forgotten once past, so a
+/// looping route needs no more than its current leg (times asked must not
+/// decrease).
+#[derive(Clone)]
 struct Schedule {
     /// (start time, duration, distance or angle, is_turn, peak rate, accel).
-    phases: Vec<(f64, f64, f64, bool, f64, f64)>,
+    phases: VecDeque<(f64, f64, f64, bool, f64, f64)>,
     /// Cumulative (distance, angle) at each phase start.
-    base: Vec<(f64, f64)>,
+    base: VecDeque<(f64, f64)>,
     end: (f64, f64, f64),
+    /// The route, its number of legs (unbounded when closed), the next leg to lay out.
+    wp: Vec<Point2<f64>>,
+    closed: bool,
+    legs: usize,
+    leg: usize,
+    /// No leg starts after this time (s).
+    until: f64,
+    limits: ScenarioConfig,
 }
 
 impl Schedule {
     fn new(wp: &[Point2<f64>], closed: bool, sc: &ScenarioConfig, until: f64) -> Self {
-        let mut s = Self {
-            phases: Vec::new(),
-            base: Vec::new(),
+        Self {
+            phases: VecDeque::new(),
+            base: VecDeque::new(),
             end: (sc.start_hold_s, 0.0, 0.0),
-        };
-        let n = wp.len();
-        let dir = |i: usize| {
+            wp: wp.to_vec(),
+            closed,
+            legs: if closed { usize::MAX } else { wp.len() - 1 },
+            leg: 0,
+            until,
+            limits: sc.clone(),
+        }
+    }
+
+    /// Lays out the phases of every leg that starts by `t` (s).
+    fn lay_out(&mut self, t: f64) {
+        let n = self.wp.len();
+        let dir = |wp: &[Point2<f64>], i: usize| {
             let d = wp[(i + 1) % n] - wp[i % n];
             d.y.atan2(d.x)
         };
-        let legs = if closed { usize::MAX } else { n - 1 };
-        let mut i = 0;
-        while s.end.0 < until && i < legs {
-            let len = (wp[(i + 1) % n] - wp[i % n]).norm();
-            s.push(len, false, sc.cruise_speed, sc.max_accel);
-            s.end.0 += sc.corner_pause_s;
-            let last = !closed && i + 2 == n;
+        while self.end.0 <= t && self.end.0 < self.until && self.leg < self.legs {
+            let i = self.leg;
+            let sc = &self.limits;
+            let (drive, turn, pause) = (
+                (sc.cruise_speed, sc.max_accel),
+                (sc.turn_rate, sc.max_angular_accel),
+                sc.corner_pause_s,
+            );
+            let len = (self.wp[(i + 1) % n] - self.wp[i % n]).norm();
+            self.push(len, false, drive.0, drive.1);
+            self.end.0 += pause;
+            let last = !self.closed && i + 2 == n;
             if !last {
-                let turn = wrap_angle(dir(i + 1) - dir(i));
-                s.push(turn, true, sc.turn_rate, sc.max_angular_accel);
-                s.end.0 += sc.corner_pause_s;
+                let angle = wrap_angle(dir(&self.wp, i + 1) - dir(&self.wp, i));
+                self.push(angle, true, turn.0, turn.1);
+                self.end.0 += pause;
             }
-            i += 1;
+            self.leg += 1;
         }
-        s
     }
 
     fn push(&mut self, amount: f64, turn: bool, peak: f64, acc: f64) {
         let d = amount.abs();
         let vp = peak.min((d * acc).sqrt());
         let dur = if vp > 0.0 { d / vp + vp / acc } else { 0.0 };
-        self.phases.push((self.end.0, dur, amount, turn, vp, acc));
-        self.base.push((self.end.1, self.end.2));
+        self.phases
+            .push_back((self.end.0, dur, amount, turn, vp, acc));
+        self.base.push_back((self.end.1, self.end.2));
         self.end.0 += dur;
         if turn {
             self.end.2 += amount;
@@ -247,8 +363,14 @@ impl Schedule {
         }
     }
 
-    /// Cumulative (distance m, angle rad) at time `t` (s).
-    fn at(&self, t: f64) -> (f64, f64) {
+    /// Cumulative (distance m, angle rad) at time `t` (s), not before the
+    /// time last asked.
+    fn at(&mut self, t: f64) -> (f64, f64) {
+        self.lay_out(t);
+        while self.phases.len() > 1 && self.phases[1].0 <= t {
+            self.phases.pop_front();
+            self.base.pop_front();
+        }
         let k = self.phases.partition_point(|p| p.0 <= t);
         if k == 0 {
             return (0.0, 0.0);

@@ -51,6 +51,15 @@ impl TrueRobot {
         self.departures.encoder_taken(stamp) - extra
     }
 
+    /// How far back (s) a latency that grows during the run can move the
+    /// time a later encoder reading was taken: the sum of the growths.
+    pub fn delay_margin(&self) -> f64 {
+        self.faults
+            .iter()
+            .map(|f| f.extra_delay(f64::INFINITY).max(0.0))
+            .sum()
+    }
+
     /// The (right, left) angles the encoders' wiring reports.
     pub fn wire(&self, angles: (f64, f64)) -> (f64, f64) {
         self.faults.iter().fold(angles, |a, f| f.wire(a))

@@ -2,7 +2,9 @@
 //! differential-drive chair whose true parameters depart from the nominal
 //! ones by injected effects, and the sensors that observe it (laser, wheel
 //! encoders, gyro, a LOAM-like reference). [`simulate`] produces a
-//! [`Recording`] that never mentions the effects, and a [`Truth`] that holds them.
+//! [`Recording`] that never mentions the effects, and a [`Truth`] that holds them;
+//! [`prepare`] gives the same run as streams drawn in time order (each
+//! sensor reading the motion through its own [`Tape`]), for runs of any length.
 //!
 //! Semantics: the scenario commands body velocities (v, w); the chair's true
 //! wheel rates realise them with the true radii and wheel base, so the body
@@ -19,6 +21,7 @@ mod path;
 mod run;
 mod scenario;
 mod sensors;
+mod tape;
 mod truth;
 mod world;
 pub mod worlds;
@@ -27,13 +30,16 @@ pub use config::{
     EncoderConfig, GyroConfig, LaserConfig, ReferenceConfig, ScenarioConfig, ScenarioSpec,
     SimConfig, WorldConfig, WorldRef,
 };
-pub use drive::{drive, Drive};
+pub use drive::{drive, Drive, Driver, Step};
 pub use effects::TrueRobot;
 pub use path::Path;
-pub use run::{prepare, simulate, SimRun};
+pub use run::{path_length, prepare, simulate, SimRun, TrueBase};
 pub use scenario::{Route, Scenario, BUILTIN_SCENARIOS};
-pub use sensors::{encoder_samples, gyro_samples, reference_poses, LaserSim, WheelTrack};
-pub use truth::{TrueParameters, TruePose, Truth};
+pub use sensors::{
+    encoder_samples, Clock, Encoders, Gyro, LaserSim, Reference, Sensor, SensorStream, WheelTrack,
+};
+pub use tape::Tape;
+pub use truth::{Drawn, TrueParameters, TruePose, Truth, TruthOf};
 pub use world::{World, WorldSpec};
 
 use rand::rngs::StdRng;

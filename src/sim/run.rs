@@ -2,18 +2,20 @@
 //! every sensor observe the result.
 
 use super::config::SimConfig;
-use super::drive::{drive, Drive};
+use super::drive::Driver;
 use super::effects::TrueRobot;
 use super::scenario::Scenario;
 use super::sensors::{
-    encoder_samples, gyro_samples, reference_poses, sample_times, LaserSim, WheelTrack,
+    sample_times, Clock, Encoders, Gyro, LaserSim, Reference, Sensor, SensorStream,
 };
-use super::truth::{TrueParameters, TruePose, Truth};
+use super::tape::Tape;
+use super::truth::{TrueParameters, TruePose, Truth, TruthOf};
 use super::SimError;
 use crate::effects::Effect;
 use crate::geom::wrap_angle;
 use crate::recording::Recording;
 use crate::robot::RobotConfig;
+use nalgebra::Vector2;
 
 /// Simulates a run: returns the recording a reader would produce from the
 /// bag (scans, wheel angles, gyro, reference, nominal `base_from_laser`) and
@@ -25,73 +27,191 @@ pub fn simulate(
     effects: &[Effect],
     progress: &mut dyn FnMut(f64),
 ) -> Result<(Recording, Truth), SimError> {
-    let SimRun {
-        mut recording,
-        truth,
-        laser,
-    } = prepare(cfg, robot, effects, progress)?;
-    recording.scans = laser.all(&mut |f| progress(0.1 + 0.9 * f));
+    let run = prepare(cfg, robot, effects)?;
+    let mut recording = run.recording();
+    recording.wheels = run.encoders().collect();
+    recording.gyro = run.gyro().collect();
+    recording.reference = run.reference().collect();
+    progress(0.1);
+    recording.scans = run.laser().all(&mut |f| progress(0.1 + 0.9 * f));
+    let truth = run.truth();
     progress(1.0);
     Ok((recording, truth))
 }
 
-/// A run ready to be written: the truth and every stream but the laser's,
-/// whose scans [`LaserSim`] casts on demand (so that a long run need not be
-/// held in memory).
+/// A run ready to be observed: the scenario, the true robot and the
+/// settings, from which every stream (each sensor, the true trajectory and
+/// parameters) is drawn on demand, in time order, in memory that does not
+/// grow with the run's length. Each stream drives the scenario on its own
+/// tape; all of them see the same motion, bit for bit.
 pub struct SimRun {
-    /// The recording without its scans (`scans` is empty).
-    pub recording: Recording,
-    /// What really happened.
-    pub truth: Truth,
-    /// The laser of the run; scan k of it is scan k of [`simulate`]'s recording.
-    pub laser: LaserSim,
+    cfg: SimConfig,
+    nominal: RobotConfig,
+    effects: Vec<Effect>,
+    scenario: Scenario,
+    true_robot: TrueRobot,
 }
 
-/// Drives the scenario and simulates every sensor but the laser (progress up to 0.1).
+/// Checks the run's settings, robot and effects and resolves its scenario.
 pub fn prepare(
     cfg: &SimConfig,
     robot: &RobotConfig,
     effects: &[Effect],
-    progress: &mut dyn FnMut(f64),
 ) -> Result<SimRun, SimError> {
     let true_robot = true_robot(cfg, robot, effects)?;
-    let duration = cfg.duration_s;
     let scenario = Scenario::from_config(cfg)?;
-    let motion = drive(&scenario, &cfg.scenario, duration, 1.0 / cfg.integration_hz);
-    progress(0.05);
-    let recording = recording(cfg, robot, &scenario, &motion, &true_robot);
-    progress(0.1);
-    let truth = Truth {
-        scenario: scenario.name.clone(),
-        world: scenario.world.name().to_string(),
-        walls: scenario.world.segments().to_vec(),
-        seed: cfg.seed,
-        duration_s: duration,
-        nominal: robot.clone(),
-        effect_specs: effects
-            .iter()
-            .map(|e| e.to_string())
-            .chain(cfg.faults.iter().map(|f| f.to_string()))
-            .collect(),
-        effects: effects.to_vec(),
-        parameters: true_parameters(&true_robot, duration),
-        laser_mount: true_robot.laser,
-        trajectory: true_trajectory(&motion, duration),
-        settings: cfg.clone(),
-    };
-    let laser = LaserSim::new(
-        &cfg.laser,
-        scenario.world,
-        motion,
-        true_robot,
-        cfg.seed,
-        duration,
-    );
     Ok(SimRun {
-        recording,
-        truth,
-        laser,
+        cfg: cfg.clone(),
+        nominal: robot.clone(),
+        effects: effects.to_vec(),
+        scenario,
+        true_robot,
     })
+}
+
+impl SimRun {
+    /// Length of the run (s).
+    pub fn duration(&self) -> f64 {
+        self.cfg.duration_s
+    }
+
+    /// A fresh drive of the scenario, not yet started.
+    fn driver(&self) -> Driver {
+        let cfg = &self.cfg;
+        Driver::new(
+            &self.scenario,
+            &cfg.scenario,
+            cfg.duration_s,
+            1.0 / cfg.integration_hz,
+        )
+    }
+
+    /// The recording's description without any samples: its source and the
+    /// nominal laser mounting it states.
+    pub fn recording(&self) -> Recording {
+        Recording {
+            source: format!("simulated:{}", self.scenario.name),
+            scans: Vec::new(),
+            wheels: Vec::new(),
+            gyro: Vec::new(),
+            odom: Vec::new(),
+            reference: Vec::new(),
+            base_from_laser: Some(self.nominal.laser.unwrap_or_default().pose()),
+            mount_origin: Some(crate::assumptions::Origin::TfStatic),
+            mount_note: None,
+            wheel_values: Some(crate::recording::WheelValues::Positions),
+        }
+    }
+
+    /// The samples at `rate` Hz of the run, each from a fresh tape.
+    fn stream<S: Sensor>(&self, sensor: S, tape: Tape, rate: f64) -> SensorStream<S> {
+        SensorStream::new(sensor, tape, Clock::new(rate, self.cfg.duration_s, 0.0))
+    }
+
+    /// The encoders reading the true wheels.
+    pub fn encoders(&self) -> SensorStream<Encoders> {
+        let (c, robot) = (&self.cfg, &self.true_robot);
+        let sensor = Encoders::new(self.nominal.ticks_per_rev, robot, c.seed);
+        let tape = Tape::with_wheels(self.driver(), robot.clone());
+        self.stream(sensor, tape, c.encoder.rate_hz)
+    }
+
+    /// The gyro observing the motion.
+    pub fn gyro(&self) -> SensorStream<Gyro> {
+        let c = &self.cfg;
+        let sensor = Gyro::new(&c.gyro, &self.true_robot, c.seed);
+        self.stream(sensor, Tape::new(self.driver()), c.gyro.rate_hz)
+    }
+
+    /// The LOAM-like reference observing the motion.
+    pub fn reference(&self) -> SensorStream<Reference> {
+        let c = &self.cfg;
+        let sensor = Reference::new(&c.reference, c.seed);
+        self.stream(sensor, Tape::new(self.driver()), c.reference.rate_hz)
+    }
+
+    /// The laser, casting its scans block by block.
+    pub fn laser(&self) -> LaserSim {
+        let c = &self.cfg;
+        LaserSim::new(
+            &c.laser,
+            self.scenario.world.clone(),
+            Tape::new(self.driver()),
+            self.true_robot.clone(),
+            c.seed,
+            c.duration_s,
+        )
+    }
+
+    /// The true trajectory of the base at 100 Hz.
+    pub fn trajectory(&self) -> SensorStream<TrueBase> {
+        self.stream(TrueBase, Tape::new(self.driver()), 100.0)
+    }
+
+    /// The true radii and wheel base at 10 Hz and at every radius step of the run.
+    pub fn parameters(&self) -> impl Iterator<Item = TrueParameters> {
+        true_parameters(self.true_robot.clone(), self.cfg.duration_s)
+    }
+
+    /// The truth without its series (true parameters and trajectory).
+    pub fn truth_header(&self) -> TruthOf<(), ()> {
+        let scenario = &self.scenario;
+        TruthOf {
+            scenario: scenario.name.clone(),
+            world: scenario.world.name().to_string(),
+            walls: scenario.world.segments().to_vec(),
+            seed: self.cfg.seed,
+            duration_s: self.cfg.duration_s,
+            nominal: self.nominal.clone(),
+            effect_specs: self
+                .effects
+                .iter()
+                .map(|e| e.to_string())
+                .chain(self.cfg.faults.iter().map(|f| f.to_string()))
+                .collect(),
+            effects: self.effects.clone(),
+            parameters: (),
+            laser_mount: self.true_robot.laser,
+            trajectory: (),
+            settings: self.cfg.clone(),
+        }
+    }
+
+    /// The whole truth, in memory.
+    pub fn truth(&self) -> Truth {
+        self.truth_header()
+            .with(self.parameters().collect(), self.trajectory().collect())
+    }
+}
+
+/// The true base pose, as the truth file states it (heading wrapped).
+pub struct TrueBase;
+
+impl Sensor for TrueBase {
+    type Sample = TruePose;
+    fn sample(&mut self, t: f64, tape: &Tape) -> TruePose {
+        let [x, y, th] = tape.pose_at(t);
+        TruePose {
+            t,
+            x,
+            y,
+            theta: wrap_angle(th),
+        }
+    }
+}
+
+/// Length (m) of the path through `poses`, in order: the value of
+/// [`crate::traj::Trajectory::path_length`] of the same poses.
+pub fn path_length(poses: impl Iterator<Item = TruePose>) -> f64 {
+    let mut last: Option<Vector2<f64>> = None;
+    poses
+        .filter_map(|p| {
+            let at = Vector2::new(p.x, p.y);
+            let step = last.map(|l| (at - l).norm());
+            last = Some(at);
+            step
+        })
+        .sum()
 }
 
 /// Checks the settings and the nominal robot, and applies the effects to it;
@@ -114,77 +234,34 @@ fn true_robot(
     Ok(true_robot)
 }
 
-/// The recording of every stream but the laser: the encoders read the true
-/// wheels, the gyro and the reference observe the motion.
-fn recording(
-    cfg: &SimConfig,
-    robot: &RobotConfig,
-    scenario: &Scenario,
-    motion: &Drive,
-    true_robot: &TrueRobot,
-) -> Recording {
-    let duration = cfg.duration_s;
-    let track = WheelTrack::new(motion, true_robot);
-    let wheels = encoder_samples(
-        &cfg.encoder,
-        robot.ticks_per_rev,
-        &track,
-        true_robot,
-        cfg.seed,
-        duration,
-    );
-    let gyro = gyro_samples(&cfg.gyro, motion, true_robot, cfg.seed, duration);
-    let reference = reference_poses(&cfg.reference, motion, cfg.seed, duration);
-    Recording {
-        source: format!("simulated:{}", scenario.name),
-        scans: Vec::new(),
-        wheels,
-        gyro,
-        odom: Vec::new(),
-        reference,
-        base_from_laser: Some(robot.laser.unwrap_or_default().pose()),
-        mount_origin: Some(crate::assumptions::Origin::TfStatic),
-        mount_note: None,
-        wheel_values: Some(crate::recording::WheelValues::Positions),
-    }
-}
-
-/// The true trajectory of the base at 100 Hz.
-fn true_trajectory(motion: &Drive, duration: f64) -> Vec<TruePose> {
-    sample_times(100.0, duration, 0.0)
-        .map(|t| {
-            let [x, y, th] = motion.pose_at(t);
-            TruePose {
-                t,
-                x,
-                y,
-                theta: wrap_angle(th),
-            }
-        })
-        .collect()
-}
-
-/// The true radii and wheel base at 10 Hz and at every radius step of the run.
-fn true_parameters(true_robot: &TrueRobot, duration: f64) -> Vec<TrueParameters> {
-    let mut times: Vec<f64> = sample_times(10.0, duration, 0.0).collect();
-    times.extend(
-        true_robot
-            .departures()
-            .step_times()
-            .filter(|t| *t <= duration),
-    );
-    times.sort_by(f64::total_cmp);
-    times.dedup();
-    times
-        .into_iter()
-        .map(|t| {
-            let k = true_robot.at(t);
-            TrueParameters {
-                t,
-                r_right: k.r_right,
-                r_left: k.r_left,
-                wheel_base: k.wheel_base,
-            }
-        })
-        .collect()
+/// The true radii and wheel base at 10 Hz and at every radius step of the
+/// run, in time order (a step at a sample time gives one row).
+fn true_parameters(true_robot: TrueRobot, duration: f64) -> impl Iterator<Item = TrueParameters> {
+    let mut steps: Vec<f64> = true_robot
+        .departures()
+        .step_times()
+        .filter(|t| *t <= duration)
+        .collect();
+    steps.sort_by(f64::total_cmp);
+    let mut steps = steps.into_iter().peekable();
+    let mut samples = sample_times(10.0, duration, 0.0).peekable();
+    let mut last: Option<f64> = None;
+    std::iter::from_fn(move || loop {
+        let t = match (samples.peek(), steps.peek()) {
+            (Some(a), Some(b)) if b.total_cmp(a).is_lt() => steps.next(),
+            (Some(_), _) => samples.next(),
+            (None, _) => steps.next(),
+        }?;
+        if last == Some(t) {
+            continue;
+        }
+        last = Some(t);
+        let k = true_robot.at(t);
+        return Some(TrueParameters {
+            t,
+            r_right: k.r_right,
+            r_left: k.r_left,
+            wheel_base: k.wheel_base,
+        });
+    })
 }

@@ -15,8 +15,18 @@ pub mod entity {
     pub const SCAN: &str = "scan";
     /// The world's map as line segments (static), world frame.
     pub const MAP: &str = "world/map";
-    /// The current scan's points placed at the estimated pose, world frame.
-    pub const SCAN_POINTS: &str = "world/scan";
+    /// The robot's base: a transform (`base_link` in the world at each scan's
+    /// time), under which the laser and the scan hang.
+    pub const ROBOT: &str = "world/robot";
+    /// An arrow along the robot's x axis (static, robot frame).
+    pub const ROBOT_HEADING: &str = "world/robot/heading";
+    /// The laser on the robot: its mounting `base_from_laser` (static transform).
+    pub const LASER: &str = "world/robot/laser";
+    /// The current scan's points in the laser frame.
+    pub const SCAN_POINTS: &str = "world/robot/laser/scan";
+    /// The scan-matching covariance of the pair ending at a scan: its 1σ
+    /// position ellipse at the matched pose, magnified (world frame).
+    pub const ICP_COVARIANCE: &str = "world/icp_covariance";
     /// ICP-integrated trajectory (line strip, world frame).
     pub const TRAJ_ICP: &str = "world/trajectory/icp";
     /// Raw wheel odometry with nominal parameters.
@@ -101,13 +111,24 @@ impl TrajectoryKind {
         TrajectoryKind::Calibrated,
     ];
 
-    /// The entity path (`world/trajectory/...`).
+    /// The entity path (`world/trajectory/...`): the trajectory up to the
+    /// time cursor, growing along the `time` timeline.
     pub fn entity(self) -> &'static str {
         match self {
             TrajectoryKind::Icp => entity::TRAJ_ICP,
             TrajectoryKind::RawOdometry => entity::TRAJ_RAW,
             TrajectoryKind::Calibrated => entity::TRAJ_CALIBRATED,
             TrajectoryKind::Reference => entity::TRAJ_REFERENCE,
+        }
+    }
+
+    /// The whole trajectory, static, faint (`world/trajectory/.../full`).
+    pub fn full_entity(self) -> &'static str {
+        match self {
+            TrajectoryKind::Icp => "world/trajectory/icp/full",
+            TrajectoryKind::RawOdometry => "world/trajectory/raw_odometry/full",
+            TrajectoryKind::Calibrated => "world/trajectory/calibrated/full",
+            TrajectoryKind::Reference => "world/trajectory/reference/full",
         }
     }
 
@@ -143,16 +164,36 @@ pub trait Logger {
     /// The map as line segments `[a, b]` (world frame, m); static.
     fn map(&mut self, segments: &[[Point2<f64>; 2]]) -> Result<(), VizError>;
 
-    /// One scan's points (sensor frame, m) placed at `world_from_sensor`.
+    /// One scan's points (sensor frame, m) from a robot at `world_from_base`
+    /// whose laser sits at `base_from_sensor`.
     fn scan(
         &mut self,
         at: Stamp,
-        world_from_sensor: &Pose2,
+        world_from_base: &Pose2,
+        base_from_sensor: &Pose2,
         points: &[Point2<f64>],
     ) -> Result<(), VizError>;
 
-    /// A whole trajectory (world frame) as a line strip; static.
-    fn trajectory(&mut self, kind: TrajectoryKind, poses: &[Pose2]) -> Result<(), VizError>;
+    /// A whole trajectory (world frame) with each pose's time (s, timeline
+    /// `time`): the full line (static) and the line up to each time.
+    fn trajectory(
+        &mut self,
+        kind: TrajectoryKind,
+        times: &[f64],
+        poses: &[Pose2],
+    ) -> Result<(), VizError>;
+
+    /// The covariance (m², 2×2, base frame) of the scan match ending at `at`,
+    /// whose matched pose is `world_from_base`.
+    fn icp_covariance(
+        &mut self,
+        at: Stamp,
+        world_from_base: &Pose2,
+        cov_xy: [[f64; 2]; 2],
+    ) -> Result<(), VizError> {
+        let _ = (at, world_from_base, cov_xy);
+        Ok(())
+    }
 
     /// The particle cloud after a filter step: per particle R_R, R_L (m) and
     /// weight (any non-negative scale). Long clouds are shown as a
@@ -185,10 +226,10 @@ impl Logger for NullLogger {
     fn map(&mut self, _: &[[Point2<f64>; 2]]) -> Result<(), VizError> {
         Ok(())
     }
-    fn scan(&mut self, _: Stamp, _: &Pose2, _: &[Point2<f64>]) -> Result<(), VizError> {
+    fn scan(&mut self, _: Stamp, _: &Pose2, _: &Pose2, _: &[Point2<f64>]) -> Result<(), VizError> {
         Ok(())
     }
-    fn trajectory(&mut self, _: TrajectoryKind, _: &[Pose2]) -> Result<(), VizError> {
+    fn trajectory(&mut self, _: TrajectoryKind, _: &[f64], _: &[Pose2]) -> Result<(), VizError> {
         Ok(())
     }
     fn particles(&mut self, _: Stamp, _: &[f64], _: &[f64], _: &[f64]) -> Result<(), VizError> {

@@ -7,7 +7,10 @@ mod logger;
 pub mod plot;
 pub mod report;
 #[cfg(feature = "rerun")]
+mod rerun_layout;
+#[cfg(feature = "rerun")]
 mod rerun_logger;
+pub mod shapes;
 mod subsample;
 
 pub use logger::{entity, CalibEstimate, Logger, NullLogger, Stamp, TrajectoryKind};

@@ -5,13 +5,14 @@
 //! costs little next to computing it.
 
 use super::logger::{entity, CalibEstimate, Logger, Stamp, TrajectoryKind};
+use super::shapes::{ellipse, growth_steps, thin_prefix};
 use super::subsample::systematic_subsample;
 use super::VizError;
 use crate::geom::Pose2;
 use nalgebra::Point2;
 use rerun::{
-    Color, LineStrips2D, Points2D, Radius, RecordingStream, RecordingStreamBuilder, Scalars,
-    TimeColumn,
+    Angle, Arrows2D, Color, LineStrips2D, Points2D, Radius, RecordingStream,
+    RecordingStreamBuilder, RotationAxisAngle, Scalars, TimeColumn, Transform3D,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -38,6 +39,12 @@ pub struct RerunOptions {
     pub max_particles: usize,
     /// Rows buffered per entity before a chunk is sent.
     pub batch_rows: usize,
+    /// Magnification of the scan-matching 1σ ellipses (they are millimetres).
+    pub ellipse_scale: f64,
+    /// Most times at which a trajectory is logged as grown so far.
+    pub growth_steps: usize,
+    /// Most poses in each grown line (every k-th, and the last).
+    pub growth_points: usize,
 }
 
 impl Default for RerunOptions {
@@ -46,8 +53,31 @@ impl Default for RerunOptions {
             app_id: "odocal".into(),
             max_particles: 256,
             batch_rows: 512,
+            ellipse_scale: 100.0,
+            growth_steps: 300,
+            growth_points: 1000,
         }
     }
+}
+
+/// Points of [`ellipse`]'s outlines.
+const ELLIPSE_POINTS: usize = 32;
+
+/// Rows of the robot's pose transform waiting to be sent.
+#[derive(Default)]
+struct TransformRows {
+    scans: Vec<i64>,
+    times: Vec<f64>,
+    translations: Vec<[f32; 3]>,
+    yaws: Vec<f32>,
+}
+
+/// Rows of line strips (one strip a row) waiting to be sent.
+#[derive(Default)]
+struct StripRows {
+    scans: Vec<i64>,
+    times: Vec<f64>,
+    strips: Vec<Vec<[f32; 2]>>,
 }
 
 /// Rows of a points entity waiting to be sent as one chunk.
@@ -79,6 +109,10 @@ pub struct RerunLogger {
     scans: PointRows,
     particles: PointRows,
     scalars: BTreeMap<&'static str, ScalarRows>,
+    robot: TransformRows,
+    ellipses: StripRows,
+    /// The laser mounting last logged (static).
+    mount: Option<Pose2>,
 }
 
 fn rerun_err(e: impl std::fmt::Display) -> VizError {
@@ -120,19 +154,35 @@ fn rgb(c: [u8; 3]) -> Color {
     Color::from_rgb(c[0], c[1], c[2])
 }
 
+/// A planar pose as a transform about the z axis.
+fn planar_transform(p: &Pose2) -> Transform3D {
+    let t = p.translation.vector;
+    Transform3D::from_translation_rotation(
+        [t.x as f32, t.y as f32, 0.0],
+        RotationAxisAngle::new(
+            [0.0, 0.0, 1.0],
+            Angle::from_radians(p.rotation.angle() as f32),
+        ),
+    )
+}
+
 impl RerunLogger {
     /// Opens a recording to `sink`. A file sink writes to a temporary file
     /// beside the target until [`Logger::finish`]; `Spawn` fails clearly when
     /// no `rerun` binary is on `PATH`.
     pub fn new(sink: RerunSink, options: RerunOptions) -> Result<Self, VizError> {
-        if options.max_particles == 0 || options.batch_rows == 0 {
+        if options.max_particles == 0 || options.batch_rows == 0 || options.growth_steps == 0 {
             return Err(VizError::Input(
-                "max_particles and batch_rows must be positive".into(),
+                "max_particles, batch_rows and growth_steps must be positive".into(),
             ));
+        }
+        if !(options.ellipse_scale.is_finite() && options.ellipse_scale > 0.0) {
+            return Err(VizError::Input("ellipse_scale must be positive".into()));
         }
         let app = rerun::ApplicationId::try_new(options.app_id.clone())
             .map_err(|e| VizError::Input(format!("app_id: {e}")))?;
-        let builder = RecordingStreamBuilder::new(app);
+        let builder = RecordingStreamBuilder::new(app)
+            .with_blueprint(super::rerun_layout::blueprint(options.ellipse_scale));
         let (rec, file) = match sink {
             RerunSink::File(path) => {
                 if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -158,14 +208,25 @@ impl RerunLogger {
                 (builder.spawn().map_err(rerun_err)?, None)
             }
         };
-        Ok(RerunLogger {
+        let logger = RerunLogger {
             rec: Some(rec),
             options,
             file,
             scans: PointRows::default(),
             particles: PointRows::default(),
             scalars: BTreeMap::new(),
-        })
+            robot: TransformRows::default(),
+            ellipses: StripRows::default(),
+            mount: None,
+        };
+        let heading = Arrows2D::from_vectors([[0.3f32, 0.0]])
+            .with_colors([Color::from_rgb(230, 120, 0)])
+            .with_radii([Radius::new_ui_points(2.0)]);
+        logger
+            .rec()?
+            .log_static(entity::ROBOT_HEADING, &heading)
+            .map_err(rerun_err)?;
+        Ok(logger)
     }
 
     /// Records to the `.rrd` file `path` with default options.
@@ -204,18 +265,10 @@ impl RerunLogger {
             return Ok(());
         }
         let rows = std::mem::take(rows);
-        let rec = self.rec()?;
-        rec.send_columns(
-            path,
-            [
-                TimeColumn::new_sequence(entity::SCAN, rows.scans),
-                TimeColumn::new_duration_secs(entity::TIME, rows.times),
-            ],
-            Scalars::new(rows.values)
-                .columns_of_unit_batches()
-                .map_err(rerun_err)?,
-        )
-        .map_err(rerun_err)
+        let columns = Scalars::new(rows.values)
+            .columns_of_unit_batches()
+            .map_err(rerun_err)?;
+        self.send_rows(path, rows.scans, rows.times, columns)
     }
 
     fn flush_points(&mut self, which: &'static str) -> Result<(), VizError> {
@@ -233,19 +286,101 @@ impl RerunLogger {
         if !rows.radii.is_empty() {
             points = points.with_radii(rows.radii);
         }
-        let rec = self.rec()?;
-        rec.send_columns(
-            which,
-            [
-                TimeColumn::new_sequence(entity::SCAN, rows.scans),
-                TimeColumn::new_duration_secs(entity::TIME, rows.times),
-            ],
-            points.columns(rows.lengths).map_err(rerun_err)?,
-        )
-        .map_err(rerun_err)
+        let columns = points.columns(rows.lengths).map_err(rerun_err)?;
+        self.send_rows(which, rows.scans, rows.times, columns)
+    }
+
+    fn flush_robot(&mut self) -> Result<(), VizError> {
+        let rows = std::mem::take(&mut self.robot);
+        if rows.yaws.is_empty() {
+            return Ok(());
+        }
+        let rotations = rows
+            .yaws
+            .iter()
+            .map(|&y| RotationAxisAngle::new([0.0, 0.0, 1.0], Angle::from_radians(y)));
+        let columns = Transform3D::update_fields()
+            .with_many_translation(rows.translations)
+            .with_many_rotation_axis_angle(rotations)
+            .columns_of_unit_batches()
+            .map_err(rerun_err)?;
+        self.send_rows(entity::ROBOT, rows.scans, rows.times, columns)
+    }
+
+    /// Sends `columns`, one row per scan index and time.
+    fn send_rows(
+        &self,
+        path: &str,
+        scans: Vec<i64>,
+        times: Vec<f64>,
+        columns: impl IntoIterator<Item = rerun::SerializedComponentColumn>,
+    ) -> Result<(), VizError> {
+        self.rec()?
+            .send_columns(
+                path,
+                [
+                    TimeColumn::new_sequence(entity::SCAN, scans),
+                    TimeColumn::new_duration_secs(entity::TIME, times),
+                ],
+                columns,
+            )
+            .map_err(rerun_err)
+    }
+
+    fn flush_ellipses(&mut self) -> Result<(), VizError> {
+        let rows = std::mem::take(&mut self.ellipses);
+        if rows.strips.is_empty() {
+            return Ok(());
+        }
+        let columns = LineStrips2D::new(rows.strips)
+            .columns_of_unit_batches()
+            .map_err(rerun_err)?;
+        self.send_rows(entity::ICP_COVARIANCE, rows.scans, rows.times, columns)
+    }
+
+    /// The trajectory up to each of [`growth_steps`]'s poses, on `time`.
+    fn log_growth(
+        &mut self,
+        kind: TrajectoryKind,
+        times: &[f64],
+        strip: &[[f32; 2]],
+    ) -> Result<(), VizError> {
+        let steps = growth_steps(strip.len(), self.options.growth_steps);
+        let strips: Vec<Vec<[f32; 2]>> = steps
+            .iter()
+            .map(|&i| {
+                thin_prefix(i, self.options.growth_points)
+                    .into_iter()
+                    .map(|k| strip[k])
+                    .collect()
+            })
+            .collect();
+        let t: Vec<f64> = steps.iter().map(|&i| times[i]).collect();
+        let n = strips.len();
+        let mut columns: Vec<_> = LineStrips2D::new(strips)
+            .columns_of_unit_batches()
+            .map_err(rerun_err)?
+            .collect();
+        // Colour and width once per row, as the rows of the strip column.
+        columns.extend(
+            LineStrips2D::update_fields()
+                .with_colors(vec![rgb(kind.color()); n])
+                .with_radii(vec![Radius::new_ui_points(1.5); n])
+                .columns_of_unit_batches()
+                .map_err(rerun_err)?,
+        );
+        self.rec()?
+            .send_columns(
+                kind.entity(),
+                [TimeColumn::new_duration_secs(entity::TIME, t)],
+                columns,
+            )
+            .map_err(rerun_err)
     }
 
     fn flush_all(&mut self) -> Result<(), VizError> {
+        self.flush_robot()?;
+        self.flush_ellipses()?;
         self.flush_points(entity::SCAN_POINTS)?;
         self.flush_points(entity::PARTICLES)?;
         let keys: Vec<&'static str> = self.scalars.keys().copied().collect();
@@ -272,36 +407,99 @@ impl Logger for RerunLogger {
     fn scan(
         &mut self,
         at: Stamp,
-        world_from_sensor: &Pose2,
+        world_from_base: &Pose2,
+        base_from_sensor: &Pose2,
         points: &[Point2<f64>],
     ) -> Result<(), VizError> {
         at.check()?;
         self.rec()?;
+        if self.mount != Some(*base_from_sensor) {
+            self.mount = Some(*base_from_sensor);
+            self.rec()?
+                .log_static(entity::LASER, &planar_transform(base_from_sensor))
+                .map_err(rerun_err)?;
+        }
+        let robot = &mut self.robot;
+        robot.scans.push(at.scan);
+        robot.times.push(at.time);
+        let t = world_from_base.translation.vector;
+        robot.translations.push([t.x as f32, t.y as f32, 0.0]);
+        robot.yaws.push(world_from_base.rotation.angle() as f32);
         let rows = &mut self.scans;
         rows.scans.push(at.scan);
         rows.times.push(at.time);
         rows.lengths.push(points.len());
-        rows.positions.extend(points.iter().map(|p| {
-            let w = world_from_sensor * p;
-            [w.x as f32, w.y as f32]
-        }));
+        rows.positions
+            .extend(points.iter().map(|p| [p.x as f32, p.y as f32]));
         if rows.lengths.len() >= self.options.batch_rows {
+            self.flush_robot()?;
             self.flush_points(entity::SCAN_POINTS)?;
         }
         Ok(())
     }
 
-    fn trajectory(&mut self, kind: TrajectoryKind, poses: &[Pose2]) -> Result<(), VizError> {
+    fn trajectory(
+        &mut self,
+        kind: TrajectoryKind,
+        times: &[f64],
+        poses: &[Pose2],
+    ) -> Result<(), VizError> {
+        if times.len() != poses.len() {
+            return Err(VizError::Input(format!(
+                "{}: {} times for {} poses",
+                kind.entity(),
+                times.len(),
+                poses.len()
+            )));
+        }
+        if let Some(t) = times.iter().find(|t| !t.is_finite()) {
+            return Err(VizError::Input(format!("{}: time {t}", kind.entity())));
+        }
         let strip: Vec<[f32; 2]> = poses
             .iter()
             .map(|p| [p.translation.x as f32, p.translation.y as f32])
             .collect();
-        let strips = LineStrips2D::new([strip])
-            .with_colors([rgb(kind.color())])
-            .with_radii([Radius::new_ui_points(1.5)]);
+        let [r, g, b] = kind.color();
+        let full = LineStrips2D::new([strip.clone()])
+            .with_colors([Color::from_unmultiplied_rgba(r, g, b, 70)])
+            .with_radii([Radius::new_ui_points(1.0)]);
         self.rec()?
-            .log_static(kind.entity(), &strips)
-            .map_err(rerun_err)
+            .log_static(kind.full_entity(), &full)
+            .map_err(rerun_err)?;
+        self.log_growth(kind, times, &strip)
+    }
+
+    fn icp_covariance(
+        &mut self,
+        at: Stamp,
+        world_from_base: &Pose2,
+        cov_xy: [[f64; 2]; 2],
+    ) -> Result<(), VizError> {
+        at.check()?;
+        self.rec()?;
+        let outline = ellipse(
+            world_from_base,
+            cov_xy,
+            1.0,
+            self.options.ellipse_scale,
+            ELLIPSE_POINTS,
+        )
+        .ok_or_else(|| {
+            VizError::Input(format!(
+                "{}: covariance {cov_xy:?} at scan {} is not positive semidefinite",
+                entity::ICP_COVARIANCE,
+                at.scan
+            ))
+        })?;
+        let rows = &mut self.ellipses;
+        rows.scans.push(at.scan);
+        rows.times.push(at.time);
+        rows.strips
+            .push(outline.iter().map(|p| [p[0] as f32, p[1] as f32]).collect());
+        if rows.strips.len() >= self.options.batch_rows {
+            self.flush_ellipses()?;
+        }
+        Ok(())
     }
 
     fn particles(

@@ -137,6 +137,12 @@ pub struct BatchParams {
     pub interval_s: f64,
     /// ... or turning at least this much (rad).
     pub interval_rad: f64,
+    /// A time offset beyond this (s) is refused; one beyond a wheel period
+    /// but within it is reported with a note (a scanner whose data arrive
+    /// late is stamped late: the LEGO robot's scans 0.46 s, the Mines
+    /// rover's 0.18 s). Beyond ~1 s the intervals (≈ 1 s) no longer overlap
+    /// the wheel motion they are compared with.
+    pub max_time_offset_s: f64,
 }
 
 impl Default for BatchParams {
@@ -153,6 +159,7 @@ impl Default for BatchParams {
             singular: 1e-10,
             interval_s: 1.0,
             interval_rad: 0.3,
+            max_time_offset_s: 1.0,
         }
     }
 }

@@ -1,9 +1,11 @@
 //! The batch estimate as reported: each unknown with its std from the
-//! inverse Fisher information (JᵀΣ⁻¹J)⁻¹ at the optimum (not rescaled by the
-//! reduced χ²: the Σ's are either the scan matcher's calibrated covariances
-//! or, without them, the residuals' own σ's, which sets χ²/dof ≈ 1), the
-//! correlation matrix, per-unknown observability with the motion that is
-//! missing, and the plausibility checks.
+//! inverse Fisher information (JᵀΣ⁻¹J)⁻¹ at the optimum, the correlation
+//! matrix, per-unknown observability with the motion that is missing, and
+//! the plausibility checks. Without given covariances the Σ's are the
+//! residuals' own σ's (Censi's solver), which sets χ²/dof ≈ 1; with the scan
+//! matcher's, a reduced χ² above 1 says they are too small for this
+//! recording (a real scanner's range bias, scan skew, slip) and the
+//! covariance is multiplied by it (the Birge ratio squared), with a note.
 
 use super::model::Unknowns;
 use super::solve::Fit;
@@ -76,6 +78,12 @@ pub struct BatchEstimate {
     /// The σ's estimated from the residuals `[x m, y m, θ rad]`, when the
     /// intervals carried no covariance.
     pub noise_sigma: Option<[f64; 3]>,
+    /// The factor the std's were multiplied by (√(χ²/dof) when the given
+    /// covariances explain the residuals too well; else 1).
+    pub std_widening: f64,
+    /// What a reader of the numbers must know: widened std's, a time
+    /// offset of more than a wheel period.
+    pub notes: Vec<String>,
     /// The motion the intervals showed.
     #[serde(skip)]
     pub excitation: Evidence,
@@ -186,6 +194,10 @@ pub fn build(f: &Fit, c: Context) -> Result<BatchEstimate, BatchError> {
                 .join("; "),
         )
     })?;
+    let dof = (3 * c.kept).saturating_sub(n);
+    let mut notes = Vec::new();
+    let widening = birge(f.chi2, dof, c.noise.is_none(), &mut notes);
+    let cov = cov * (widening * widening);
     let std: Vec<f64> = (0..n).map(|i| cov[(i, i)].sqrt()).collect();
     let u = Unknowns::from_slice(&f.p);
     let obs = observe(&std, &c);
@@ -198,6 +210,9 @@ pub fn build(f: &Fit, c: Context) -> Result<BatchEstimate, BatchError> {
         return Err(BatchError::Unobservable(missing.join("; ")));
     }
     plausible(&u, &c)?;
+    if let Some(note) = late_stream(&u, std.get(6).copied(), c.period) {
+        notes.push(note);
+    }
     let v = |i: usize| Valued {
         value: f.p[i],
         std: std[i],
@@ -230,8 +245,10 @@ pub fn build(f: &Fit, c: Context) -> Result<BatchEstimate, BatchError> {
         intervals: c.kept,
         dropped: c.dropped,
         chi2: f.chi2,
-        dof: (3 * c.kept).saturating_sub(n),
+        dof,
         noise_sigma: c.noise,
+        std_widening: widening,
+        notes,
         excitation: c.evidence,
         covariance: cov,
     })
@@ -298,8 +315,47 @@ fn observe(std: &[f64], c: &Context) -> BTreeMap<String, ParamObservability> {
     out
 }
 
+/// √(χ²/dof) when the intervals' covariances were given (the scan
+/// matcher's) and explain the residuals worse than they claim, else 1; the
+/// note says so.
+fn birge(chi2: f64, dof: usize, given: bool, notes: &mut Vec<String>) -> f64 {
+    let reduced = chi2 / dof.max(1) as f64;
+    if !given || !(reduced > 1.0) {
+        return 1.0;
+    }
+    let w = reduced.sqrt();
+    notes.push(format!(
+        "the residuals are {w:.1} times the scan matcher's σ (χ² {chi2:.0} for {dof} degrees \
+         of freedom): its covariances are too small for this recording (range bias, scan \
+         skew, slip, moving objects); every std is multiplied by {w:.1}"
+    ));
+    w
+}
+
+/// The note for a time offset of more than one wheel period: the streams
+/// are stamped apart (which one is late, by how many samples).
+fn late_stream(u: &Unknowns, std: Option<f64>, period: Option<f64>) -> Option<String> {
+    let (p, s) = (period?, std?);
+    let d = u.time_offset;
+    if d.abs() <= p {
+        return None;
+    }
+    let (late, other) = if d < 0.0 {
+        ("laser scan", "wheel reading")
+    } else {
+        ("wheel reading", "laser scan")
+    };
+    Some(format!(
+        "time_offset {d:+.3} ± {s:.3} s is {:.1} wheel periods: a {late} is stamped {:.3} s \
+         after the {other} of the same instant (a recorder that stamps data on arrival does \
+         this); the online filters need it applied (`calibrate --init batch` does)",
+        d.abs() / p,
+        d.abs()
+    ))
+}
+
 /// Radii and wheel base within the multiplier bounds of the nominal robot,
-/// and a time offset under one wheel period.
+/// and a time offset within `max_time_offset_s`.
 fn plausible(u: &Unknowns, c: &Context) -> Result<(), BatchError> {
     let est = DiffDrive {
         r_right: u.r_right,
@@ -309,14 +365,14 @@ fn plausible(u: &Unknowns, c: &Context) -> Result<(), BatchError> {
     if let Some(m) = implausible(&est, c.nominal, None, c.checks) {
         return Err(BatchError::Implausible(m));
     }
-    if let Some(p) = c.period {
-        if u.time_offset.abs() > p {
-            return Err(BatchError::Implausible(format!(
-                "time_offset came out {:.4} s, more than the wheel stream's period {p:.4} s: \
-                 the streams' clocks disagree by more than a sample; fix the stamps",
-                u.time_offset
-            )));
-        }
+    let limit = c.params.max_time_offset_s;
+    if c.period.is_some() && u.time_offset.abs() > limit {
+        return Err(BatchError::Implausible(format!(
+            "time_offset came out {:.4} s, more than the {limit} s accepted \
+             ([calib.batch] max_time_offset_s): the wheel and laser clocks disagree; fix the \
+             stamps, or raise the limit if the recorder is known to stamp that late",
+            u.time_offset
+        )));
     }
     Ok(())
 }

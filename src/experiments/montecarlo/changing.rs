@@ -43,8 +43,10 @@ pub fn changing_figure(
     let runs: Vec<(&str, CalibrationRun)> = configs
         .iter()
         // The fixed PF's estimate swings by ±10 mm and would flatten every
-        // other curve; its figures are in the table.
+        // other curve; its figures are in the table, as are the Kalman
+        // filters' runs without the detector.
         .filter(|(_, p)| !matches!(p.method, Method::None | Method::Pf))
+        .filter(|(_, p)| p.change.enabled || p.method == Method::AdaptivePf)
         .map(|(label, p)| {
             let mut cal =
                 build(p, nominal).map_err(|e| PipelineError::BadArgument(e.to_string()))?;

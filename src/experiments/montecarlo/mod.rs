@@ -11,7 +11,7 @@ mod score;
 mod table;
 
 pub use changing::{changing_figure, ParticleCounts};
-pub use configs::{table1_configs, table2_configs};
+pub use configs::{changing_configs, table1_configs, table2_configs};
 pub(super) use output::monte_carlo;
 pub use scans::{scan_montecarlo, ScanMonteCarloParams};
 pub use score::{score, RunMetrics, RunTruth};
@@ -141,7 +141,7 @@ where
                 p.seed = p.seed.wrapping_add(k as u64);
                 let mut cal = build(&p, nominal).expect("experiment configs are valid");
                 let r = run(cal.as_mut(), &st, nominal);
-                score(&r, &truth, mc.convergence_fraction)
+                score(&r, &st, &truth, mc.convergence_fraction)
             })
             .collect())
     };

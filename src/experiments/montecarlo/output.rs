@@ -3,8 +3,8 @@
 
 use super::scans::ScanMonteCarloParams;
 use super::{
-    changing_figure, montecarlo, scan_montecarlo, table1_configs, table2_configs, MonteCarloParams,
-    MonteCarloTable, TableRow,
+    changing_configs, changing_figure, montecarlo, scan_montecarlo, table1_configs, table2_configs,
+    MonteCarloParams, MonteCarloTable, TableRow,
 };
 use crate::calib::synth::RadiusStep;
 use crate::calib::CalibParams;
@@ -51,7 +51,7 @@ fn setup(name: &str, inp: &ExperimentInputs<'_>) -> Setup {
                 left: 0.002,
             });
             (
-                table2_configs(base),
+                changing_configs(base),
                 "Radii step at 55 s: convergence measured from the step",
             )
         }
@@ -73,7 +73,7 @@ fn changing_note(s: &Setup, png: &Path) -> Result<String, PipelineError> {
     let mut md = String::from("\nRun 0 over time (radius estimates against the truth, the Adaptive-PF's particle count): `changing-run0.png`.\n");
     if let Some(c) = changing_figure(&s.mc, &s.configs, &fig)? {
         md += &format!(
-            "Adaptive-PF particles in run 0: {} before the step, up to {} after it, {} at the end (one particle per 0.01 mm of radius standard deviation, clamped to [adaptive.n_min, adaptive.n_max]; a detected jump restarts from the initial count).\n",
+            "Adaptive-PF particles in run 0: {} before the step, up to {} after it, {} at the end (one particle per 0.01 mm of the radius cloud's width, ±3σ of each radius summed, clamped to [adaptive.n_min, adaptive.n_max]; a detected jump restarts from at least the initial count).\n",
             c.before, c.peak, c.end
         );
     }
@@ -97,6 +97,7 @@ pub(in crate::experiments) fn monte_carlo(
     let title = format!("{} ({} runs, medians)", s.title, inp.runs);
     draw_bars(png, &median_bars(title, labels, &table.rows, &PANELS))?;
     let mut md = table.to_markdown();
+    md += &table.paired_markdown();
     if name == "changing" {
         md += &changing_note(&s, png)?;
     }

@@ -2,7 +2,7 @@
 //! velocity and odometry RMSE, time per iteration, convergence time.
 
 use crate::calib::synth::SynthData;
-use crate::calib::CalibrationRun;
+use crate::calib::{CalibStep, CalibrationRun};
 use crate::geom::{self, Pose2};
 use crate::robot::DiffDrive;
 use serde::Serialize;
@@ -24,6 +24,13 @@ pub struct RunMetrics {
     pub rmse_xy: f64,
     /// RMSE of its heading (rad).
     pub rmse_theta: f64,
+    /// RMSE of the position of the odometry dead-reckoned over the whole
+    /// run with the method's final parameters (m): what the calibration is
+    /// worth afterwards, free of how each step's estimate re-fits that
+    /// step's measurements.
+    pub rmse_xy_final: f64,
+    /// RMSE of that odometry's heading (rad).
+    pub rmse_theta_final: f64,
     /// Mean time per step (ms).
     pub mean_iteration_ms: f64,
     /// Time from the start (or the radius step) after which both radius
@@ -58,10 +65,55 @@ impl RunTruth for SynthData {
     }
 }
 
-/// Scores a finished run against its truth. The calibrated odometry starts
-/// at the identity; the true trajectory is expressed in its own pose at
-/// that first stamp before comparing.
-pub fn score(r: &CalibrationRun, truth: &dyn RunTruth, fraction: f64) -> RunMetrics {
+/// The odometry of `steps` dead-reckoned with fixed parameters `k`, from
+/// the identity at the first step's start, integrated as the calibration
+/// runner does (each step's part not yet covered, by its mean wheel rates).
+pub fn fixed_odometry(steps: &[CalibStep], k: &DiffDrive) -> (Vec<f64>, Vec<Pose2>) {
+    let mut pose = Pose2::identity();
+    let Some(first) = steps.first() else {
+        return (vec![], vec![]);
+    };
+    let (mut stamps, mut poses) = (vec![first.t0], vec![pose]);
+    let mut covered = first.t0;
+    for s in steps {
+        let dt = s.t1 - s.t0.max(covered);
+        if dt > 0.0 {
+            pose *= k.increment(s.omega_right * dt, s.omega_left * dt);
+            stamps.push(s.t1);
+            poses.push(pose);
+            covered = s.t1;
+        }
+    }
+    (stamps, poses)
+}
+
+/// RMSE of position (m) and heading (rad) of poses against the truth, the
+/// truth expressed in its own pose at the first stamp.
+fn pose_rmse(stamps: &[f64], poses: &[Pose2], truth: &dyn RunTruth) -> (f64, f64) {
+    let origin = stamps.first().and_then(|&t| truth.pose_at(t));
+    let (mut sxy, mut sth, mut m) = (0.0, 0.0, 0usize);
+    for (t, p) in stamps.iter().zip(poses) {
+        if let (Some(o), Some(q)) = (origin, truth.pose_at(*t)) {
+            let q = geom::between(&o, &q);
+            let d = p.translation.vector - q.translation.vector;
+            sxy += d.norm_squared();
+            sth += geom::wrap_angle(geom::heading(p) - geom::heading(&q)).powi(2);
+            m += 1;
+        }
+    }
+    let rms = |s: f64| if m > 0 { (s / m as f64).sqrt() } else { 0.0 };
+    (rms(sxy), rms(sth))
+}
+
+/// Scores a finished run of `steps` against its truth. The calibrated
+/// odometry starts at the identity; the true trajectory is expressed in its
+/// own pose at that first stamp before comparing.
+pub fn score(
+    r: &CalibrationRun,
+    steps: &[CalibStep],
+    truth: &dyn RunTruth,
+    fraction: f64,
+) -> RunMetrics {
     let end = truth.params_at(f64::INFINITY);
     let f = r.summary.final_params;
     let (mut sv, mut sw, mut n) = (0.0, 0.0, 0usize);
@@ -83,17 +135,9 @@ pub fn score(r: &CalibrationRun, truth: &dyn RunTruth, fraction: f64) -> RunMetr
             _ => {}
         }
     }
-    let origin = r.trajectory.stamps.first().and_then(|&t| truth.pose_at(t));
-    let (mut sxy, mut sth, mut m) = (0.0, 0.0, 0usize);
-    for (t, p) in r.trajectory.stamps.iter().zip(&r.trajectory.poses) {
-        if let (Some(o), Some(q)) = (origin, truth.pose_at(*t)) {
-            let q = geom::between(&o, &q);
-            let d = p.translation.vector - q.translation.vector;
-            sxy += d.norm_squared();
-            sth += geom::wrap_angle(geom::heading(p) - geom::heading(&q)).powi(2);
-            m += 1;
-        }
-    }
+    let (rmse_xy, rmse_theta) = pose_rmse(&r.trajectory.stamps, &r.trajectory.poses, truth);
+    let (stamps, poses) = fixed_odometry(steps, &f);
+    let (rmse_xy_final, rmse_theta_final) = pose_rmse(&stamps, &poses, truth);
     let rms = |s: f64, k: usize| if k > 0 { (s / k as f64).sqrt() } else { 0.0 };
     RunMetrics {
         err_r_right: (f.r_right - end.r_right).abs(),
@@ -101,8 +145,10 @@ pub fn score(r: &CalibrationRun, truth: &dyn RunTruth, fraction: f64) -> RunMetr
         err_wheel_base: (f.wheel_base - end.wheel_base).abs(),
         rmse_v: rms(sv, n),
         rmse_w: rms(sw, n),
-        rmse_xy: rms(sxy, m),
-        rmse_theta: rms(sth, m),
+        rmse_xy,
+        rmse_theta,
+        rmse_xy_final,
+        rmse_theta_final,
         mean_iteration_ms: r.summary.mean_iteration_ms,
         convergence_s: conv_from.map(|t| (t - start).max(0.0)),
     }

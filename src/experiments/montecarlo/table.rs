@@ -23,6 +23,10 @@ pub struct TableRow {
     pub rmse_xy: Stat,
     /// Odometry RMSE θ (rad).
     pub rmse_theta: Stat,
+    /// RMSE x, y of the odometry with the final parameters (m).
+    pub rmse_xy_final: Stat,
+    /// RMSE θ of the odometry with the final parameters (rad).
+    pub rmse_theta_final: Stat,
     /// Time per iteration (ms).
     pub mean_iteration_ms: Stat,
     /// Convergence time over the runs that converged (s).
@@ -51,6 +55,8 @@ impl TableRow {
             rmse_w: col(&|r| r.rmse_w),
             rmse_xy: col(&|r| r.rmse_xy),
             rmse_theta: col(&|r| r.rmse_theta),
+            rmse_xy_final: col(&|r| r.rmse_xy_final),
+            rmse_theta_final: col(&|r| r.rmse_theta_final),
             mean_iteration_ms: col(&|r| r.mean_iteration_ms),
             converged: conv.len() as f64 / runs.len().max(1) as f64,
             convergence_s: stat(conv),
@@ -69,18 +75,63 @@ pub struct MonteCarloTable {
     pub rows: Vec<TableRow>,
 }
 
+/// One lower-is-better figure of a run.
+type Metric = fn(&RunMetrics) -> f64;
+
+/// The metrics the paired comparison counts, each lower-is-better: name
+/// and value of one run (a run that never converged counts as never).
+const PAIRED: [(&str, Metric); 5] = [
+    ("radius error", |r| 0.5 * (r.err_r_right + r.err_r_left)),
+    ("convergence", |r| r.convergence_s.unwrap_or(f64::INFINITY)),
+    ("RMSE x,y", |r| r.rmse_xy),
+    ("RMSE θ", |r| r.rmse_theta),
+    ("RMSE x,y, final parameters", |r| r.rmse_xy_final),
+];
+
+/// Runs (of the same seeds) in which `a` is strictly better than `b` on `f`.
+fn wins(a: &[RunMetrics], b: &[RunMetrics], f: Metric) -> usize {
+    a.iter().zip(b).filter(|(x, y)| f(x) < f(y)).count()
+}
+
 impl MonteCarloTable {
+    /// The paired comparison of the first row against every other: in how
+    /// many runs (same data, same seeds) the first configuration is strictly
+    /// better, per metric ([`PAIRED`]).
+    pub fn paired_markdown(&self) -> String {
+        let Some((first, rest)) = self.rows.split_first() else {
+            return String::new();
+        };
+        let mut s = format!(
+            "\nPaired: in how many of the {} runs {} is strictly better than each configuration (same data and seeds; a tie or two runs that never converge is not a win).\n\n| against |",
+            self.runs, first.label
+        );
+        for (name, _) in PAIRED {
+            s += &format!(" {name} |");
+        }
+        s += "\n|---|";
+        s += &"---|".repeat(PAIRED.len());
+        s += "\n";
+        for r in rest {
+            s += &format!("| {} |", r.label);
+            for (_, f) in PAIRED {
+                s += &format!(" {} / {} |", wins(&first.runs, &r.runs, f), self.runs);
+            }
+            s += "\n";
+        }
+        s
+    }
+
     /// Markdown table of medians (errors in mm, times in ms and s).
     pub fn to_markdown(&self) -> String {
         let mut s = format!(
-            "Medians over {} runs (mean in parentheses).\n\n| config | err R_R (mm) | err R_L (mm) | err D (mm) | RMSE V (m/s) | RMSE W (rad/s) | RMSE x,y (m) | RMSE θ (rad) | ms/iter | convergence (s) | converged |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+            "Medians over {} runs (mean in parentheses).\n\n| config | err R_R (mm) | err R_L (mm) | err D (mm) | RMSE V (m/s) | RMSE W (rad/s) | RMSE x,y (m) | RMSE θ (rad) | RMSE x,y, final params (m) | RMSE θ, final params (rad) | ms/iter | convergence (s) | converged |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             self.runs
         );
         for r in &self.rows {
             let mm = |x: &Stat| format!("{:.3} ({:.3})", 1e3 * x.median, 1e3 * x.mean);
             let g = |x: &Stat| format!("{:.4} ({:.4})", x.median, x.mean);
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {:.4} | {:.2} | {:.0} % |\n",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.4} | {:.2} | {:.0} % |\n",
                 r.label,
                 mm(&r.err_r_right),
                 mm(&r.err_r_left),
@@ -89,6 +140,8 @@ impl MonteCarloTable {
                 g(&r.rmse_w),
                 g(&r.rmse_xy),
                 g(&r.rmse_theta),
+                g(&r.rmse_xy_final),
+                g(&r.rmse_theta_final),
                 r.mean_iteration_ms.median,
                 r.convergence_s_censored.median,
                 100.0 * r.converged

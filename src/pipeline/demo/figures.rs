@@ -57,9 +57,6 @@ fn radii_chart(
         ("wheel base D (m)".into(), Vec::new()),
     ];
     for ((m, run), color) in runs.iter().zip(METHOD_COLORS) {
-        if *m == Method::Pf {
-            continue; // diverges along D; its radii would flatten the scale of the others
-        }
         panels[0]
             .1
             .push(series_over_time(m.as_str(), run, t_start, |h| h.r_right).color(color));

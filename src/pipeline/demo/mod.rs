@@ -46,13 +46,22 @@ pub struct MethodResult {
     pub final_params: [f64; 3],
     /// Final errors against the truth `[R_R, R_L, D]` (m), when a truth file is given.
     pub final_errors: Option<[f64; 3]>,
+    /// Whether the method estimates the parameters (`none` keeps its prior:
+    /// no convergence is reported for it).
+    pub estimates: bool,
     /// First time (s from start) after which both radii stay within 0.5 % of
-    /// the truth; `None` when they never settle (or no truth).
+    /// the truth; `None` when they never settle, without a truth, or for a
+    /// method that does not estimate.
     pub convergence_s: Option<f64>,
     /// Mean time per filter step (ms).
     pub mean_iteration_ms: f64,
-    /// The calibrated odometry against the reference (origin-aligned).
+    /// The calibrated odometry against the reference (origin-aligned): each
+    /// step integrated with the estimate after that step, as online.
     pub eval: Option<TrajectoryMetrics>,
+    /// The wheel odometry of the whole recording dead-reckoned with the
+    /// method's final parameters, against the reference: what the
+    /// calibration is worth afterwards.
+    pub eval_final: Option<TrajectoryMetrics>,
 }
 
 /// What `odocal demo` prints with `--json` and writes as `summary.json`.
@@ -297,9 +306,10 @@ fn output_files(out: &Path) -> Vec<PathBuf> {
 /// Reads a simulator truth file.
 pub fn load_truth(path: &Path) -> Result<Truth, PipelineError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path)
+    let file = std::fs::File::open(path)
         .map_err(|e| InputError::new(&name, format!("cannot read: {e}")))?;
-    Ok(Truth::from_json(&text).map_err(|e| InputError::new(&name, e.to_string()))?)
+    let truth = Truth::from_reader(std::io::BufReader::new(file));
+    Ok(truth.map_err(|e| InputError::new(&name, e.to_string()))?)
 }
 
 /// Runs the demo on a recording in memory into `out` (created), logging to
@@ -446,11 +456,29 @@ fn method_results(
             .last()
             .map(|p| [p.r_right, p.r_left, p.wheel_base])
     });
+    // One set of final parameters cannot describe a run whose true
+    // parameters change: that column is left out then, and says why.
+    let changing = input.truth.is_some_and(|t| {
+        t.parameters.windows(2).any(|w| {
+            (w[0].r_right, w[0].r_left, w[0].wheel_base)
+                != (w[1].r_right, w[1].r_left, w[1].wheel_base)
+        })
+    });
+    if changing {
+        notes.push(
+            "the true parameters change during the recording, so no single set of final \
+             parameters describes it: no odometry with the final parameters"
+                .into(),
+        );
+    }
     runs.iter()
         .map(|(m, run)| {
             let f = &run.summary.final_params;
             let final_params = [f.r_right, f.r_left, f.wheel_base];
+            let estimates = *m != Method::None;
+            let fixed = wheel_odometry(f, &input.recording.wheels, Pose2::identity());
             MethodResult {
+                estimates,
                 method: m.as_str().into(),
                 final_params,
                 final_errors: truth_end.map(|t| {
@@ -460,7 +488,10 @@ fn method_results(
                         final_params[2] - t[2],
                     ]
                 }),
-                convergence_s: input.truth.and_then(|t| convergence(run, t, t_start)),
+                convergence_s: input
+                    .truth
+                    .filter(|_| estimates)
+                    .and_then(|t| convergence(run, t, t_start)),
                 mean_iteration_ms: run.summary.mean_iteration_ms,
                 eval: origin_eval(
                     &format!("calibrated by {}", m.as_str()),
@@ -468,6 +499,16 @@ fn method_results(
                     reference,
                     notes,
                 ),
+                eval_final: (!changing)
+                    .then(|| {
+                        origin_eval(
+                            &format!("final parameters of {}", m.as_str()),
+                            &fixed,
+                            reference,
+                            notes,
+                        )
+                    })
+                    .flatten(),
             }
         })
         .collect()

@@ -73,7 +73,10 @@ fn calibration(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
                 opt(e.map(|e| e[0] * 1000.0), 2),
                 opt(e.map(|e| e[1] * 1000.0), 2),
                 opt(e.map(|e| e[2] * 1000.0), 2),
-                opt(m.convergence_s, 1),
+                match (m.estimates, m.convergence_s) {
+                    (false, _) => "– (fixed prior)".into(),
+                    (true, c) => opt(c, 1),
+                },
                 num(m.mean_iteration_ms, 3),
             ]
         })
@@ -93,6 +96,11 @@ fn calibration(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
         &rows,
     )
     .map_err(viz_err)?;
+    r.paragraph(
+        "Settled: the time after which both radii stay within 0.5 % of the truth to the end \
+         (with a radii step mid-run, within 0.5 % of the radii in effect); `none` estimates \
+         nothing and is never reported as settled.",
+    );
     r.image(
         "radii.png",
         "Radii and wheel base of each method against the truth (seed 000, Fig. 6/8).",
@@ -107,19 +115,25 @@ fn calibration(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
 /// Every trajectory against the reference; without a reference (or without
 /// any figure) no table and no error plot, only why and the trajectories.
 fn odometry(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
-    let named: Vec<(String, &TrajectoryMetrics)> = [
-        ("raw odometry (nominal)".to_string(), &s.raw_odometry_eval),
-        ("ICP".to_string(), &s.icp_eval),
+    let named: Vec<(String, &TrajectoryMetrics, Option<&TrajectoryMetrics>)> = [
+        (
+            "raw odometry (nominal)".to_string(),
+            &s.raw_odometry_eval,
+            None,
+        ),
+        ("ICP".to_string(), &s.icp_eval, None),
     ]
     .into_iter()
-    .chain(
-        s.methods
-            .iter()
-            .map(|m| (format!("odometry calibrated by {}", m.method), &m.eval)),
-    )
-    .filter_map(|(n, m)| m.as_ref().map(|m| (n, m)))
+    .chain(s.methods.iter().map(|m| {
+        (
+            format!("odometry calibrated by {}", m.method),
+            &m.eval,
+            m.eval_final.as_ref(),
+        )
+    }))
+    .filter_map(|(n, m, f)| m.as_ref().map(|m| (n, m, f)))
     .collect();
-    let Some(&(_, first)) = named.first() else {
+    let Some(&(_, first, _)) = named.first() else {
         r.heading(2, "Odometry");
         for note in &s.eval_notes {
             r.paragraph(&format!("Note — {note}."));
@@ -137,7 +151,7 @@ fn odometry(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
     let rot = first.rotation_omitted.is_none();
     let rows: Vec<Vec<String>> = named
         .iter()
-        .map(|(name, m)| {
+        .map(|(name, m, f)| {
             let mut row = vec![name.clone(), num(m.ape.rmse, 3)];
             if rot {
                 row.push(opt(m.rmse_theta, 4));
@@ -146,6 +160,7 @@ fn odometry(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
                 opt(m.drift_percent, 2),
                 num(m.final_error, 3),
                 num(m.rpe.rmse, 4),
+                opt(f.map(|f| f.ape.rmse), 3),
             ]);
             row
         })
@@ -154,8 +169,22 @@ fn odometry(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
     if rot {
         header.push("RMSE θ (rad)");
     }
-    header.extend(["drift (%)", "final error (m)", "RPE RMSE (m, 1 frame)"]);
+    header.extend([
+        "drift (%)",
+        "final error (m)",
+        "RPE RMSE (m, 1 frame)",
+        "APE RMSE, final parameters (m)",
+    ]);
     r.table(&header, &rows).map_err(viz_err)?;
+    r.paragraph(
+        "Calibrated odometry integrates each step's wheel rotation with the estimate after \
+         that step, as a robot would online. A filter whose estimate moves with every step \
+         re-fits each step's measured turn rate (the gyro's), so its online odometry follows \
+         the gyro even while its parameters are wrong: the fixed PF's random walk of 0.5 mm \
+         per step does this. The last column dead-reckons the whole recording with each \
+         method's final parameters instead: what the calibration is worth afterwards (left \
+         out when the true parameters change during the recording).",
+    );
     r.paragraph(&format!(
         "Every trajectory starts on the reference at its first stamp, as a robot's dead \
          reckoning would: alignment `{}` ({}). Pairs: {} of {} ({}).{}",

@@ -1,0 +1,253 @@
+//! Exact nearest-neighbour search among a reference's points, within a
+//! radius: a uniform grid of square cells whose points are stored cell by
+//! cell (a counting sort, built once per reference), searched ring by ring
+//! outwards from the query's cell until no unvisited cell can hold a closer
+//! point.
+//!
+//! Why not a kd-tree: the reference is a few hundred to a few thousand points
+//! on walls, queried by points that lie within centimetres of them, and only
+//! a neighbour within the correspondence gate is of any use. The grid answers
+//! such a query from the cells around it with no descent, no backtracking
+//! and no allocation. Measured with callgrind over the Intel log: about 850
+//! instructions per query against the kd-tree's 1,090 (kiddo's immutable
+//! tree), plus 0.2 M per grid built (once per keyframe). What remains is the
+//! local map's density: five overlapping keyframes put five points where a
+//! scan has one, and a query scans them all in its cells.
+
+/// Points binned into square cells; cell `c` holds
+/// `xy[start[c]..start[c + 1]]`, whose original indices are in `idx`.
+#[derive(Debug, Clone, Default)]
+pub struct PointGrid {
+    x0: f64,
+    y0: f64,
+    cell: f64,
+    inv: f64,
+    nx: usize,
+    ny: usize,
+    start: Vec<u32>,
+    xy: Vec<[f64; 2]>,
+    idx: Vec<u32>,
+    /// Next free slot of each cell while binning (scratch).
+    fill: Vec<u32>,
+}
+
+/// Cells per point at most (bounds the grid over sparse, wide maps).
+const MAX_CELLS_PER_POINT: f64 = 64.0;
+
+impl PointGrid {
+    /// Whether the grid holds no point.
+    pub fn is_empty(&self) -> bool {
+        self.xy.is_empty()
+    }
+
+    /// Rebuilds the grid over `pts` (m) with cells of `cell` m, widened
+    /// where the points spread over so large an area that the grid would
+    /// exceed `MAX_CELLS_PER_POINT` cells per point. Non-finite points are
+    /// left out (never found).
+    pub fn build(&mut self, pts: &[[f64; 2]], cell: f64) {
+        self.xy.clear();
+        self.idx.clear();
+        self.start.clear();
+        let mut b = [f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY];
+        let mut finite = 0usize;
+        for p in pts.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
+            b = [
+                b[0].min(p[0]),
+                b[1].min(p[1]),
+                b[2].max(p[0]),
+                b[3].max(p[1]),
+            ];
+            finite += 1;
+        }
+        if finite == 0 {
+            self.nx = 0;
+            self.ny = 0;
+            return;
+        }
+        let (w, h) = (b[2] - b[0], b[3] - b[1]);
+        let area_cell = (w * h / (MAX_CELLS_PER_POINT * finite as f64)).sqrt();
+        self.cell = cell.max(area_cell).max(1e-6);
+        self.inv = 1.0 / self.cell;
+        self.x0 = b[0];
+        self.y0 = b[1];
+        self.nx = (w * self.inv) as usize + 1;
+        self.ny = (h * self.inv) as usize + 1;
+        self.bin(pts, finite);
+    }
+
+    /// The counting sort: cell counts, their prefix sums, then the points.
+    fn bin(&mut self, pts: &[[f64; 2]], finite: usize) {
+        let cells = self.nx * self.ny;
+        self.start.resize(cells + 1, 0);
+        let (x0, y0, inv, nx, ny) = (self.x0, self.y0, self.inv, self.nx, self.ny);
+        let cell_of = |p: &[f64; 2]| {
+            let ix = (((p[0] - x0) * inv) as usize).min(nx - 1);
+            let iy = (((p[1] - y0) * inv) as usize).min(ny - 1);
+            iy * nx + ix
+        };
+        let ok = |p: &&[f64; 2]| p[0].is_finite() && p[1].is_finite();
+        for p in pts.iter().filter(ok) {
+            self.start[cell_of(p) + 1] += 1;
+        }
+        for c in 0..cells {
+            self.start[c + 1] += self.start[c];
+        }
+        self.xy.resize(finite, [0.0; 2]);
+        self.idx.resize(finite, 0);
+        // Fill from each cell's end backwards, leaving `start` as it was.
+        self.fill.clear();
+        self.fill.extend_from_slice(&self.start[1..]);
+        for (i, p) in pts.iter().enumerate().rev().filter(|(_, p)| ok(p)) {
+            let c = cell_of(p);
+            self.fill[c] -= 1;
+            let k = self.fill[c] as usize;
+            self.xy[k] = *p;
+            self.idx[k] = i as u32;
+        }
+    }
+
+    /// Index and squared distance (m²) of the point nearest to `q` among
+    /// those closer than `max_dist` m; `None` when there is none. Ties go
+    /// to the point met first.
+    pub fn nearest(&self, q: [f64; 2], max_dist: f64) -> Option<(usize, f64)> {
+        if self.xy.is_empty() || !(q[0].is_finite() && q[1].is_finite()) {
+            return None;
+        }
+        let fx = (q[0] - self.x0) * self.inv;
+        let fy = (q[1] - self.y0) * self.inv;
+        let (cx, cy) = (floor(fx), floor(fy));
+        // Distance from q to the nearest border of its own (possibly
+        // virtual, outside the grid) cell: every point of ring r + 1 is at
+        // least r cells plus this far away.
+        let m = (fx - cx).min(cx + 1.0 - fx).min(fy - cy).min(cy + 1.0 - fy) * self.cell;
+        let (nx, ny) = (self.nx as i64, self.ny as i64);
+        // Rings beyond the grid on every side hold nothing.
+        let far = |v: f64, n: i64| (-v).max(v - (n - 1) as f64).max(0.0);
+        let r_min = far(cx, nx).max(far(cy, ny));
+        if (r_min - 1.0) * self.cell + m >= max_dist {
+            return None;
+        }
+        let (cx, cy) = (cx as i64, cy as i64);
+        let r_max = (cx.max(nx - 1 - cx)).max(cy.max(ny - 1 - cy));
+        let mut best = (usize::MAX, max_dist * max_dist);
+        let mut r = r_min as i64;
+        while r <= r_max {
+            self.search_ring(q, cx, cy, r, &mut best);
+            let bound = r as f64 * self.cell + m;
+            if bound * bound >= best.1 || bound > max_dist {
+                break;
+            }
+            r += 1;
+        }
+        (best.0 != usize::MAX).then(|| (self.idx[best.0] as usize, best.1))
+    }
+
+    /// Visits the cells at Chebyshev distance `r` from cell (`cx`, `cy`)
+    /// that lie in the grid, updating `best` (slot, squared distance).
+    fn search_ring(&self, q: [f64; 2], cx: i64, cy: i64, r: i64, best: &mut (usize, f64)) {
+        let (nx, ny) = (self.nx as i64, self.ny as i64);
+        let (x_lo, x_hi) = ((cx - r).max(0), (cx + r).min(nx - 1));
+        if r == 0 {
+            if (0..nx).contains(&cx) && (0..ny).contains(&cy) {
+                self.search_cell(q, (cy * nx + cx) as usize, best);
+            }
+            return;
+        }
+        for y in [cy - r, cy + r] {
+            if (0..ny).contains(&y) {
+                for x in x_lo..=x_hi {
+                    self.search_cell(q, (y * nx + x) as usize, best);
+                }
+            }
+        }
+        let (y_lo, y_hi) = ((cy - r + 1).max(0), (cy + r - 1).min(ny - 1));
+        for x in [cx - r, cx + r] {
+            if (0..nx).contains(&x) {
+                for y in y_lo..=y_hi {
+                    self.search_cell(q, (y * nx + x) as usize, best);
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn search_cell(&self, q: [f64; 2], c: usize, best: &mut (usize, f64)) {
+        let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
+        for (k, p) in self.xy[a..b].iter().enumerate() {
+            let d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]);
+            if d2 < best.1 {
+                *best = (a + k, d2);
+            }
+        }
+    }
+}
+
+/// `x.floor()` without a call into libm (the baseline x86-64 target has no
+/// rounding instruction).
+#[inline]
+fn floor(x: f64) -> f64 {
+    let t = x as i64 as f64;
+    if t > x {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Brute force: the nearest point within `max` (first of equals).
+    fn brute(pts: &[[f64; 2]], q: [f64; 2], max: f64) -> Option<(usize, f64)> {
+        let mut best: Option<(usize, f64)> = None;
+        for (i, p) in pts.iter().enumerate() {
+            let d2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+            if d2 < max * max && best.is_none_or(|b| d2 < b.1) {
+                best = Some((i, d2));
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn answers_as_brute_force_inside_outside_and_at_the_radius() {
+        // Walls, a cluster and a few strays, queried on a lattice that
+        // reaches well beyond the points, with radii from tiny to huge.
+        let mut pts = Vec::new();
+        for i in 0..200 {
+            let s = i as f64 * 0.037;
+            pts.push([s, 0.013 * (i % 5) as f64]);
+            pts.push([3.1 + 0.002 * (i % 3) as f64, -2.0 + s * 0.8]);
+        }
+        pts.extend([[-4.0, 9.0], [12.0, -3.5], [1.0, 1.0], [1.0, 1.0]]);
+        let mut g = PointGrid::default();
+        for cell in [0.05, 0.3, 2.0] {
+            g.build(&pts, cell);
+            for qi in 0..60 {
+                for qj in 0..50 {
+                    let q = [-6.0 + 0.33 * qi as f64, -5.0 + 0.31 * qj as f64];
+                    for max in [0.01, 0.2, 1.0, 50.0] {
+                        let got = g.nearest(q, max);
+                        let want = brute(&pts, q, max);
+                        assert_eq!(got.map(|g| g.1), want.map(|w| w.1), "{q:?} {max}");
+                        if let Some((i, d2)) = got {
+                            let p = pts[i];
+                            assert_eq!((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2), d2);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn empty_and_non_finite_find_nothing() {
+        let mut g = PointGrid::default();
+        g.build(&[], 0.1);
+        assert!(g.nearest([0.0, 0.0], 10.0).is_none());
+        g.build(&[[f64::NAN, 0.0], [1.0, 1.0]], 0.1);
+        assert_eq!(g.nearest([1.0, 1.2], 1.0).map(|n| n.0), Some(1));
+        assert!(g.nearest([f64::NAN, 1.0], 1.0).is_none());
+    }
+}
