@@ -9,8 +9,10 @@
 //! robot, forward for the simulator and inverse for the diagnosis).
 
 mod departures;
+mod faults;
 
 pub use departures::{invert_gain, Departures, Step};
+pub use faults::{FaultEffect, FAULT_NAMES};
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

@@ -197,6 +197,7 @@ fn experiment_changing_draws_run_0_over_time_with_the_particle_count() {
         robot: &robot,
         tables: None,
         icp: &IcpParams::default(),
+        diagnose: &Default::default(),
     };
     let out = run("changing", &inp, &settings, &d).unwrap();
     for f in [

@@ -280,9 +280,13 @@ fn cli_pipeline_chains_and_prints_the_contract_keys() {
             "gain.relative",
         ],
     );
-    assert!(
-        ["explained", "no-discrepancy", "unexplained"].contains(&dg["verdict"].as_str().unwrap())
-    );
+    assert!([
+        "explained",
+        "partly-explained",
+        "no-discrepancy",
+        "unexplained"
+    ]
+    .contains(&dg["verdict"].as_str().unwrap()));
     for f in ["report.md", "residuals.png", "regressors.png"] {
         assert!(rep.join(f).is_file(), "{f} missing");
     }

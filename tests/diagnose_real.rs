@@ -78,12 +78,27 @@ fn lego_robot_scans_lag_and_the_effective_track_is_wider_than_nominal() {
 
     let d = diagnose(&robot, &measured, &DiagnoseParams::default()).unwrap();
     show("lego, every candidate", &d);
-    assert_eq!(d.verdict, Verdict::Explained);
+    assert!(
+        matches!(d.verdict, Verdict::Explained | Verdict::PartlyExplained),
+        "{:?}",
+        d.verdict
+    );
     let lat = cause(&d, "latency").expect("latency named");
     let delay = lat.parameters["delay"];
     assert!((-0.5..-0.3).contains(&delay), "delay {delay}");
     assert!(lat.stderr["delay"] < 0.05);
     assert!(d.gain.relative > 0.15, "{:?}", d.gain);
+    // With every candidate, what the tracker supports: a track that turns
+    // the robot less than the nominal 150 mm (a wider base, or one that
+    // widens in turns as tracks skid), never an encoder gain that makes the
+    // tracker's error worse; and both errors against it shrink.
+    assert!(cause(&d, "encoder_gain").is_none(), "{:?}", d.causes);
+    let wider = cause(&d, "wheel_base_scale").is_some_and(|c| c.parameters["scale"] > 0.0)
+        || cause(&d, "turn_slip").is_some_and(|c| c.parameters["k"] > 0.0);
+    assert!(wider, "{:?}", d.causes);
+    let t = d.gain.trajectory.expect("tracker covers the held-out part");
+    assert!(t.rpe_after < t.rpe_before, "{t:?}");
+    assert!(t.ate_after.unwrap() < t.ate_before.unwrap(), "{t:?}");
 
     // The calibration family (latency, radii, wheel base): the wheel base
     // is what the data asks for, and it is wider than nominal.
@@ -160,7 +175,15 @@ fn censi_tuples_laser_mount_matches_the_authors_calibration() {
         let authors = censi::read_results(&dir.join(format!("{set}_results.json"))).unwrap();
         let d = pipeline::diagnose::run_tuples(&tuples, &robot, &p).unwrap();
         show(set, &d);
-        assert_eq!(d.verdict, Verdict::Explained);
+        // A turn-magnitude-dependent turn-rate residual of about 0.35 % is
+        // left on these sets (no table effect has that sign: a negative turn
+        // slip is unphysical), so "partly" is the honest verdict.
+        assert!(
+            matches!(d.verdict, Verdict::Explained | Verdict::PartlyExplained),
+            "{:?}",
+            d.verdict
+        );
+        assert!(cause(&d, "turn_slip").is_none(), "{:?}", d.causes);
         let l = cause(&d, "laser_offset").expect("laser mount named");
         assert_eq!(d.causes[0].effect, "laser_offset");
         let got = [l.parameters["x"], l.parameters["y"], l.parameters["yaw"]];
@@ -250,7 +273,33 @@ fn cli_diagnoses_censi_tuples_with_json_keys() {
         String::from_utf8_lossy(&out.stderr)
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["verdict"], "explained");
+    assert!(
+        v["verdict"] == "explained" || v["verdict"] == "partly-explained",
+        "{}",
+        v["verdict"]
+    );
+    // The shorter axle the authors measure is named as such, not as a
+    // negative turn slip.
+    let names: Vec<&str> = v["causes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["effect"].as_str().unwrap())
+        .collect();
+    assert!(
+        names.contains(&"wheel_base_scale") && !names.contains(&"turn_slip"),
+        "{names:?}"
+    );
+    let wb = v["causes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["effect"] == "wheel_base_scale")
+        .unwrap();
+    assert!(wb["parameters"]["scale"].as_f64().unwrap() < 0.0, "{wb}");
+    for r in v["remaining"].as_array().unwrap() {
+        assert!(r["stream"].is_string() && r["structure"].is_string() && r["unit"].is_string());
+    }
     let first = &v["causes"][0];
     assert_eq!(first["effect"], "laser_offset");
     let authors = censi::read_results(&dir.join("lstraight_results.json")).unwrap();

@@ -63,4 +63,6 @@ fn simulated_null_recording_blind_through_icp() {
     // merely name no cause (an `unexplained` verdict names none either).
     assert_eq!(d.verdict, Verdict::NoDiscrepancy, "{:?}", d.candidates);
     assert!(d.causes.is_empty(), "{:?}", d.causes);
+    assert!(d.faults.is_empty(), "{:?}", d.faults);
+    assert_eq!(d.verdict, Verdict::NoDiscrepancy, "{:?}", d.remaining);
 }

@@ -149,21 +149,28 @@ fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
     }
     out!("verdict: {}", pipeline::diagnose::verdict_word(&d));
     for c in &d.causes {
-        let params: Vec<String> = c
-            .parameters
-            .iter()
-            .map(|(k, v)| match c.stderr.get(k) {
-                Some(e) => format!("{k} = {v:.6} ± {e:.6}"),
-                None => format!("{k} = {v:.6}"),
-            })
-            .collect();
         out!(
             "  {}: {} (ΔBIC {:.1})",
             c.effect,
-            params.join(", "),
+            pipeline::diagnose::cause_parameters(c),
             c.delta_bic
         );
     }
+    for f in &d.faults {
+        out!("  fault {}: {}", f.name, f.evidence);
+        out!("    fix: {}", f.fix);
+    }
+    for r in &d.remaining {
+        out!(
+            "  left in {}: {}, {:.5} {} (p {:.1e})",
+            r.stream,
+            r.structure,
+            r.size,
+            r.unit,
+            r.p_value
+        );
+    }
+    out!("held out from t = {:.1} s", d.series.split);
     out!(
         "held-out residual RMSE {:.4} -> {:.4} ({:+.1} %)",
         d.gain.heldout_rmse_before,

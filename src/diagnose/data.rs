@@ -169,14 +169,15 @@ pub fn gyro_rows(gyro: &[GyroSample], span: (f64, f64), margin: f64, window: f64
     rows
 }
 
-/// Drops the rows far from the nominal model: a row is an outlier when one
-/// of its normalised residuals lies more than `sigma` robust σ (1.4826·MAD)
-/// from its group's median. Returns how many rows were dropped.
+/// Drops the rows far from model `x`: a row is an outlier when one of its
+/// normalised residuals lies more than `sigma` robust σ (1.4826·MAD) from
+/// its group's median. Returns how many rows were dropped.
 pub fn drop_outliers(
     replay: &Replay,
     icp: &mut Vec<IcpRow>,
     gyro: &mut Vec<GyroRow>,
     sigma: f64,
+    x: &Departures,
 ) -> usize {
     let before = icp.len() + gyro.len();
     let all = Part {
@@ -185,7 +186,7 @@ pub fn drop_outliers(
         gyro: gyro.as_slice(),
     };
     let mut e: [Vec<f64>; 4] = Default::default();
-    all.normalised(&Departures::default(), &mut e);
+    all.normalised(x, &mut e);
     let rb: Vec<(f64, f64)> = e.iter().map(|v| robust(v)).collect();
     let bad = |g: usize, v: f64| {
         let (c, s) = rb[g];

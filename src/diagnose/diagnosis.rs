@@ -13,8 +13,10 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Verdict {
-    /// Named causes explain the discrepancy.
+    /// Named causes explain the discrepancy and nothing is left.
     Explained,
+    /// Named causes explain part of it; `remaining` says what is left.
+    PartlyExplained,
     /// The nominal model agrees with the measurements within their noise.
     NoDiscrepancy,
     /// The residuals hold structure that no candidate explains.
@@ -47,6 +49,37 @@ impl Cause {
     }
 }
 
+/// A fault outside the effect table, named by its own name (never dressed
+/// as a table effect), with what shows it and how to fix it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Fault {
+    /// Its name (`swapped_wheels`, `mirrored_wheels`, `wheel_out_of_round`,
+    /// `floor_slip`, `varying_latency`).
+    pub name: String,
+    /// Its estimated size, with units in the keys' docs of each fault.
+    pub parameters: BTreeMap<String, f64>,
+    /// What in the data shows it.
+    pub evidence: String,
+    /// What to do about it.
+    pub fix: String,
+}
+
+/// Structure left in one stream's residuals after the extension.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Remaining {
+    /// The stream (`icp_v`, `icp_lateral`, `icp_w`, `gyro`).
+    pub stream: String,
+    /// The kind of structure: `bias`, `trend`, `speed-dependent`,
+    /// `turn-dependent`, `periodic in wheel angle`.
+    pub structure: String,
+    /// Its size in the stream's unit (per unit of the regressor).
+    pub size: f64,
+    /// The unit of `size`.
+    pub unit: String,
+    /// p-value of the test that found it.
+    pub p_value: f64,
+}
+
 /// The whole diagnosis.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnosis {
@@ -54,6 +87,10 @@ pub struct Diagnosis {
     pub verdict: Verdict,
     /// Named causes (empty unless explained), from the final joint fit.
     pub causes: Vec<Cause>,
+    /// Faults outside the effect table, under their own names.
+    pub faults: Vec<Fault>,
+    /// What the extension leaves (empty for `explained`).
+    pub remaining: Vec<Remaining>,
     /// Held-out gain of the extension.
     pub gain: Gain,
     /// Whether structure remains after the extension (explained verdicts).

@@ -17,20 +17,23 @@
 pub mod data;
 pub mod diagnosis;
 pub mod encoder_table;
+pub mod faults;
 pub mod fit;
 pub mod free;
 pub mod gain;
 pub mod model;
 pub mod odometry;
+pub mod remaining;
 pub mod residuals;
 pub mod run;
 pub mod select;
 pub mod series;
+pub mod stability;
 pub mod stats;
 pub mod synthetic;
 pub mod trajectory;
 
-pub use diagnosis::{Cause, Diagnosis, Verdict};
+pub use diagnosis::{Cause, Diagnosis, Fault, Remaining, Verdict};
 pub use gain::{Gain, StreamGain};
 pub use select::CandidateScore;
 pub use series::ResidualSeries;
@@ -76,8 +79,18 @@ pub struct DiagnoseParams {
     pub min_interval: f64,
     /// Time kept free at both ends of the wheel stream (s), bounding latency.
     pub margin: f64,
-    /// Residuals beyond this many robust σ of the nominal model are outliers.
+    /// Residuals beyond this many robust σ of the fitted model are
+    /// outliers: rows are first screened against the nominal model at four
+    /// times this (gross scan-matching failures only, so a large effect keeps
+    /// its evidence), then against the model selected on them.
     pub outlier_sigma: f64,
+    /// Span (s) of serial correlation the structure tests allow for
+    /// (Newey–West lags): scan matching errors stay correlated while the
+    /// robot sees the same geometry.
+    pub structure_lag: f64,
+    /// Sizes below which a leftover structure is not reported (what scan
+    /// matching alone leaves on null recordings).
+    pub floors: remaining::Floors,
     /// Maximum number of effects selected.
     pub max_effects: usize,
     /// Levenberg–Marquardt iterations per fit.
@@ -102,7 +115,9 @@ impl Default for DiagnoseParams {
             min_interval: 0.0,
             margin: 0.25,
             outlier_sigma: 8.0,
-            max_effects: 3,
+            structure_lag: 3.0,
+            floors: remaining::Floors::default(),
+            max_effects: 4,
             max_iter: 30,
             candidates: EFFECT_NAMES.iter().map(|s| s.to_string()).collect(),
         }
@@ -123,6 +138,7 @@ impl DiagnoseParams {
             ("gyro_window", self.gyro_window),
             ("trajectory_window", self.trajectory_window),
             ("outlier_sigma", self.outlier_sigma),
+            ("structure_lag", self.structure_lag),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return bad(format!("{k} must be positive, got {v}"));

@@ -3,13 +3,17 @@
 //! held-out part, then the gain, the structure tests and the verdict.
 
 use super::data::{drop_outliers, gyro_rows, icp_rows, merge_motions, GyroRow, IcpRow, Part};
-use super::diagnosis::{Cause, Diagnosis, Verdict};
+use super::diagnosis::{Cause, Diagnosis, Fault, Remaining, Verdict};
+use super::faults;
+use super::fit::Fit;
 use super::gain::heldout_gain;
 use super::model::Replay;
-use super::residuals::{has_structure, stream_stats, structure};
+use super::remaining::{remaining_tests, RemainingTest, PERIODIC};
+use super::residuals::{stream_stats, structure};
 use super::select::{forward, SelectSettings, Selection};
 use super::series::series;
-use super::stats::StructureTest;
+use super::stability::{self, StabilitySettings};
+use super::trajectory::trajectory_gain;
 use super::{DiagnoseError, DiagnoseParams, Measured};
 use crate::effects::{Departures, EffectKind};
 use crate::robot::RobotConfig;
@@ -22,70 +26,208 @@ pub fn run(
     p: &DiagnoseParams,
 ) -> Result<Diagnosis, DiagnoseError> {
     let origin = m.origin();
-    let replay = Replay::new(robot, m.wheels, origin, p.wheel_smoothing);
+    // Wheels wired the wrong way are rewired before anything else is fitted.
+    let rewired = faults::rewire(m.wheels, faults::wiring(m.wheels, m.motions));
+    let wheels = rewired.as_ref().map_or(m.wheels, |r| r.0.as_slice());
+    let replay = Replay::new(robot, wheels, origin, p.wheel_smoothing);
     let span = replay
         .span()
         .filter(|s| replay.len() >= 2 && s.1 > s.0)
         .ok_or_else(|| DiagnoseError::TooLittleData("fewer than 2 wheel samples".into()))?;
     let merged = merge_motions(m.motions, p.min_interval);
-    let mut icp = icp_rows(&merged, span, p.margin);
-    let mut gyro = gyro_rows(m.gyro, span, p.margin, p.gyro_window);
-    let outliers = drop_outliers(&replay, &mut icp, &mut gyro, p.outlier_sigma);
-    let split = Split::new(&icp, &gyro, span, p.holdout)?;
-    let (train, held) = split.parts(&replay, &icp, &gyro);
-    let all = Part {
-        replay: &replay,
-        icp: &icp,
-        gyro: &gyro,
-    };
-    let settings = settings(p, train, &split, origin);
-    let (sel, kept, heldout_rejected) = select_confirmed(train, held, settings, p.heldout_margin);
-    let model = if kept == 0 {
-        &sel.nominal
-    } else {
-        &sel.steps[kept - 1]
-    };
-    let nominal = Departures::default();
-    let xm = Departures::of(&model.effects);
-    // Gain on the held-out part, normalised by the final training scales.
-    let scale = model.scale;
-    let gain = heldout_gain(
-        held,
+    let icp0 = icp_rows(&merged, span, p.margin);
+    let gyro0 = gyro_rows(m.gyro, span, p.margin, p.gyro_window);
+    // Screen gross failures against the nominal model, select, then reject
+    // outliers against the selected model and select again on those rows.
+    let first = Pass::new(
+        &replay,
+        &icp0,
+        &gyro0,
+        &Departures::default(),
+        4.0 * p.outlier_sigma,
+        span,
+        p,
+        origin,
         m.reference,
-        &xm,
-        &scale,
-        split.time,
-        p.trajectory_window,
-    );
-    // Structure tests on all rows.
-    let structure_before = structure(all, &nominal, &sel.nominal.scale, p);
-    let structure_after = structure(all, &xm, &scale, p);
-    let causes: Vec<Cause> = (0..model.effects.len())
-        .map(|i| Cause::of(model, i, sel.delta_bic[i]))
-        .collect();
-    let all_b = all.physical(&nominal);
-    let all_a = all.physical(&xm);
-    let train_counts = train.counts();
-    Ok(Diagnosis {
-        assumptions: Default::default(),
-        wheel_source: None,
-        verdict: verdict(&causes, &structure_before, p.structure_alpha),
-        causes,
-        gain,
-        remaining_structure: has_structure(&structure_after, p.structure_alpha),
-        heldout_rejected,
-        candidates: sel.tried,
-        structure_before,
-        structure_after,
-        stats_before: stream_stats(&all_b),
-        stats_after: stream_stats(&all_a),
-        noise_scale: (0..4)
-            .filter(|g| train_counts[*g] > 0)
-            .map(|g| (super::data::GROUPS[g].to_string(), scale[g]))
-            .collect(),
-        rows: split.row_counts(icp.len(), gyro.len(), outliers),
-        series: series(&replay, &icp, &gyro, &all_b, &all_a, split.time),
-    })
+    )?;
+    let fitted = Departures::of(&first.model().effects);
+    let pass = Pass::new(
+        &replay,
+        &icp0,
+        &gyro0,
+        &fitted,
+        p.outlier_sigma,
+        span,
+        p,
+        origin,
+        m.reference,
+    )?;
+    let wiring: Vec<Fault> = rewired.into_iter().map(|r| r.1).collect();
+    Ok(pass.diagnosis(&replay, m, p, robot, wiring))
+}
+
+/// One selection on the rows kept by an outlier screen.
+struct Pass {
+    icp: Vec<IcpRow>,
+    gyro: Vec<GyroRow>,
+    outliers: usize,
+    split: Split,
+    sel: Selection,
+    kept: usize,
+    heldout_rejected: Vec<Cause>,
+}
+
+impl Pass {
+    /// Drops the rows beyond `sigma` robust σ of model `x`, splits and selects.
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        replay: &Replay,
+        icp0: &[IcpRow],
+        gyro0: &[GyroRow],
+        x: &Departures,
+        sigma: f64,
+        span: (f64, f64),
+        p: &DiagnoseParams,
+        origin: f64,
+        reference: &[crate::recording::StampedPose],
+    ) -> Result<Self, DiagnoseError> {
+        let (mut icp, mut gyro) = (icp0.to_vec(), gyro0.to_vec());
+        let outliers = drop_outliers(replay, &mut icp, &mut gyro, sigma, x);
+        let split = Split::new(&icp, &gyro, span, p.holdout)?;
+        let (train, held) = split.parts(replay, &icp, &gyro);
+        let settings = settings(p, train, &split, origin);
+        let check = Confirm {
+            margin: p.heldout_margin,
+            reference,
+            split: split.time,
+            window: p.trajectory_window,
+        };
+        let (sel, kept, heldout_rejected) = select_confirmed(train, held, settings, &check);
+        Ok(Self {
+            icp,
+            gyro,
+            outliers,
+            split,
+            sel,
+            kept,
+            heldout_rejected,
+        })
+    }
+
+    /// The selected model (the nominal one when nothing was kept).
+    fn model(&self) -> &Fit {
+        if self.kept == 0 {
+            &self.sel.nominal
+        } else {
+            &self.sel.steps[self.kept - 1]
+        }
+    }
+
+    /// Gain, structure tests and verdict of the selected model.
+    fn diagnosis(
+        &self,
+        replay: &Replay,
+        m: &Measured,
+        p: &DiagnoseParams,
+        robot: &RobotConfig,
+        mut faults: Vec<Fault>,
+    ) -> Diagnosis {
+        let (icp, gyro, split, sel) = (&self.icp, &self.gyro, &self.split, &self.sel);
+        let (_, held) = split.parts(replay, icp, gyro);
+        let all = Part { replay, icp, gyro };
+        let model = self.model();
+        let nominal = Departures::default();
+        let xm = Departures::of(&model.effects);
+        // Gain on the held-out part, normalised by the final training scales.
+        let scale = model.scale;
+        let gain = heldout_gain(
+            held,
+            m.reference,
+            &xm,
+            &scale,
+            split.time,
+            p.trajectory_window,
+        );
+        let structure_before = structure(all, &nominal, &sel.nominal.scale, p);
+        let structure_after = structure(all, &xm, &scale, p);
+        let causes: Vec<Cause> = (0..model.effects.len())
+            .map(|i| Cause::of(model, i, sel.delta_bic[i]))
+            .collect();
+        let st = StabilitySettings {
+            alpha: p.structure_alpha,
+            lag_seconds: p.structure_lag,
+            ..Default::default()
+        };
+        faults.extend(stability::latency_change(all, &xm, &st));
+        faults.extend(stability::floor_slip(all, &xm, &st));
+        let tests = remaining_tests(
+            all,
+            &xm,
+            p.structure_alpha,
+            p.structure_lag,
+            &p.floors,
+            robot,
+        );
+        let remaining = leftover(&tests, robot, &mut faults);
+        let verdict = verdict(&causes, &remaining, &faults);
+        let all_b = all.physical(&nominal);
+        let all_a = all.physical(&xm);
+        let train_counts = split.parts(replay, icp, gyro).0.counts();
+        Diagnosis {
+            assumptions: Default::default(),
+            wheel_source: None,
+            verdict,
+            causes,
+            faults,
+            remaining_structure: !remaining.is_empty(),
+            remaining,
+            gain,
+            heldout_rejected: self.heldout_rejected.clone(),
+            candidates: sel.tried.clone(),
+            structure_before,
+            structure_after,
+            stats_before: stream_stats(&all_b),
+            stats_after: stream_stats(&all_a),
+            noise_scale: (0..4)
+                .filter(|g| train_counts[*g] > 0)
+                .map(|g| (super::data::GROUPS[g].to_string(), scale[g]))
+                .collect(),
+            rows: split.row_counts(icp.len(), gyro.len(), self.outliers),
+            series: series(replay, icp, gyro, &all_b, &all_a, split.time),
+        }
+    }
+}
+
+/// The significant structures the model leaves; a periodic one in the
+/// wheel angles is an out-of-round wheel, reported as that fault (from the
+/// stream that shows it most clearly) instead of as a leftover.
+fn leftover(
+    tests: &[RemainingTest],
+    robot: &RobotConfig,
+    faults: &mut Vec<Fault>,
+) -> Vec<Remaining> {
+    let round = tests
+        .iter()
+        .filter(|t| t.significant && t.found.structure == PERIODIC)
+        .min_by(|a, b| a.found.p_value.total_cmp(&b.found.p_value));
+    if let Some(t) = round {
+        let c = &t.coefficients;
+        let g = super::data::GROUPS
+            .iter()
+            .position(|s| *s == t.found.stream)
+            .unwrap_or(0);
+        faults.push(faults::out_of_round(
+            &t.found,
+            &[c[1], c[2], c[3], c[4]],
+            g,
+            robot,
+        ));
+    }
+    tests
+        .iter()
+        .filter(|t| t.significant && !(round.is_some() && t.found.structure == PERIODIC))
+        .map(|t| t.found.clone())
+        .collect()
 }
 
 /// The held-out part: the rows after `time`, the training part those before.
@@ -188,6 +330,7 @@ fn settings(p: &DiagnoseParams, train: Part, split: &Split, origin: f64) -> Sele
         max_iter: p.max_iter,
         step_range: (split.start - origin + 1.0, split.time - origin - 1.0),
         step_min_rows: 30,
+        max_steps: p.max_effects,
     }
 }
 
@@ -200,26 +343,62 @@ fn select_confirmed(
     train: Part,
     held: Part,
     settings: SelectSettings,
-    margin: f64,
+    check: &Confirm,
 ) -> (Selection, usize, Vec<Cause>) {
-    let mut usable = settings.candidates.clone();
+    let mut settings = settings;
     let mut rejected: Vec<Cause> = Vec::new();
     loop {
-        let sel = forward(train, &usable, &settings);
-        let kept = confirmed(held, &sel, margin);
+        let sel = forward(train, &settings.candidates, &settings);
+        let kept = confirmed(held, &sel, check);
         if kept == sel.steps.len() {
             return (sel, kept, rejected);
         }
         let f = &sel.steps[kept];
         rejected.push(Cause::of(f, kept, sel.delta_bic[kept]));
         let name = f.effects[kept].name();
-        usable.retain(|c| c != name);
+        // A vetoed radius step leaves the steps kept before it.
+        let earlier = f.effects[..kept]
+            .iter()
+            .filter(|e| e.name() == name)
+            .count();
+        if name == EffectKind::RadiusStep.name() && earlier > 0 {
+            settings.max_steps = earlier;
+        } else {
+            settings.candidates.retain(|c| c != name);
+        }
     }
 }
 
+/// Relative increase of a trajectory error against the reference that
+/// counts as worse: refitting the earlier effects alongside a new one (a
+/// gyro bias, a laser mount, which leave the wheel odometry alone) moves
+/// that error by a per cent or two either way.
+const TRAJECTORY_TOLERANCE: f64 = 0.05;
+
+/// Absolute increase (m) of a trajectory error that counts as worse on top
+/// of [`TRAJECTORY_TOLERANCE`]: once an extension has brought the error down
+/// to a centimetre or so, refitting moves it by that much relative to itself.
+const TRAJECTORY_FLOOR: f64 = 0.01;
+
+/// What the held-out part must show for an effect to be kept.
+struct Confirm<'a> {
+    /// Least drop of the held-out χ².
+    margin: f64,
+    /// Reference poses (may be empty).
+    reference: &'a [crate::recording::StampedPose],
+    /// Start of the held-out part (s).
+    split: f64,
+    /// Window of the trajectory comparison (s).
+    window: f64,
+}
+
 /// How many of the nested models of the selection, in order, each drop the
-/// held-out χ² (normalised by the model's noise scales) by at least `margin`.
-fn confirmed(held: Part, sel: &Selection, margin: f64) -> usize {
+/// held-out χ² (normalised by the model's noise scales) by at least the
+/// margin and, where a reference covers the held-out part, make neither
+/// trajectory error against it worse (the windows' relative-pose error and,
+/// where the reference allows it, the 2D-aligned ATE): an independent
+/// measurement of where the robot went outranks a better fit to ICP.
+fn confirmed(held: Part, sel: &Selection, c: &Confirm) -> usize {
     let sse = |x: &Departures, scale: &[f64; 4]| {
         let mut e: [Vec<f64>; 4] = Default::default();
         held.normalised(x, &mut e);
@@ -234,8 +413,31 @@ fn confirmed(held: Part, sel: &Selection, margin: f64) -> usize {
         } else {
             Departures::of(&sel.steps[k - 1].effects)
         };
-        let drop = sse(&prev, &step.scale) - sse(&Departures::of(&step.effects), &step.scale);
-        if drop < margin {
+        let next = Departures::of(&step.effects);
+        let drop = sse(&prev, &step.scale) - sse(&next, &step.scale);
+        // A latency says which clock the laser keeps against the wheels, not
+        // which one the reference keeps: the odometry is compared unshifted,
+        // and a latency entering is not judged by the reference at all.
+        let unshifted = |x: &Departures| Departures {
+            latency: 0.0,
+            ..x.clone()
+        };
+        let (a, b) = (unshifted(&prev), unshifted(&next));
+        let clock = step
+            .effects
+            .last()
+            .is_some_and(|e| e.kind() == EffectKind::Latency);
+        let worse = !clock
+            && trajectory_gain(held.replay, c.reference, &a, &b, c.split, c.window).is_some_and(
+                |t| {
+                    let worse =
+                        |b: f64, a: f64| a > b * (1.0 + TRAJECTORY_TOLERANCE) + TRAJECTORY_FLOOR;
+                    let ate =
+                        matches!((t.ate_before, t.ate_after), (Some(b), Some(a)) if worse(b, a));
+                    ate || worse(t.rpe_before, t.rpe_after)
+                },
+            );
+        if drop < c.margin || worse {
             break;
         }
         kept = k + 1;
@@ -243,18 +445,14 @@ fn confirmed(held: Part, sel: &Selection, margin: f64) -> usize {
     kept
 }
 
-/// Explained when causes are named; otherwise unexplained when the nominal
-/// model's residuals hold structure, no discrepancy when they do not.
-fn verdict(
-    causes: &[Cause],
-    structure_before: &BTreeMap<String, StructureTest>,
-    alpha: f64,
-) -> Verdict {
-    if !causes.is_empty() {
-        Verdict::Explained
-    } else if has_structure(structure_before, alpha) {
-        Verdict::Unexplained
-    } else {
-        Verdict::NoDiscrepancy
+/// `explained` when causes (or faults) are named and nothing is left,
+/// `partly-explained` when something is; without causes, `unexplained` when
+/// the nominal model leaves structure and `no-discrepancy` when it does not.
+pub fn verdict(causes: &[Cause], remaining: &[Remaining], faults: &[Fault]) -> Verdict {
+    match (causes.is_empty() && faults.is_empty(), remaining.is_empty()) {
+        (false, true) => Verdict::Explained,
+        (false, false) => Verdict::PartlyExplained,
+        (true, false) => Verdict::Unexplained,
+        (true, true) => Verdict::NoDiscrepancy,
     }
 }

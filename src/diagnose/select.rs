@@ -6,7 +6,7 @@ use super::data::Part;
 use super::fit::{fit, wald, Fit};
 use super::free::{free_names, free_params, zero_effect};
 use super::stats::chi2_sf;
-use crate::effects::{Departures, Effect, Step};
+use crate::effects::{Departures, Effect, EffectKind, Step};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -27,6 +27,24 @@ pub struct CandidateScore {
     pub p_value: f64,
     /// Whether every parameter was identifiable from the data.
     pub identifiable: bool,
+    /// Whether the estimate is physically possible (see [`physical`]).
+    pub physical: bool,
+}
+
+/// Whether a fitted effect is physically possible: every parameter within
+/// the range the effect table allows it (either sign: a negative latency is
+/// a laser stream late against the encoders), and turn slip only widening
+/// the effective wheel base (wheels skid sideways in a turn, they never grip
+/// better than rolling), so a negative `turn_slip` is a shorter axle seen
+/// through the turns the run happened to make, left to `wheel_base_scale`.
+/// A radius drift of metres per hour standing in for a step or a scale over
+/// a short run is thereby refused, never returned.
+pub fn physical(e: &Effect) -> bool {
+    let within = e.kind().params().iter().zip(e.values()).all(|(p, v)| {
+        let b = p.bounds;
+        v.abs() <= b.lo.abs().max(b.hi.abs())
+    });
+    within && !matches!(e, Effect::TurnSlip { k } if *k < 0.0)
 }
 
 /// Settings of the selection (a slice of `DiagnoseParams`).
@@ -46,6 +64,8 @@ pub struct SelectSettings {
     pub step_range: (f64, f64),
     /// Minimum rows on each side of a radius step.
     pub step_min_rows: usize,
+    /// Most radius steps in one model.
+    pub max_steps: usize,
 }
 
 /// Result of the selection.
@@ -168,6 +188,7 @@ fn score(round: usize, f: &Fit, base_bic: f64) -> CandidateScore {
         delta_bic: base_bic - f.bic,
         p_value: chi2_sf(w, free_params(&f.effects[i]).len()),
         identifiable: f.identifiable,
+        physical: physical(&f.effects[i]),
     }
 }
 
@@ -185,7 +206,11 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
     for round in 0..s.max_effects {
         let mut best: Option<(Fit, f64)> = None;
         for name in usable {
-            if current.effects.iter().any(|e| e.name() == name) {
+            // Radius steps may repeat (a chair boards several users); any
+            // other effect enters once.
+            let repeats = name == EffectKind::RadiusStep.name();
+            let present = current.effects.iter().filter(|e| e.name() == name).count();
+            if present >= if repeats { s.max_steps } else { 1 } {
                 continue;
             }
             let Some(mut new) = zero_effect(name) else {
@@ -205,7 +230,10 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
             effs.push(new);
             let f = fit(part, &effs, current.scale, s.max_iter, 1);
             let sc = score(round, &f, current.bic);
-            let ok = sc.identifiable && sc.delta_bic > s.bic_margin && sc.p_value < s.alpha;
+            let ok = sc.identifiable
+                && sc.physical
+                && sc.delta_bic > s.bic_margin
+                && sc.p_value < s.alpha;
             tried.push(sc.clone());
             if ok && best.as_ref().is_none_or(|b| sc.delta_bic > b.1) {
                 best = Some((f, sc.delta_bic));
@@ -221,11 +249,84 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
             None => break,
         }
     }
+    let (model, delta_bic, steps) = prune(part, current, delta_bic, steps, s);
     Selection {
         nominal,
-        model: current,
+        model,
         delta_bic,
         steps,
         tried,
     }
+}
+
+/// Backward elimination after the forward pass: an effect that entered
+/// early can be made redundant by later ones (a radius drift standing in for
+/// a scale and a step until both are in), and later ones can move an
+/// earlier estimate out of its physical range. While some effect is
+/// unphysical, or its removal costs less than the BIC margin, or its
+/// parameters are no longer significant in the joint fit, the weakest such
+/// effect is removed. Returns the model,
+/// each effect's ΔBIC (BIC without it minus with it) and the nested models
+/// in the kept order.
+fn prune(
+    part: Part,
+    mut current: Fit,
+    delta_bic: Vec<f64>,
+    steps: Vec<Fit>,
+    s: &SelectSettings,
+) -> (Fit, Vec<f64>, Vec<Fit>) {
+    let mut removed = false;
+    loop {
+        let n = current.effects.len();
+        if n < 2 && current.effects.iter().all(physical) {
+            break;
+        }
+        let without: Vec<Fit> = (0..n)
+            .map(|i| {
+                let mut effs = current.effects.clone();
+                effs.remove(i);
+                fit(part, &effs, current.scale, s.max_iter, 1)
+            })
+            .collect();
+        let weakest = (0..n)
+            .map(|i| {
+                let cost = without[i].bic - current.bic;
+                let p = chi2_sf(wald(&current, i), free_params(&current.effects[i]).len());
+                (i, cost, p)
+            })
+            .map(|(i, cost, p)| {
+                // An estimate the joint fit moved out of its physical range
+                // goes first, whatever it buys.
+                let cost = if physical(&current.effects[i]) {
+                    cost
+                } else {
+                    f64::NEG_INFINITY
+                };
+                (i, cost, p)
+            })
+            .filter(|(_, cost, p)| *cost < s.bic_margin || *p >= s.alpha)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((i, _, _)) = weakest else {
+            break;
+        };
+        current = without[i].clone();
+        removed = true;
+    }
+    if !removed {
+        return (current, delta_bic, steps);
+    }
+    // The nested models of the kept effects in their order, and what each
+    // removal would cost.
+    let n = current.effects.len();
+    let nested: Vec<Fit> = (1..=n)
+        .map(|k| fit(part, &current.effects[..k], current.scale, s.max_iter, 1))
+        .collect();
+    let costs = (0..n)
+        .map(|i| {
+            let mut effs = current.effects.clone();
+            effs.remove(i);
+            fit(part, &effs, current.scale, s.max_iter, 1).bic - current.bic
+        })
+        .collect();
+    (current, costs, nested)
 }

@@ -1,6 +1,7 @@
 //! `odocal experiment NAME`: the experiment's name, settings and inputs in;
 //! `NAME.md`, `NAME.json` and `NAME.png` out.
 
+use super::blind::{blind_output, BlindParams};
 use super::heading_pf::{heading_pf_output, PfExperimentParams};
 use super::inputs::{bad, ExperimentInputs};
 use super::literature::{literature_output, LiteratureParams};
@@ -15,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// Experiment names `odocal experiment` knows.
-pub const EXPERIMENTS: [&str; 10] = [
+pub const EXPERIMENTS: [&str; 11] = [
     "resampling",
     "montecarlo",
     "montecarlo-scans",
@@ -25,6 +26,7 @@ pub const EXPERIMENTS: [&str; 10] = [
     "umbmark",
     "heading-pf",
     "tachometer",
+    "diagnose",
     "fleet",
 ];
 
@@ -42,6 +44,8 @@ pub struct ExperimentSettings {
     pub heading_pf: PfExperimentParams,
     /// `montecarlo-scans`.
     pub scans: ScanMonteCarloParams,
+    /// `diagnose` (the blind suite).
+    pub diagnose: BlindParams,
     /// `fleet` (`--runs` robots).
     pub fleet: super::fleet::FleetSimParams,
 }
@@ -97,6 +101,7 @@ pub fn run(job: &ExperimentJob) -> Result<ExperimentOutput, PipelineError> {
         robot: &robot,
         tables: job.tables.as_deref(),
         icp: &cfg.icp,
+        diagnose: &cfg.diagnose,
     };
     run_experiment(&job.name, &inputs, &settings, &job.out)
 }
@@ -125,6 +130,7 @@ pub fn run_experiment(
         "umbmark" => umbmark_output(inp, &settings.umbmark, &png)?,
         "heading-pf" => heading_pf_output(inp, &settings.heading_pf, &png)?,
         "tachometer" => tachometer_output(inp, &settings.square, &png)?,
+        "diagnose" => blind_output(inp, &settings.diagnose, out, &png)?,
         "fleet" => super::fleet::fleet_output(inp, &settings.fleet, out, &png)?,
         _ => monte_carlo(name, inp, &settings.scans, &png)?,
     };

@@ -22,6 +22,8 @@ pub struct ExperimentInputs<'a> {
     pub tables: Option<&'a Path>,
     /// Scan matching settings (`--config`'s `[icp]`), for montecarlo-scans.
     pub icp: &'a crate::icp::IcpParams,
+    /// Diagnosis settings (`--config`'s `[diagnose]`), for `diagnose`.
+    pub diagnose: &'a crate::diagnose::DiagnoseParams,
 }
 
 impl ExperimentInputs<'_> {

@@ -10,6 +10,7 @@
 //! simulated runs, summarises, and turns the seed tables (`io::seed_tables`)
 //! into their inputs.
 
+pub mod blind;
 mod compare;
 mod driver;
 pub mod fleet;

@@ -99,11 +99,13 @@ pub fn run(
     if let Some(d) = job.duration_s {
         cfg.sim.duration_s = d;
     }
-    let effects = job
-        .effects
-        .iter()
-        .map(|s| Effect::parse(s).map_err(|e| PipelineError::BadArgument(e.to_string())))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut effects = Vec::new();
+    for spec in &job.effects {
+        match parse_effect(spec)? {
+            Hidden::Effect(e) => effects.push(e),
+            Hidden::Fault(f) => cfg.sim.faults.push(f),
+        }
+    }
     simulate(
         &cfg.sim,
         &cfg.topics,
@@ -113,6 +115,29 @@ pub fn run(
         job.truth.as_deref(),
         progress,
     )
+}
+
+/// What a SPEC of `simulate --effect` hides: a table effect or a fault
+/// outside the table.
+enum Hidden {
+    Effect(Effect),
+    Fault(crate::effects::FaultEffect),
+}
+
+/// Parses a SPEC as a table effect, else as a fault outside the table.
+fn parse_effect(spec: &str) -> Result<Hidden, PipelineError> {
+    let name = spec.split(':').next().unwrap_or("").trim();
+    if crate::effects::FAULT_NAMES.contains(&name) {
+        return crate::effects::FaultEffect::parse(spec)
+            .map(Hidden::Fault)
+            .map_err(|e| PipelineError::BadArgument(e.to_string()));
+    }
+    Effect::parse(spec).map(Hidden::Effect).map_err(|e| {
+        PipelineError::BadArgument(format!(
+            "{e} (faults outside the table: {})",
+            crate::effects::FAULT_NAMES.join(", ")
+        ))
+    })
 }
 
 /// A built-in scenario by name, or a JSON scenario file (a path ending in

@@ -27,6 +27,10 @@ pub struct SimConfig {
     pub seed: u64,
     /// Rate (Hz) at which the true motion is integrated (exact arcs per step).
     pub integration_hz: f64,
+    /// Faults outside the effect table hidden in the run (`simulate --effect`
+    /// takes their SPECs too); left out of the settings written when none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub faults: Vec<crate::effects::FaultEffect>,
 }
 
 impl Default for SimConfig {
@@ -41,6 +45,7 @@ impl Default for SimConfig {
             duration_s: 120.0,
             seed: 1,
             integration_hz: 1000.0,
+            faults: Vec::new(),
         }
     }
 }

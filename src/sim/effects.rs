@@ -1,7 +1,7 @@
 //! The true robot: the nominal model changed by the injected effects
 //! (design.md's table). Effects of the same kind add up.
 
-use crate::effects::{Departures, Effect};
+use crate::effects::{Departures, Effect, FaultEffect};
 use crate::robot::{DiffDrive, LaserMount, RobotConfig};
 
 /// True kinematics and sensor departures of the simulated chair.
@@ -11,6 +11,8 @@ pub struct TrueRobot {
     departures: Departures,
     /// True laser mounting `base_from_laser`.
     pub laser: LaserMount,
+    /// Faults outside the effect table.
+    faults: Vec<FaultEffect>,
 }
 
 impl TrueRobot {
@@ -23,7 +25,44 @@ impl TrueRobot {
             nominal: robot.diff_drive(),
             laser: departures.laser_mount(&robot.laser.unwrap_or_default()),
             departures,
+            faults: Vec::new(),
         }
+    }
+
+    /// The same robot with faults outside the effect table.
+    pub fn with_faults(mut self, faults: &[FaultEffect]) -> Self {
+        self.faults = faults.to_vec();
+        self
+    }
+
+    /// True wheel rates (rad/s) after the faults that change how the wheels
+    /// roll: round-wheel `rates`, the wheels' true `angles` (rad), the
+    /// robot's world x (m).
+    pub fn faulty_rates(&self, rates: (f64, f64), angles: (f64, f64), x: f64) -> (f64, f64) {
+        self.faults
+            .iter()
+            .fold(rates, |r, f| f.wheel_rates(r, angles, x))
+    }
+
+    /// True time (s) at which the encoder reading stamped `stamp` was
+    /// taken: the latency, plus any change of it by then.
+    pub fn encoder_taken(&self, stamp: f64) -> f64 {
+        let extra: f64 = self.faults.iter().map(|f| f.extra_delay(stamp)).sum();
+        self.departures.encoder_taken(stamp) - extra
+    }
+
+    /// How far back (s) a latency that grows during the run can move the
+    /// time a later encoder reading was taken: the sum of the growths.
+    pub fn delay_margin(&self) -> f64 {
+        self.faults
+            .iter()
+            .map(|f| f.extra_delay(f64::INFINITY).max(0.0))
+            .sum()
+    }
+
+    /// The (right, left) angles the encoders' wiring reports.
+    pub fn wire(&self, angles: (f64, f64)) -> (f64, f64) {
+        self.faults.iter().fold(angles, |a, f| f.wire(a))
     }
 
     /// What the effects amount to.

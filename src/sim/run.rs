@@ -163,7 +163,12 @@ impl SimRun {
             seed: self.cfg.seed,
             duration_s: self.cfg.duration_s,
             nominal: self.nominal.clone(),
-            effect_specs: self.effects.iter().map(|e| e.to_string()).collect(),
+            effect_specs: self
+                .effects
+                .iter()
+                .map(|e| e.to_string())
+                .chain(self.cfg.faults.iter().map(|f| f.to_string()))
+                .collect(),
             effects: self.effects.clone(),
             parameters: (),
             laser_mount: self.true_robot.laser,
@@ -220,7 +225,7 @@ fn true_robot(
     robot
         .validate()
         .map_err(|e| SimError::Config(e.to_string()))?;
-    let true_robot = TrueRobot::new(robot, effects);
+    let true_robot = TrueRobot::new(robot, effects).with_faults(&cfg.faults);
     if !true_robot.radii_positive(cfg.duration_s) {
         return Err(SimError::Config(
             "the effects make a wheel radius or the wheel base non-positive".into(),

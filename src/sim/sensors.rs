@@ -83,10 +83,13 @@ impl WheelTrack {
         let mut right = Vec::with_capacity(drive.steps() + 1);
         let mut left = Vec::with_capacity(drive.steps() + 1);
         let (mut r, mut l) = (0.0, 0.0);
+        // True wheel angles (rad), for faults that depend on them.
+        let mut truth = (0.0, 0.0);
         right.push(r);
         left.push(l);
         for k in 0..drive.steps() {
-            let (dr, dl) = wheel_step(robot, k, dt, drive.v[k], drive.w[k]);
+            let x = drive.pose_at((k as f64 + 0.5) * dt)[0];
+            let (dr, dl) = wheel_step(robot, k, dt, (drive.v[k], drive.w[k]), &mut truth, x);
             r += dr;
             l += dl;
             right.push(r);
@@ -148,7 +151,7 @@ pub fn encoder_samples(
 ) -> Vec<WheelSample> {
     let enc = Encoder::new(ticks_per_rev, seed);
     sample_times(cfg.rate_hz, duration, 0.0)
-        .map(|t| enc.sample(t, track.at(robot.departures().encoder_taken(t))))
+        .map(|t| enc.sample(t, robot.wire(track.at(robot.encoder_taken(t)))))
         .collect()
 }
 
@@ -236,13 +239,15 @@ impl Encoders {
 
 impl Sensor for Encoders {
     type Sample = WheelSample;
+    /// The instant the reading was taken, and before it as far as a
+    /// latency that grows during the run can take a later reading back.
     fn reads(&self, t: f64) -> (f64, f64) {
-        let taken = self.robot.departures().encoder_taken(t);
-        (taken, taken)
+        let taken = self.robot.encoder_taken(t);
+        (taken - self.robot.delay_margin(), taken)
     }
     fn sample(&mut self, t: f64, tape: &Tape) -> WheelSample {
-        let taken = self.robot.departures().encoder_taken(t);
-        self.enc.sample(t, tape.wheels_at(taken))
+        let taken = self.robot.encoder_taken(t);
+        self.enc.sample(t, self.robot.wire(tape.wheels_at(taken)))
     }
 }
 

@@ -11,11 +11,23 @@ use super::effects::TrueRobot;
 use std::collections::VecDeque;
 
 /// The measured wheel angle increments (rad, right and left) over step `k`
-/// of `dt` s commanding `v` (m/s), `w` (rad/s): the true wheel rates that
-/// realise the command, as the encoders read them.
-pub(crate) fn wheel_step(robot: &TrueRobot, k: usize, dt: f64, v: f64, w: f64) -> (f64, f64) {
+/// of `dt` s commanding `v` (m/s), `w` (rad/s) with the body at `x` (m) in
+/// mid-step: the true wheel rates that realise the command, altered by the
+/// robot's faults (which may depend on the true wheel angles `truth`, rad,
+/// advanced here, and on where the robot is), as the encoders read them.
+pub(crate) fn wheel_step(
+    robot: &TrueRobot,
+    k: usize,
+    dt: f64,
+    (v, w): (f64, f64),
+    truth: &mut (f64, f64),
+    x: f64,
+) -> (f64, f64) {
     let t = (k as f64 + 0.5) * dt;
-    let (wr, wl) = robot.wheel_rates(t, v, w);
+    let rates = robot.wheel_rates(t, v, w);
+    let (wr, wl) = robot.faulty_rates(rates, *truth, x);
+    truth.0 += wr * dt;
+    truth.1 += wl * dt;
     (robot.measured_rate(wr) * dt, robot.measured_rate(wl) * dt)
 }
 
@@ -26,6 +38,8 @@ struct Wheels {
     robot: TrueRobot,
     /// Angles (rad, right and left) at the end of the last step integrated.
     now: (f64, f64),
+    /// True wheel angles (rad, right and left) there, for the faults.
+    truth: (f64, f64),
     /// Angles at the poses kept, `first..first + len`.
     right: VecDeque<f64>,
     left: VecDeque<f64>,
@@ -66,6 +80,7 @@ impl Tape {
         t.wheels = Some(Wheels {
             robot,
             now: (0.0, 0.0),
+            truth: (0.0, 0.0),
             right: VecDeque::from([0.0]),
             left: VecDeque::from([0.0]),
         });
@@ -113,11 +128,13 @@ impl Tape {
         };
         let k = self.next;
         self.next += 1;
+        let mid_x = 0.5 * (self.x[self.x.len() - 1] + s.end[0]);
         self.x.push_back(s.end[0]);
         self.y.push_back(s.end[1]);
         self.theta.push_back(s.end[2]);
         if let Some(w) = &mut self.wheels {
-            let (dr, dl) = wheel_step(&w.robot, k, self.driver.dt(), s.v, s.w);
+            let dt = self.driver.dt();
+            let (dr, dl) = wheel_step(&w.robot, k, dt, (s.v, s.w), &mut w.truth, mid_x);
             w.now.0 += dr;
             w.now.1 += dl;
             w.right.push_back(w.now.0);

@@ -63,6 +63,9 @@ pub struct LinePanel {
     pub y_label: String,
     /// Curves drawn in this panel.
     pub series: Vec<Series>,
+    /// This panel's own x-axis label (with unit), when its x is another
+    /// quantity than the chart's: it then gets its own x range and label.
+    pub x_label: Option<String>,
 }
 
 /// A figure of stacked panels sharing the x axis.
@@ -95,8 +98,24 @@ impl LineChart {
         self.panels.push(LinePanel {
             y_label: y_label.into(),
             series,
+            x_label: None,
         });
         self.size.1 += 340;
+        self
+    }
+
+    /// Adds a panel with its own x quantity (label with unit, own range).
+    pub fn panel_x(
+        mut self,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+        series: Vec<Series>,
+    ) -> Self {
+        self = self.panel(y_label, series);
+        if let Some(p) = self.panels.last_mut() {
+            p.x_label = Some(x_label.into());
+        }
+        self.size.1 += 20;
         self
     }
 }
@@ -121,7 +140,16 @@ fn series_colors(chart: &LineChart) -> Vec<(String, RGBColor, bool)> {
 /// Draws the chart into an RGB image.
 pub fn render_line_chart(chart: &LineChart) -> Result<Rgb, VizError> {
     let all = || chart.panels.iter().flat_map(|p| &p.series);
-    let x = padded_range(all().flat_map(|s| s.points.iter().map(|p| p[0])), 0.0)
+    let shared = || {
+        chart
+            .panels
+            .iter()
+            .filter(|p| p.x_label.is_none())
+            .flat_map(|p| &p.series)
+    };
+    let xs = |s: &Series| s.points.iter().map(|p| p[0]).collect::<Vec<_>>();
+    let x = padded_range(shared().flat_map(xs), 0.0)
+        .or_else(|| padded_range(all().flat_map(xs), 0.0))
         .ok_or_else(|| VizError::Input(format!("{}: no finite points", chart.title)))?;
     let colors = series_colors(chart);
     let names: Vec<&str> = colors.iter().map(|(n, _, _)| n.as_str()).collect();
@@ -131,8 +159,21 @@ pub fn render_line_chart(chart: &LineChart) -> Result<Rgb, VizError> {
         let areas = f.plots.split_evenly((chart.panels.len(), 1));
         let n = chart.panels.len();
         for (k, (panel, area)) in chart.panels.iter().zip(&areas).enumerate() {
-            let x_label = (k + 1 == n).then_some(chart.x_label.as_str());
-            draw_panel(area, panel, x, x_label, &colors)?;
+            let (range, x_label) = match &panel.x_label {
+                Some(l) => (
+                    padded_range(
+                        panel
+                            .series
+                            .iter()
+                            .flat_map(|s| s.points.iter().map(|p| p[0])),
+                        0.0,
+                    )
+                    .unwrap_or(x),
+                    Some(l.as_str()),
+                ),
+                None => (x, (k + 1 == n).then_some(chart.x_label.as_str())),
+            };
+            draw_panel(area, panel, range, x_label, &colors)?;
         }
         let entries: Vec<LegendEntry> = colors
             .iter()

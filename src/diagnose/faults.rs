@@ -1,0 +1,94 @@
+//! Faults outside the effect table, named by their own names and never
+//! fitted as a table effect: wheels wired the wrong way (swapped joints, an
+//! encoder counting backwards) and out-of-round wheels.
+//!
+//! Wiring: the calibration's own test ([`crate::calib::Evidence::wiring`]:
+//! the measured turn rate and speed regressed on the two wheel rates, seed
+//! 000 Eq. 1 wants W rising with the right wheel and falling with the left)
+//! on the ICP motions; a miswired stream is corrected before the replay, so
+//! the table effects are still diagnosed, and the fault is reported with its
+//! fix.
+
+use super::diagnosis::{Fault, Remaining};
+use crate::calib::{Evidence, Wiring};
+use crate::motion::{Motion, VelocityObs};
+use crate::recording::WheelSample;
+use std::collections::BTreeMap;
+
+/// The wiring the wheel rates show against the scan matching.
+pub fn wiring(wheels: &[WheelSample], motions: &[Motion]) -> Wiring {
+    let obs: Vec<VelocityObs> = motions
+        .iter()
+        .filter_map(VelocityObs::from_motion)
+        .collect();
+    let mut ev = Evidence::default();
+    for s in crate::calib::steps(&obs, wheels, &[], 1.0) {
+        ev.add(&s);
+    }
+    ev.wiring()
+}
+
+/// How a miswired sample is put right: (right, left) from the sample.
+type Rewire = fn(&WheelSample) -> (f64, f64);
+
+/// The wheel streams as they should have been wired, and the fault, when
+/// the wiring is wrong (`None` when it is consistent or cannot be told).
+pub fn rewire(wheels: &[WheelSample], w: Wiring) -> Option<(Vec<WheelSample>, Fault)> {
+    let (name, map): (&str, Rewire) = match w {
+        Wiring::Swapped => ("swapped_wheels", |s| (s.left, s.right)),
+        Wiring::LeftReversed => ("reversed_left_encoder", |s| (s.right, -s.left)),
+        Wiring::RightReversed => ("reversed_right_encoder", |s| (-s.right, s.left)),
+        Wiring::BothReversed => ("reversed_encoders", |s| (-s.right, -s.left)),
+        Wiring::Consistent | Wiring::Inconclusive => return None,
+    };
+    let fixed = wheels
+        .iter()
+        .map(|s| {
+            let (right, left) = map(s);
+            WheelSample {
+                stamp: s.stamp,
+                right,
+                left,
+            }
+        })
+        .collect();
+    let fault = Fault {
+        name: name.into(),
+        parameters: BTreeMap::new(),
+        evidence: "the scan-matched turn rate regressed on the two wheel rates has the signs \
+                   of this wiring (W must rise with the right wheel and fall with the left); \
+                   the diagnosis below replays the wheels rewired"
+            .into(),
+        fix: w.fault().unwrap_or_default().to_string(),
+    };
+    Some((fixed, fault))
+}
+
+/// An out-of-round wheel from the periodic structure the extended model
+/// leaves in stream `g` (`periodic` that test's finding, `coefficients` on
+/// ω_R cos φ_R, ω_R sin φ_R, ω_L cos φ_L, ω_L sin φ_L in the stream's unit
+/// per rad/s): each wheel's radius wobble relative to its radius.
+pub fn out_of_round(
+    periodic: &Remaining,
+    coefficients: &[f64; 4],
+    g: usize,
+    robot: &crate::robot::RobotConfig,
+) -> Fault {
+    let rel = |a: f64, b: f64| super::remaining::wobble(a.hypot(b), g, robot);
+    let mut parameters = BTreeMap::new();
+    parameters.insert("right".to_string(), rel(coefficients[0], coefficients[1]));
+    parameters.insert("left".to_string(), rel(coefficients[2], coefficients[3]));
+    Fault {
+        name: "wheel_out_of_round".into(),
+        parameters,
+        evidence: format!(
+            "the {} residual follows the sine and cosine of the wheel angles, once per \
+             revolution (p = {:.1e}, Newey–West); sizes are each wheel's radius wobble \
+             relative to its radius",
+            periodic.stream, periodic.p_value
+        ),
+        fix: "true the wheel or replace the tyre; no constant calibration removes a \
+              once-per-revolution radius change"
+            .into(),
+    }
+}
