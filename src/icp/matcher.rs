@@ -234,7 +234,7 @@ impl ScanMatcher {
                 let p = &self.params;
                 let measured = self
                     .velocity
-                    .is_some_and(|v| v.cond >= p.prior_blend_conditioning);
+                    .is_some_and(|v| v.cond >= p.prior_blend_conditioning && v.agreed);
                 let [lo, hi] = p.prior_sigma_bounds;
                 let cv = cv.as_ref().filter(|_| measured);
                 let (c, s) = self.model.prior(&g, cv, p.prior_sigma_xy, (lo, hi));
@@ -443,8 +443,10 @@ impl ScanMatcher {
             self.threshold.update(&geom::between(&init, &motion));
             if time_ok {
                 self.learn(&motion, source, u.conditioning);
+                let agreed = self.info.prior_conflict <= CONFLICT || self.steady(&motion, dt);
                 self.velocity = Some(Velocity {
                     cond: u.conditioning,
+                    agreed,
                     inc: motion,
                     dt,
                     t1,
@@ -592,6 +594,22 @@ impl ScanMatcher {
             conflict,
             split,
         }
+    }
+
+    /// Whether a matched `motion` over `dt` (s) keeps the speed of the last
+    /// valid motion within what the robot can change in between
+    /// (`max_accel`, plus `speed_slack` per pair): a sustained contradiction
+    /// of the odometry (a reversal it missed) does, a single wrong match
+    /// does not.
+    fn steady(&self, motion: &Pose2, dt: f64) -> bool {
+        let Some(v) = self.velocity else {
+            return false;
+        };
+        let (a, _) = geom::arc_of_increment(&v.inc);
+        let (b, _) = geom::arc_of_increment(motion);
+        let p = &self.params;
+        let slack = p.max_accel * 0.5 * (dt + v.dt) + p.speed_slack / dt.min(v.dt);
+        (b / dt - a / v.dt).abs() <= slack
     }
 
     /// The previous valid motion's velocity carried over `dt` (s), if any.
@@ -784,6 +802,11 @@ impl ScanMatcher {
 struct Velocity {
     /// Conditioning of its match (see `MatchInfo::conditioning`).
     cond: f64,
+    /// Whether its scans agreed with their prior term (`CONFLICT`), or kept
+    /// the previous velocity ([`ScanMatcher::steady`]): a single match
+    /// against the odometry that jumps in speed (a wrong match) does not
+    /// speak for the next pair's prior centre.
+    agreed: bool,
     /// The motion (`prev_from_cur`).
     inc: Pose2,
     /// Its duration (s).
