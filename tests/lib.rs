@@ -32,6 +32,7 @@ mod fleet_cli;
 mod fleet_math;
 mod fuzz_regressions;
 mod icp_bad_input;
+mod icp_corridor;
 mod icp_odometry_faults;
 mod icp_real;
 mod icp_relations;

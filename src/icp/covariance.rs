@@ -34,6 +34,8 @@ pub struct Correspondence {
     pub residual: f64,
     /// Robust weight in [0, 1] of that residual.
     pub weight: f64,
+    /// Variance (rad²) of the reference line's direction (0 when exact).
+    pub tilt_var: f64,
 }
 
 /// Covariance and conditioning of one match.
@@ -48,6 +50,11 @@ pub struct Uncertainty {
     pub weak_direction: [f64; 3],
     /// Weighted RMS residual (m).
     pub rms: f64,
+    /// The information (inverse covariance, of x, y, θ) the scan measured
+    /// beyond what its lines' direction noise alone would show (see
+    /// [`measured`]): zero along a direction the geometry leaves free even
+    /// where noisy line fits make `cov` look finite there.
+    pub measured: Matrix3<f64>,
 }
 
 /// Weighted sums over the correspondences at one pose.
@@ -62,6 +69,9 @@ struct Information {
     wsum: f64,
     /// `Σ w |R p|²` (m²), for the RMS range.
     r2sum: f64,
+    /// `Σ w σ_α² J_α J_αᵀ`: the expected part of `h` that is the lines'
+    /// direction noise (see [`measured`]).
+    floor: Matrix3<f64>,
 }
 
 /// Estimates the uncertainty of pose `[x, y, θ]` from its correspondences;
@@ -73,6 +83,7 @@ pub fn estimate(corrs: &[Correspondence], pose: [f64; 3], inflation: f64) -> Opt
         dof,
         wsum,
         r2sum,
+        floor,
     } = information(corrs, pose);
     if !(dof > 3.0) || !(wsum > 0.0) {
         return None;
@@ -80,13 +91,16 @@ pub fn estimate(corrs: &[Correspondence], pose: [f64; 3], inflation: f64) -> Opt
     let var = (ss / (dof - 3.0)).max(MIN_RESIDUAL_STD * MIN_RESIDUAL_STD);
     let cov = h.try_inverse()? * (var * inflation);
     let (conditioning, weak_direction) = conditioning(&h, r2sum / wsum);
+    let m = measured(&h, &floor) / (var * inflation);
     let u = Uncertainty {
         cov: (cov + cov.transpose()) * 0.5,
         conditioning,
         weak_direction,
         rms: (ss / dof).sqrt(),
+        measured: (m + m.transpose()) * 0.5,
     };
-    (u.cov.iter().all(|x| x.is_finite()) && u.conditioning.is_finite()).then_some(u)
+    let finite = u.cov.iter().chain(u.measured.iter()).all(|x| x.is_finite());
+    (finite && u.conditioning.is_finite()).then_some(u)
 }
 
 /// The weighted information at `pose`: per correspondence with a normal the
@@ -95,6 +109,7 @@ pub fn estimate(corrs: &[Correspondence], pose: [f64; 3], inflation: f64) -> Opt
 fn information(corrs: &[Correspondence], pose: [f64; 3]) -> Information {
     let at = Placement::new(pose);
     let mut h = Matrix3::zeros();
+    let mut floor = Matrix3::zeros();
     let (mut ss, mut dof, mut wsum, mut r2sum) = (0.0, 0.0, 0.0, 0.0);
     for k in corrs {
         let m = at.apply(k.p);
@@ -105,6 +120,9 @@ fn information(corrs: &[Correspondence], pose: [f64; 3]) -> Information {
             Some(n) => {
                 let (e, j) = metric::residual_and_jacobian(&m, k.q, n);
                 h += k.weight * j * j.transpose();
+                // A tilt δα turns n by δα n⊥: J moves by δα J(n⊥).
+                let ja = metric::jacobian(rp, [-n[1], n[0]]);
+                floor += (k.weight * k.tilt_var) * ja * ja.transpose();
                 ss += k.weight * e * e;
                 dof += k.weight;
             }
@@ -125,7 +143,43 @@ fn information(corrs: &[Correspondence], pose: [f64; 3]) -> Information {
         dof,
         wsum,
         r2sum,
+        floor,
     }
+}
+
+/// Information beyond the noise floor counts only from this many times the
+/// floor: fewer than that and the direction is not told apart from the
+/// lines' direction noise (in a featureless corridor the axis shows 1–1.5).
+pub const MEASURED_FACTOR: f64 = 4.0;
+
+/// The information `h` (`Σ w J Jᵀ`) less its part that is the reference
+/// lines' direction noise. A line fitted through noisy points has a normal
+/// `n + δα n⊥` with `E[δα²] = σ_α²`, so `E[J Jᵀ] = J₀ J₀ᵀ + σ_α² J(n⊥) J(n⊥)ᵀ`:
+/// along a straight wall, every fitted line's random tilt adds information
+/// along the wall that the wall does not hold (`floor` = the sum of those
+/// terms). In the generalised eigenbasis of `h` against `floor`
+/// (`h v = λ floor v`), a direction keeps `λ − 1` times the floor where
+/// `λ ≥ MEASURED_FACTOR`, else nothing. Without a floor (exact lines), `h`.
+pub fn measured(h: &Matrix3<f64>, floor: &Matrix3<f64>) -> Matrix3<f64> {
+    let eps = 1e-12 * h.trace().max(0.0);
+    let Some(l) = (floor + Matrix3::identity() * eps).cholesky() else {
+        return *h;
+    };
+    let l = l.l();
+    let Some(li) = l.try_inverse() else {
+        return *h;
+    };
+    let w = li * h * li.transpose();
+    let eig = SymmetricEigen::new((w + w.transpose()) * 0.5);
+    let g = eig.eigenvalues.map(|lam| {
+        if lam >= MEASURED_FACTOR {
+            lam - 1.0
+        } else {
+            0.0
+        }
+    });
+    let u = eig.eigenvectors;
+    l * u * Matrix3::from_diagonal(&g) * u.transpose() * l.transpose()
 }
 
 /// Smallest over largest eigenvalue of the information `h` with θ in metres
@@ -166,6 +220,7 @@ mod tests {
                 normal: Some([0.0, 1.0]),
                 residual: if i % 2 == 0 { -0.01 } else { 0.01 },
                 weight: 1.0,
+                tilt_var: 0.0,
             })
             .collect()
     }
@@ -187,6 +242,7 @@ mod tests {
             normal: Some([1.0, 0.0]),
             residual: if i % 2 == 0 { -0.01 } else { 0.01 },
             weight: 1.0,
+            tilt_var: 0.0,
         }));
         let u = estimate(&c, [0.0; 3], 1.0).unwrap();
         assert!(u.conditioning > 1e-3);
@@ -197,5 +253,53 @@ mod tests {
             u.cov
         );
         assert!((u.rms - 0.01).abs() < 1e-9);
+    }
+
+    #[test]
+    fn tilt_noise_along_a_wall_is_not_measured_information() {
+        // Two walls whose fitted normals are tilted by ±0.15 rad of noise
+        // (tilt variance 0.15²): the tilts look like information along x.
+        let tilt = 0.15f64;
+        let mut c: Vec<Correspondence> = [1.0, -1.0]
+            .iter()
+            .flat_map(|&y| wall(y, 40))
+            .enumerate()
+            .map(|(i, mut k)| {
+                let a = if i % 3 == 0 { tilt } else { -0.7 * tilt };
+                k.normal = Some([-a.sin(), a.cos()]);
+                k.tilt_var = tilt * tilt;
+                k
+            })
+            .collect();
+        let u = estimate(&c, [0.0; 3], 1.0).unwrap();
+        assert!(u.cov[(0, 0)].is_finite() && u.conditioning > 1e-4, "{u:?}");
+        // Measured: (almost) nothing along x, y as before.
+        let full = u.cov.try_inverse().unwrap();
+        assert!(
+            u.measured[(0, 0)] < 0.1 * full[(0, 0)],
+            "{} vs {full}",
+            u.measured
+        );
+        assert!(
+            u.measured[(1, 1)] > 0.5 * full[(1, 1)],
+            "{} vs {full}",
+            u.measured
+        );
+        // An end wall measures x: it keeps its information there.
+        c.extend((0..20).map(|i| Correspondence {
+            p: [3.0, i as f64 * 0.1 - 1.0],
+            q: [3.0, i as f64 * 0.1 - 1.0],
+            normal: Some([1.0, 0.0]),
+            residual: if i % 2 == 0 { -0.01 } else { 0.01 },
+            weight: 1.0,
+            tilt_var: tilt * tilt,
+        }));
+        let u = estimate(&c, [0.0; 3], 1.0).unwrap();
+        let full = u.cov.try_inverse().unwrap();
+        assert!(
+            u.measured[(0, 0)] > 0.5 * full[(0, 0)],
+            "{} vs {full}",
+            u.measured
+        );
     }
 }

@@ -234,7 +234,7 @@ impl ScanMatcher {
                 let p = &self.params;
                 let measured = self
                     .velocity
-                    .is_some_and(|v| v.cond >= p.prior_blend_conditioning);
+                    .is_some_and(|v| v.cond >= p.prior_blend_conditioning && v.agreed);
                 let [lo, hi] = p.prior_sigma_bounds;
                 let cv = cv.as_ref().filter(|_| measured);
                 let (c, s) = self.model.prior(&g, cv, p.prior_sigma_xy, (lo, hi));
@@ -463,6 +463,7 @@ impl ScanMatcher {
         let Attempt {
             reg,
             ref_from_cur,
+            cov: own_cov,
             motion,
             init,
             source,
@@ -473,9 +474,9 @@ impl ScanMatcher {
         let cov = if self.params.local_map {
             // motion = inv(W_last) W_cur, both registered against the map.
             let (ja, jb) = between_jacobians(&self.ref_from_last, &ref_from_cur);
-            ja * self.last_cov * ja.transpose() + jb * u.cov * jb.transpose()
+            ja * self.last_cov * ja.transpose() + jb * own_cov * jb.transpose()
         } else {
-            u.cov
+            own_cov
         };
         let time_ok = self.within_limits(&motion, &cov, dt);
         let bridged = self.misses > 0;
@@ -483,8 +484,10 @@ impl ScanMatcher {
             self.threshold.update(&geom::between(&init, &motion));
             if time_ok {
                 self.learn(&motion, source, u.conditioning);
+                let agreed = self.info.prior_conflict <= CONFLICT || self.steady(&motion, dt);
                 self.velocity = Some(Velocity {
                     cond: u.conditioning,
+                    agreed,
                     inc: motion,
                     dt,
                     t1,
@@ -493,7 +496,7 @@ impl ScanMatcher {
                 });
             }
         }
-        self.advance(ref_from_cur, u.cov);
+        self.advance(ref_from_cur, own_cov);
         Motion {
             iterations: reg.iterations,
             inliers: reg.inliers as u32,
@@ -585,14 +588,23 @@ impl ScanMatcher {
         self.info.threshold = set.threshold;
         self.info.source_points = self.src.len();
         self.info.reference_points = self.reference.len();
-        let ref_from_cur = geom::pose(reg.pose[0], reg.pose[1], reg.pose[2]);
-        let motion = geom::between(&self.ref_from_last, &ref_from_cur);
         let conflict = reg.uncertainty.map_or(0.0, |u| {
             prior_conflict(&reg.pose, &init, &set.prior_precision, &u.cov)
         });
+        let prec = &set.prior_precision;
         let split = reg
             .uncertainty
-            .map(|u| info_split(&reg.pose, &init, &set.prior_precision, &u.cov));
+            .map(|u| info_split(&reg.pose, &init, prec, &u.cov, &u.measured));
+        let held = prec.iter().any(|&v| v > 0.0);
+        let (pose, cov) = match (reg.uncertainty, &split) {
+            (Some(u), Some(sp)) if held => {
+                split_estimate(sp, &init, prec, &u.measured).unwrap_or((reg.pose, u.cov))
+            }
+            (Some(u), _) => (reg.pose, u.cov),
+            _ => (reg.pose, Matrix3::zeros()),
+        };
+        let ref_from_cur = geom::pose(pose[0], pose[1], pose[2]);
+        let motion = geom::between(&self.ref_from_last, &ref_from_cur);
         // Only points with a surface of their own can ever be matched
         // (clutter, isolated returns and open ends never are): the inlier
         // fraction counts those.
@@ -616,6 +628,7 @@ impl ScanMatcher {
         Attempt {
             reg,
             ref_from_cur,
+            cov,
             motion,
             failure,
             init: *prior,
@@ -623,6 +636,22 @@ impl ScanMatcher {
             conflict,
             split,
         }
+    }
+
+    /// Whether a matched `motion` over `dt` (s) keeps the speed of the last
+    /// valid motion within what the robot can change in between
+    /// (`max_accel`, plus `speed_slack` per pair): a sustained contradiction
+    /// of the odometry (a reversal it missed) does, a single wrong match
+    /// does not.
+    fn steady(&self, motion: &Pose2, dt: f64) -> bool {
+        let Some(v) = self.velocity else {
+            return false;
+        };
+        let (a, _) = geom::arc_of_increment(&v.inc);
+        let (b, _) = geom::arc_of_increment(motion);
+        let p = &self.params;
+        let slack = p.max_accel * 0.5 * (dt + v.dt) + p.speed_slack / dt.min(v.dt);
+        (b / dt - a / v.dt).abs() <= slack
     }
 
     /// The previous valid motion's velocity carried over `dt` (s), if any.
@@ -815,6 +844,11 @@ impl ScanMatcher {
 struct Velocity {
     /// Conditioning of its match (see `MatchInfo::conditioning`).
     cond: f64,
+    /// Whether its scans agreed with their prior term (`CONFLICT`), or kept
+    /// the previous velocity ([`ScanMatcher::steady`]): a single match
+    /// against the odometry that jumps in speed (a wrong match) does not
+    /// speak for the next pair's prior centre.
+    agreed: bool,
     /// The motion (`prev_from_cur`).
     inc: Pose2,
     /// Its duration (s).
@@ -831,6 +865,9 @@ struct Velocity {
 struct Attempt {
     reg: Registration,
     ref_from_cur: Pose2,
+    /// Covariance of `ref_from_cur`: the scan's, or with a prior term, that
+    /// of the estimate of [`split_estimate`].
+    cov: Matrix3<f64>,
     motion: Pose2,
     failure: Option<PairFailure>,
     /// The initial guess (motion since the last scan) it started from.
@@ -880,32 +917,65 @@ fn prior_conflict(pose: &[f64; 3], init: &[f64; 3], prec: &[f64; 3], cov: &Matri
 /// The information split of a registration's `pose` (all in the reference
 /// frame) between the scan and a prior term centred at `init` with
 /// precision `prec` (diagonal, 1/m², 1/m², 1/rad²), given the scan-only
-/// covariance `cov`: the scan-only optimum `pose + cov·P·off` (`off` =
-/// `pose − init`, as in [`prior_conflict`]) and `K = (I + cov·P)⁻¹`, with
-/// which `pose = K·scan + (I − K)·init` to first order. `K = I` without a
-/// prior term; where `cov` is not finite (a direction the scan leaves
-/// free), that direction's share is 0 and the pose is kept.
+/// covariance `cov` of the registration's cost and the information `info`
+/// the scan measured beyond its lines' direction noise
+/// (`Uncertainty::measured`): the scan-only optimum `own = pose + cov·P·off`
+/// (`off` = `pose − init`, as in [`prior_conflict`]) and
+/// `K = (info + P)⁻¹ info`, the share of each direction the scan measured.
+/// `K = I` without a prior term; where the result is not finite, `own` is
+/// the pose and the share 0.
 fn info_split(
     pose: &[f64; 3],
     init: &[f64; 3],
     prec: &[f64; 3],
     cov: &Matrix3<f64>,
+    info: &Matrix3<f64>,
 ) -> ([f64; 3], Matrix3<f64>) {
+    if prec.iter().all(|&p| p == 0.0) {
+        return (*pose, Matrix3::identity());
+    }
     let off = Vector3::new(
         pose[0] - init[0],
         pose[1] - init[1],
         geom::wrap_angle(pose[2] - init[2]),
     );
     let p = Matrix3::from_diagonal(&Vector3::from(*prec));
-    let cp = cov * p;
-    let own = Vector3::from(*pose) + cp * off;
-    let k = (Matrix3::identity() + cp).try_inverse();
+    let own = Vector3::from(*pose) + cov * p * off;
+    let k = (info + p).try_inverse().map(|s| s * info);
     match k {
         Some(k) if k.iter().all(|v| v.is_finite()) && own.iter().all(|v| v.is_finite()) => {
             ([own.x, own.y, geom::wrap_angle(own.z)], k)
         }
         _ => (*pose, Matrix3::zeros()),
     }
+}
+
+/// The estimate that follows from a split (`own`, `k`) and the prior
+/// term's centre `init`: `init + K (own − init)` (θ wrapped), i.e. the
+/// scan's own estimate only as far as the scan measured it, and its
+/// covariance `(info + P)⁻¹` (`P` = diag(`prec`)). Where the scan's lines
+/// hold more information than they measure (noise-tilted fits along a
+/// wall), this, not the registration's optimum, is the pair's motion.
+fn split_estimate(
+    (own, k): &([f64; 3], Matrix3<f64>),
+    init: &[f64; 3],
+    prec: &[f64; 3],
+    info: &Matrix3<f64>,
+) -> Option<([f64; 3], Matrix3<f64>)> {
+    let d = Vector3::new(
+        own[0] - init[0],
+        own[1] - init[1],
+        geom::wrap_angle(own[2] - init[2]),
+    );
+    let x = Vector3::from(*init) + k * d;
+    let cov = (info + Matrix3::from_diagonal(&Vector3::from(*prec))).try_inverse()?;
+    let ok = x.iter().chain(cov.iter()).all(|v| v.is_finite());
+    ok.then(|| {
+        (
+            [x.x, x.y, geom::wrap_angle(x.z)],
+            (cov + cov.transpose()) * 0.5,
+        )
+    })
 }
 
 /// Failed scans in a row after which the local map is given up for a new
@@ -978,7 +1048,7 @@ mod tests {
         assert!((got - want).abs() < 1e-9 * want, "{got} {want}");
         // The information split of that fused optimum recovers the
         // scan-only estimate, and K·xs + (I − K)·init is the fused optimum.
-        let (own, k) = info_split(&fused.into(), &init.into(), &prec, &c);
+        let (own, k) = info_split(&fused.into(), &init.into(), &prec, &c, &ci);
         for i in 0..3 {
             assert!((own[i] - xs[i]).abs() < 1e-9, "{own:?} {xs}");
         }

@@ -24,7 +24,11 @@
 //!   against the matched motions, learned per recording; the prior term is
 //!   centred on their inverse-variance blend (`prior_blend_rate`).
 //! - `covariance`: Hessian × residual variance × inflation; the choice and the
-//!   inflation are explained there.
+//!   inflation are explained there; and the information measured beyond the
+//!   fitted lines' direction noise (range noise tilts short line fits, which
+//!   looks like information along a featureless wall), which decides how
+//!   much of each direction a motion owes to the scan and how much to the
+//!   prior term (`matcher`).
 //! - `matcher`: the pair-by-pair [`ScanMatcher`] with prior selection,
 //!   retries of failed matches from the constant-velocity guess, failure
 //!   flags, and a local map kept across a few failed scans; `stream`: the

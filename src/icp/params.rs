@@ -77,7 +77,9 @@ pub struct IcpParams {
     /// Standard deviation (m) of the given prior's translation (the wheel
     /// odometry), per pair: a weak prior term in the registration that holds
     /// the directions the geometry leaves loose (a corridor's axis) at the
-    /// odometry. 0 = no prior term. The covariance stays the scan's alone.
+    /// odometry. 0 = no prior term. A motion owes to the scan only the
+    /// information it measured beyond its lines' direction noise; its
+    /// covariance is that information plus the prior term's, inverted.
     pub prior_sigma_xy: f64,
     /// Same for the given prior's heading change (rad).
     pub prior_sigma_theta: f64,

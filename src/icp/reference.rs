@@ -38,6 +38,9 @@ struct Line {
     scored: bool,
     /// Mean squared distance of the fitted points from the line (m²).
     score: f64,
+    /// Spread of the fitted points along the line, `Σ (tᵀ (p − c))²` (m²):
+    /// with the scatter across it, the variance of the line's direction.
+    spread: f64,
 }
 
 impl Line {
@@ -82,6 +85,9 @@ pub struct Reference {
     length: f64,
     /// Mean squared fit distances of the lines (scratch for the median).
     scatter: Vec<f64>,
+    /// Their median (m²), at least `MIN_SCATTER²`: the typical scatter of a
+    /// point across its surface.
+    typical: f64,
     /// Prefix sums of x, y, x², xy, y² along one surface (scratch).
     prefix: Vec<[f64; 5]>,
     /// Score and fit of every window along one surface (scratch).
@@ -101,6 +107,9 @@ pub struct Closest {
     pub vertex_dist: f64,
     /// Index of the nearest reference point.
     pub index: usize,
+    /// Variance (rad²) of the fitted line's direction from the scatter of
+    /// its points (see [`Reference::tilt_variance`]).
+    pub tilt_var: f64,
 }
 
 impl Reference {
@@ -268,6 +277,7 @@ impl Reference {
                     fitted: true,
                     scored: m >= 2,
                     score,
+                    spread: (f.sxx + f.syy - f.ss).max(0.0),
                 };
                 if m >= 2 {
                     self.scatter.push(score);
@@ -282,6 +292,7 @@ impl Reference {
     /// `SCATTER_LIMIT` times the median of `self.scatter` (the scored
     /// lines' scores).
     fn limit_scatter(&mut self) {
+        self.typical = MIN_SCATTER * MIN_SCATTER;
         if self.scatter.is_empty() {
             for l in &mut self.lines {
                 l.ok = l.fitted;
@@ -290,7 +301,8 @@ impl Reference {
         }
         let mid = self.scatter.len() / 2;
         let typical = *self.scatter.select_nth_unstable_by(mid, f64::total_cmp).1;
-        let limit = SCATTER_LIMIT * typical.max(MIN_SCATTER * MIN_SCATTER);
+        self.typical = typical.max(self.typical);
+        let limit = SCATTER_LIMIT * self.typical;
         for l in &mut self.lines {
             l.ok = l.fitted && l.score <= limit;
         }
@@ -441,7 +453,24 @@ impl Reference {
             residual: e,
             vertex_dist: d2.sqrt(),
             index: j,
+            tilt_var: self.tilt_variance(l),
         })
+    }
+
+    /// Variance (rad²) of the direction of line `l`: the scatter across it
+    /// (its own, at least the reference's typical one — the straightest
+    /// window was chosen for a small scatter) over the spread of its points
+    /// along it, as for the slope of a least-squares line. Range noise alone
+    /// tilts a line fitted over a few centimetres of wall by tenths of a
+    /// radian: information along a wall that is only this noise is not
+    /// measured (see `covariance`). At most 1 rad².
+    fn tilt_variance(&self, l: &Line) -> f64 {
+        let across = l.score.max(self.typical);
+        if l.spread > 0.0 {
+            (across / l.spread).min(1.0)
+        } else {
+            1.0
+        }
     }
 }
 

@@ -240,6 +240,7 @@ fn associate(
             normal: Some(cl.normal),
             residual: cl.residual,
             weight: 1.0,
+            tilt_var: cl.tilt_var,
         });
     }
 }
