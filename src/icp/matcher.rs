@@ -361,13 +361,10 @@ impl ScanMatcher {
         // Scans that contradict the prior term (odometry that froze, slipped
         // or lost the sign of a reversal) beyond `CONFLICT` are matched again
         // without it, from the same guess: the scans, not the odometry, are
-        // what the motion is measured by — where they say so: the match
-        // without the prior must hold at least as many of the scan's points
-        // as the one with it, or it is a neighbouring minimum the prior kept
-        // the first match out of.
+        // what the motion is measured by.
         if best.failure.is_none() && best.conflict > CONFLICT {
             let alt = self.attempt_with(prior, source, false);
-            if alt.failure.is_none() && alt.reg.inliers >= best.reg.inliers {
+            if alt.failure.is_none() {
                 best = alt;
             }
         }
@@ -383,45 +380,7 @@ impl ScanMatcher {
         if source == PriorSource::Given && best.failure.is_some() {
             best = self.retry_from_guesses(best, prior, source, possible, dt);
         }
-        if self.few_inliers(&best) {
-            best = self.retry_from_velocity(best, prior, source, possible, dt);
-        }
         best
-    }
-
-    /// Whether a successful match holds under [`FEW_INLIERS`] of the inliers
-    /// of the last good one: in a fast turn, a neighbouring minimum of the
-    /// registration with half the points matched and twice the rotation
-    /// (MIT-CSAIL at 702.65 s, where the ranges' rounding alone decides
-    /// which minimum the first match falls into).
-    fn few_inliers(&self, best: &Attempt) -> bool {
-        best.failure.is_none()
-            && self
-                .velocity
-                .is_some_and(|v| (best.reg.inliers as f64) < FEW_INLIERS * v.inliers as f64)
-    }
-
-    /// A match with few inliers tried again from the constant-velocity
-    /// guess (with a `possible` prior, the retry must agree with it); the
-    /// one with more inliers is kept: the scans decide.
-    fn retry_from_velocity(
-        &mut self,
-        best: Attempt,
-        prior: &Pose2,
-        source: PriorSource,
-        possible: bool,
-        dt: f64,
-    ) -> Attempt {
-        let Some(cv) = self.constant_velocity(dt) else {
-            return best;
-        };
-        let alt = self.attempt(&cv, PriorSource::ConstantVelocity);
-        let admissible = !possible || self.agrees_with_prior(&alt.motion, prior, source);
-        if admissible && alt.improves_on(&best) {
-            alt
-        } else {
-            best
-        }
     }
 
     /// A failed match from a given prior, tried again from the
@@ -492,7 +451,6 @@ impl ScanMatcher {
                     dt,
                     t1,
                     cov,
-                    inliers: reg.inliers,
                 });
             }
         }
@@ -857,8 +815,6 @@ struct Velocity {
     t1: f64,
     /// Its covariance (m², rad²).
     cov: Matrix3<f64>,
-    /// Inliers of its match.
-    inliers: usize,
 }
 
 /// One registration and its verdict, before the matcher's state changes.
@@ -988,9 +944,6 @@ const MAX_VELOCITY_AGE: f64 = 1.0;
 /// Squared Mahalanobis distance (3 dof) beyond which the scans contradict the
 /// prior term: the χ² 99.9 % quantile.
 const CONFLICT: f64 = 16.27;
-/// Fraction of the last good match's inliers below which a successful match
-/// is tried again from the constant-velocity guess.
-const FEW_INLIERS: f64 = 2.0 / 3.0;
 
 /// Odometry increments below this (m, rad) are a robot standing still (or a
 /// frozen reading).
