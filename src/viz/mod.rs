@@ -3,6 +3,7 @@
 //! plots ([`plot`]) and a markdown [`report`]. Nothing here is imported by the
 //! math modules; the logger takes plain numbers, poses and points.
 
+mod clock;
 mod logger;
 pub mod plot;
 pub mod report;
@@ -12,11 +13,14 @@ mod rerun_layout;
 mod rerun_logger;
 pub mod shapes;
 mod subsample;
+mod trail;
 
+pub use clock::ScanClock;
 pub use logger::{entity, CalibEstimate, Logger, NullLogger, Stamp, TrajectoryKind};
 #[cfg(feature = "rerun")]
 pub use rerun_logger::{RerunLogger, RerunOptions, RerunSink};
 pub use subsample::systematic_subsample;
+pub use trail::{Trail, TrailUpdate};
 
 /// Failures of recording, plotting or report writing.
 #[derive(Debug, thiserror::Error)]
