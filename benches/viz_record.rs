@@ -1,6 +1,7 @@
 //! Cost of recording a whole run to `.rrd`: 6,000 scans × 541 points and
 //! 6,000 filter steps of 8,000 particles (subsampled to 256 for display),
-//! with estimates, ICP quality and four 6,000-pose trajectories.
+//! with estimates, ICP quality and its covariance ellipse (and their trail),
+//! and four 6,000-pose trajectories grown along both timelines.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Point2;
@@ -41,11 +42,14 @@ fn run() -> Run {
 fn record(dir: &std::path::Path, r: &Run) {
     let mut log = RerunLogger::to_file(dir.join("bench.rrd")).unwrap();
     let mut poses = Vec::with_capacity(SCANS);
+    let mut times = Vec::with_capacity(SCANS);
+    let mount = pose(-0.45, 0.0, std::f64::consts::PI);
     for i in 0..SCANS {
         let at = Stamp::new(i as i64, 0.1 * i as f64);
         let p = pose(0.01 * i as f64, 0.0, 0.001 * i as f64);
         poses.push(p);
-        log.scan(at, &p, &r.points).unwrap();
+        times.push(at.time);
+        log.scan(at, &p, &mount, &r.points).unwrap();
         log.particles(at, &r.rr, &r.rl, &r.w).unwrap();
         let e = CalibEstimate {
             params: [0.32, 0.32, 0.65],
@@ -55,9 +59,11 @@ fn record(dir: &std::path::Path, r: &Run) {
         };
         log.estimate(at, &e).unwrap();
         log.icp(at, 6, 1e-4).unwrap();
+        log.icp_covariance(at, &p, [[4e-6, 1e-6], [1e-6, 2e-6]])
+            .unwrap();
     }
     for k in TrajectoryKind::ALL {
-        log.trajectory(k, &poses).unwrap();
+        log.trajectory(k, &times, &poses).unwrap();
     }
     log.finish().unwrap();
 }

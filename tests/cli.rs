@@ -452,14 +452,17 @@ fn check_run_rrd(test: &str, rrd: &Path, scans: usize, steps: usize, map: bool) 
     if map {
         entities.insert(entity::MAP.into(), json!({"static": true, "rows": 1}));
     }
-    // Each trajectory: its full line (static) and the line grown along the
-    // time line (at most 300 rows, the default).
+    // Each trajectory: its full line (static) and the line grown along both
+    // timelines (at most 300 rows, the default).
     for kind in odocal::viz::TrajectoryKind::ALL {
         entities.insert(
             kind.full_entity().into(),
             json!({"static": true, "rows": 1, "instances": {"LineStrips2D:strips": 1}}),
         );
-        entities.insert(kind.entity().into(), json!({"timelines": [entity::TIME]}));
+        entities.insert(
+            kind.entity().into(),
+            json!({"timelines": [entity::SCAN, entity::TIME]}),
+        );
     }
     // The robot at every scan, its laser and heading, the scan in the laser frame.
     for e in [entity::ROBOT, entity::SCAN_POINTS] {
@@ -479,6 +482,23 @@ fn check_run_rrd(test: &str, rrd: &Path, scans: usize, steps: usize, map: bool) 
     ] {
         entities.insert(e.into(), json!({"rows": scans - 1, "first": {"scan": 1}}));
     }
+    // The trail of every match's ellipse: a block of 2^L ellipses on level L
+    // for each binary digit the count of matches has had, level L first
+    // used at the 2^L-th match (scan 2^L); at the last scan it shows all
+    // `scans - 1` of them.
+    let matches = scans - 1;
+    let mut level = 0;
+    while 1 << level <= matches {
+        entities.insert(
+            entity::trail_level(level),
+            json!({"first": {"scan": 1 << level}}),
+        );
+        level += 1;
+    }
+    let cursors = [
+        json!({"prefix": entity::ICP_COVARIANCE_TRAIL, "timeline": entity::SCAN,
+        "at": scans - 1, "component": "LineStrips2D:strips", "want": matches}),
+    ];
     for e in [
         entity::PARTICLES,
         entity::PARTICLES_SHOWN,
@@ -498,6 +518,7 @@ fn check_run_rrd(test: &str, rrd: &Path, scans: usize, steps: usize, map: bool) 
         "timelines": [entity::SCAN, entity::TIME],
         "exact": true,
         "entities": entities,
+        "cursors": cursors,
     });
     let exp = rrd.with_extension("expect.json");
     std::fs::write(&exp, serde_json::to_vec_pretty(&expect).unwrap()).unwrap();

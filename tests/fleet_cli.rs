@@ -9,7 +9,7 @@ use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn odocal(args: &[&str]) -> Output {
+pub fn odocal(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_odocal"))
         .args(args)
         .output()
@@ -26,7 +26,7 @@ fn ok_json(out: &Output) -> Value {
 }
 
 /// Two robots × two days of 20 s corridor runs, laid out ROBOT/DATE/run.mcap.
-fn tiny_fleet(dir: &Path) {
+pub fn tiny_fleet(dir: &Path) {
     for (robot, seed0) in [("chair-a", 10), ("chair-b", 20)] {
         for day in 0..2 {
             let path = dir.join(format!("{robot}/2026-03-0{}/run.mcap", day + 1));
@@ -186,4 +186,24 @@ fn bad_fleets_are_refused_naming_what_to_fix() {
         "{e}"
     );
     assert!(e.contains("pip install './python[ray]'"), "{e}");
+}
+
+/// `--rrd` in a build without Rerun: refused before any work.
+#[cfg(not(feature = "rerun"))]
+#[test]
+fn fleet_rrd_without_rerun_is_refused() {
+    let d = scratch("fleet_rrd_no_rerun");
+    tiny_fleet(&d.join("fleet"));
+    let out_dir = d.join("out");
+    let e = refused(&odocal(&[
+        "fleet",
+        d.join("fleet").to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--rrd",
+        d.join("fleet.rrd").to_str().unwrap(),
+    ]));
+    assert!(e.contains("without the `rerun` feature"), "{e}");
+    assert!(!out_dir.join("cache").exists(), "work was done: {e}");
+    assert!(!d.join("fleet.rrd").exists());
 }

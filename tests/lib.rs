@@ -59,6 +59,7 @@ mod sim_memory;
 mod sim_scenario;
 mod sim_sensors;
 mod support;
+mod viz_fleet_rrd;
 mod viz_logger;
 mod viz_plot;
 mod viz_report;

@@ -13,7 +13,7 @@ use serde_json::{json, Value};
 use std::path::Path;
 use std::process::Command;
 
-fn run_check(test: &str, rrd: &Path, expect: &Value) -> bool {
+pub fn run_check(test: &str, rrd: &Path, expect: &Value) -> bool {
     let Some(py) = python_with(test, &["rerun", "pyarrow"]) else {
         return false;
     };
@@ -76,19 +76,18 @@ fn rerun_recording_matches_what_was_logged() {
         "instances": {"LineStrips2D:strips": shape.map_segments}}),
     );
     // Each trajectory: the whole line (static) and the line grown to each
-    // pose, on the time line only (23 poses: one row each).
+    // pose (23 poses: one row each), on both timelines: pose i is at scan i.
     for kind in TrajectoryKind::ALL {
         entities.insert(
             kind.full_entity().into(),
             json!({"static": true, "rows": 1,
             "instances": {"LineStrips2D:strips": 1}}),
         );
-        entities.insert(
-            kind.entity().into(),
-            json!({"rows": shape.scans, "timelines": [entity::TIME],
-            "instances": {"LineStrips2D:strips": shape.scans, "LineStrips2D:colors": shape.scans},
-            "first": {"time": 10.0}, "last": {"time": last_t}}),
-        );
+        let mut grown = temporal(shape.scans, 0);
+        grown["instances"] =
+            json!({"LineStrips2D:strips": shape.scans, "LineStrips2D:colors": shape.scans});
+        grown["first"]["time"] = json!(10.0);
+        entities.insert(kind.entity().into(), grown);
     }
     // The robot moves under its transform; laser and heading hang on it.
     let mut robot = temporal(shape.scans, 0);
@@ -103,10 +102,18 @@ fn rerun_recording_matches_what_was_logged() {
     scan["instances"] = json!({"Points2D:positions": shape.scans * shape.beams});
     scan["first"]["time"] = json!(10.0);
     entities.insert(entity::SCAN_POINTS.into(), scan);
-    // One ellipse per scan match, 33 points (closed).
+    // One ellipse per scan match, 33 points (closed); its colour static.
     let mut ell = temporal(steps, 1);
-    ell["instances"] = json!({"LineStrips2D:strips": steps});
+    ell["instances"] = json!({"LineStrips2D:strips": steps, "LineStrips2D:colors": 1});
     entities.insert(entity::ICP_COVARIANCE.into(), ell);
+    // The trail: levels of 1, 2, 4, 8 and 16 ellipses for 22 matches. What
+    // they show is pinned by the cursors below, not how they store it.
+    for level in 0..5 {
+        entities.insert(
+            entity::trail_level(level),
+            json!({"first": {"scan": (1 << level) as i64}}),
+        );
+    }
     let mut parts = temporal(steps, 1);
     parts["instances"] = json!({"Points2D:positions": steps * shown,
         "Points2D:colors": steps * shown, "Points2D:radii": steps * shown});
@@ -128,11 +135,36 @@ fn rerun_recording_matches_what_was_logged() {
         e["instances"] = json!({"Scalars:scalars": steps});
         entities.insert(s.into(), e);
     }
+    // What the viewer draws with the cursor at scan k: the ellipses of the
+    // k matches so far (the k-th ends at scan k), 33 points each, on either
+    // timeline; the latest one alone on its own entity; each grown line
+    // through poses 0..=k, ending at the robot.
+    let mut cursors = Vec::new();
+    for k in 0..shape.scans as i64 {
+        let t = 10.0 + 0.1 * k as f64 + 1e-6;
+        for (tl, at) in [(entity::SCAN, json!(k)), (entity::TIME, json!(t))] {
+            cursors.push(
+                json!({"prefix": entity::ICP_COVARIANCE_TRAIL, "timeline": tl,
+                "at": at, "component": "LineStrips2D:strips", "want": k}),
+            );
+        }
+        cursors.push(
+            json!({"prefix": entity::ICP_COVARIANCE_TRAIL, "timeline": entity::SCAN,
+            "at": k, "component": "LineStrips2D:strips", "depth": 2, "want": 33 * k}),
+        );
+        for kind in [TrajectoryKind::Icp, TrajectoryKind::Reference] {
+            cursors.push(
+                json!({"prefix": kind.entity(), "timeline": entity::SCAN, "at": k,
+                "component": "LineStrips2D:strips", "depth": 2, "want": k + 1}),
+            );
+        }
+    }
     let expect = json!({
         "version": "0.36.3",
         "timelines": [entity::SCAN, entity::TIME],
         "exact": true,
         "entities": entities,
+        "cursors": cursors,
         // The layout it opens on: the world, the estimates, the cloud, ICP.
         "blueprint": ["/world", "/", "/calib/particles", "/icp"],
     });

@@ -18,6 +18,19 @@ EXPECT is a JSON object:
       ...
     }
   }
+    "cursors": [                          # optional: what a latest-at viewer shows
+      {"prefix": "world/icp_covariance/trail",  # every entity at or below it
+       "timeline": "scan", "at": 10,            # the cursor
+       "component": "LineStrips2D:strips",
+       "depth": 1,                               # 1: count the rows' instances
+                                                 # 2: count the points inside them
+       "want": 10},
+      ...
+    ]
+  }
+A cursor sums, over the entities at or below "prefix", the instances of "component"
+in each entity's latest row at or before "at" on "timeline" (the row the viewer
+draws there; nothing for an entity with no row yet).
 The recording's blueprint (a separate store in the file) is not counted among the
 entities; its view origins are listed under "blueprint" in the summary.
 "rows" counts logged rows (one per log call or per send_columns row); "instances"
@@ -46,8 +59,9 @@ def norm(path):
 
 
 def timeline_value(col):
-    """Numbers of a timeline column: sequence as int, duration as seconds."""
-    if pa.types.is_duration(col.type):
+    """Numbers of a timeline column: sequence as int, duration and timestamp
+    as seconds (since 1970 for a timestamp)."""
+    if pa.types.is_duration(col.type) or pa.types.is_timestamp(col.type):
         unit = col.type.unit
         scale = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}[unit]
         ints = pc.cast(col, pa.int64())
@@ -55,9 +69,19 @@ def timeline_value(col):
     return col.to_pylist()
 
 
-def scan(path):
-    """Per entity: static rows, temporal rows, timelines, instances, first/last."""
+def row_counts(col, depth):
+    """Per row: the list length (depth 1) or the summed inner lengths (depth 2)."""
+    if depth == 1:
+        return pc.list_value_length(col).fill_null(0).to_pylist()
+    return [sum(len(inner or []) for inner in (row or [])) for row in col.to_pylist()]
+
+
+def scan(path, cursors=()):
+    """Per entity: static rows, temporal rows, timelines, instances, first/last;
+    and, for the entities under a cursor's prefix, every temporal row's timeline
+    values and counts (in "rows_of", used by check_cursors)."""
     found = {}
+    wanted = [(norm(c["prefix"]), c["component"], c.get("depth", 1)) for c in cursors]
     for chunk in rrx.RrdReader(path).stream():
         ent = str(chunk.entity_path)
         if ent.startswith("/__"):
@@ -65,7 +89,7 @@ def scan(path):
         e = found.setdefault(
             ent,
             {"static_rows": 0, "rows": 0, "timelines": None, "instances": {},
-             "first": {}, "last": {}},
+             "first": {}, "last": {}, "rows_of": []},
         )
         rb = chunk.to_record_batch()
         n = chunk.num_rows
@@ -81,6 +105,13 @@ def scan(path):
                     lo, hi = min(vals), max(vals)
                     e["first"][tl] = lo if tl not in e["first"] else min(e["first"][tl], lo)
                     e["last"][tl] = hi if tl not in e["last"] else max(e["last"][tl], hi)
+            for prefix, comp, depth in wanted:
+                if (ent == prefix or ent.startswith(prefix + "/")) and comp in rb.schema.names:
+                    counts = row_counts(rb.column(comp), depth)
+                    stamps = {tl: timeline_value(rb.column(tl)) for tl in tls}
+                    for i, c in enumerate(counts):
+                        e["rows_of"].append(
+                            ({tl: v[i] for tl, v in stamps.items()}, comp, depth, c))
         for name in rb.schema.names:
             if ":" not in name:
                 continue
@@ -94,6 +125,32 @@ def scan(path):
     for e in found.values():
         e["timelines"] = sorted(e["timelines"] or [])
     return found
+
+
+def check_cursors(found, cursors):
+    """What a latest-at viewer shows at each cursor, summed under its prefix."""
+    problems = []
+    for c in cursors:
+        prefix, tl, at = norm(c["prefix"]), c["timeline"], c["at"]
+        comp, depth = c["component"], c.get("depth", 1)
+        total = 0
+        for ent, e in found.items():
+            if not (ent == prefix or ent.startswith(prefix + "/")):
+                continue
+            best = None
+            for stamps, cc, dd, count in e["rows_of"]:
+                v = stamps.get(tl)
+                if cc != comp or dd != depth or v is None or v > at:
+                    continue
+                # Rows at the same stamp: the later one is drawn.
+                if best is None or v >= best[0]:
+                    best = (v, count)
+            if best is not None:
+                total += best[1]
+        if total != c["want"]:
+            problems.append(
+                f"{prefix} at {tl} {at}: {total} {comp} (depth {depth}), want {c['want']}")
+    return problems
 
 
 def close(a, b):
@@ -174,13 +231,17 @@ def main(argv):
     want_version = expect.get("version")
     if want_version and rerun.__version__ != want_version:
         problems.append(f"rerun-sdk {rerun.__version__}, want {want_version}")
-    found = scan(path)
+    cursors = expect.get("cursors", [])
+    found = scan(path, cursors)
     problems += check(found, expect)
+    problems += check_cursors(found, cursors)
     origins = blueprint_origins(path)
     for want in expect.get("blueprint", []):
         if norm(want) not in origins:
             problems.append(f"blueprint: no view of {want} (views of {origins})")
     problems += verify(path)
+    for e in found.values():
+        del e["rows_of"]
     summary = {"rerun_sdk": rerun.__version__, "entities": found, "blueprint": origins,
                "ok": not problems}
     print(json.dumps(summary, indent=1, sort_keys=True))

@@ -6,6 +6,7 @@
 use super::args::Common;
 use super::print::out;
 use clap::{Args, ValueEnum};
+use odocal::io::out_lock::OutputLock;
 use odocal::pipeline::calibrate::CalibratorChoice;
 use odocal::pipeline::fleet::{self, FleetJob, FleetSummary};
 use odocal::pipeline::PipelineError;
@@ -41,6 +42,10 @@ pub struct FleetArgs {
     /// Output directory: fleet.csv, fleet.json, report.md, fleet.png, cache/, recordings/.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Record the fleet for the Rerun viewer: per robot its parameters over days with
+    /// ±2σ bands, alarms marked.
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rrd: Option<PathBuf>,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -128,14 +133,28 @@ fn on_ray(a: &FleetArgs) -> anyhow::Result<()> {
         ))
         .into());
     }
+    let _lock = claim_rrd(a)?;
     let status = std::process::Command::new(&py)
         .args(a.python_args())
         .status()?;
     match status.code() {
-        Some(0) => Ok(()),
+        Some(0) => {}
         Some(code) => std::process::exit(code),
         None => anyhow::bail!("the Ray engine ({py}) was killed by a signal"),
     }
+    if let Some(rrd) = &a.rrd {
+        fleet::recording::write_from(rrd, &a.out)?;
+        eprintln!("Rerun recording: {}", rrd.display());
+    }
+    Ok(())
+}
+
+/// Checks and locks `--rrd` before any work (`None` without it).
+fn claim_rrd(a: &FleetArgs) -> Result<Option<Vec<OutputLock>>, PipelineError> {
+    a.rrd
+        .as_ref()
+        .map(|rrd| fleet::recording::claim(rrd, &a.source, &a.out))
+        .transpose()
 }
 
 fn print(s: &FleetSummary, a: &FleetArgs) {
@@ -171,6 +190,7 @@ pub fn run(a: FleetArgs) -> anyhow::Result<()> {
     if a.engine == Engine::Ray {
         return on_ray(&a);
     }
+    let _lock = claim_rrd(&a)?;
     let start = std::time::Instant::now();
     let pb = super::progress_bar("fleet");
     let summary = fleet::run(&a.job(), &|done, total| {
@@ -178,6 +198,10 @@ pub fn run(a: FleetArgs) -> anyhow::Result<()> {
         pb.set_message(format!("fleet {done}/{total}"));
     })?;
     pb.finish_and_clear();
+    if let Some(rrd) = &a.rrd {
+        fleet::recording::write(rrd, &summary)?;
+        eprintln!("Rerun recording: {}", rrd.display());
+    }
     eprintln!("fleet: {:.1} s wall", start.elapsed().as_secs_f64());
     if a.json {
         return super::print_json(&summary);

@@ -6,7 +6,9 @@
 //! [`StreamRecorder::notes`]: trajectories are drawn through at most
 //! [`RecorderOptions::max_polyline`] poses each, and when a run has more
 //! filter steps than [`RecorderOptions::max_clouds`], the particle cloud is
-//! logged at every k-th step only.
+//! logged at every k-th step only. The logger may bound more (the Rerun
+//! logger's trail of scan-matching ellipses); [`StreamRecorder::finish`]
+//! returns its notes too.
 
 use std::collections::VecDeque;
 
@@ -355,6 +357,8 @@ impl<'a> StreamRecorder<'a> {
             self.logger.trajectory(kind, &times, &in_world(&traj, &w))?;
         }
         self.logger.finish()?;
+        let mut notes = notes;
+        notes.extend(self.logger.notes());
         Ok(notes)
     }
 }

@@ -27,6 +27,15 @@ pub mod entity {
     /// The scan-matching covariance of the pair ending at a scan: its 1σ
     /// position ellipse at the matched pose, magnified (world frame).
     pub const ICP_COVARIANCE: &str = "world/icp_covariance";
+    /// Every scan match's ellipse up to the cursor, as a trail: the entities
+    /// below this one, one per power-of-two block of matches
+    /// ([`crate::viz::Trail`], [`trail_level`]).
+    pub const ICP_COVARIANCE_TRAIL: &str = "world/icp_covariance/trail";
+
+    /// The trail's entity of level `level` (blocks of 2^level ellipses).
+    pub fn trail_level(level: usize) -> String {
+        format!("{ICP_COVARIANCE_TRAIL}/{level:02}")
+    }
     /// ICP-integrated trajectory (line strip, world frame).
     pub const TRAJ_ICP: &str = "world/trajectory/icp";
     /// Raw wheel odometry with nominal parameters.
@@ -112,7 +121,8 @@ impl TrajectoryKind {
     ];
 
     /// The entity path (`world/trajectory/...`): the trajectory up to the
-    /// time cursor, growing along the `time` timeline.
+    /// time cursor, growing along the `time` timeline and, placed at the last
+    /// scan logged at or before each time, along `scan`.
     pub fn entity(self) -> &'static str {
         match self {
             TrajectoryKind::Icp => entity::TRAJ_ICP,
@@ -175,7 +185,8 @@ pub trait Logger {
     ) -> Result<(), VizError>;
 
     /// A whole trajectory (world frame) with each pose's time (s, timeline
-    /// `time`): the full line (static) and the line up to each time.
+    /// `time`): the full line (static) and the line up to each time (on
+    /// `scan` too, at the last scan logged at or before that time).
     fn trajectory(
         &mut self,
         kind: TrajectoryKind,
@@ -184,7 +195,8 @@ pub trait Logger {
     ) -> Result<(), VizError>;
 
     /// The covariance (m², 2×2, base frame) of the scan match ending at `at`,
-    /// whose matched pose is `world_from_base`.
+    /// whose matched pose is `world_from_base`: shown as the latest match's
+    /// ellipse and in the trail of every match up to the cursor.
     fn icp_covariance(
         &mut self,
         at: Stamp,
@@ -211,6 +223,12 @@ pub trait Logger {
 
     /// ICP quality for the scan pair ending at `at`.
     fn icp(&mut self, at: Stamp, iterations: u32, covariance_trace: f64) -> Result<(), VizError>;
+
+    /// What the recording leaves out or thins, for the user (empty when
+    /// nothing).
+    fn notes(&self) -> Vec<String> {
+        Vec::new()
+    }
 
     /// Sends everything still buffered and closes the sink (a file is
     /// complete and in place only after this). Calling it twice is harmless.

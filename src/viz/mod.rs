@@ -3,20 +3,29 @@
 //! plots ([`plot`]) and a markdown [`report`]. Nothing here is imported by the
 //! math modules; the logger takes plain numbers, poses and points.
 
+mod clock;
+pub mod fleet_view;
 mod logger;
 pub mod plot;
 pub mod report;
+#[cfg(feature = "rerun")]
+mod rerun_fleet;
 #[cfg(feature = "rerun")]
 mod rerun_layout;
 #[cfg(feature = "rerun")]
 mod rerun_logger;
 pub mod shapes;
 mod subsample;
+mod trail;
 
+pub use clock::ScanClock;
 pub use logger::{entity, CalibEstimate, Logger, NullLogger, Stamp, TrajectoryKind};
+#[cfg(feature = "rerun")]
+pub use rerun_fleet::{record_fleet, robot_path, DATE};
 #[cfg(feature = "rerun")]
 pub use rerun_logger::{RerunLogger, RerunOptions, RerunSink};
 pub use subsample::systematic_subsample;
+pub use trail::{Trail, TrailUpdate};
 
 /// Failures of recording, plotting or report writing.
 #[derive(Debug, thiserror::Error)]

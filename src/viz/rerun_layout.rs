@@ -1,6 +1,7 @@
 //! The layout the viewer opens on (a Rerun blueprint, stored first in the
 //! recording): the world — map, trajectories, the robot with its laser and
-//! scan, the scan-matching ellipses — on the left; on the right the wheel
+//! scan, the scan-matching ellipses (the latest and the trail of all up to
+//! the cursor) — on the left; on the right the wheel
 //! radii and the wheel base over time, the particle cloud in the
 //! (R_R, R_L) plane and the scan-matching quality over time.
 
@@ -10,7 +11,7 @@ use rerun::blueprint::{Blueprint, Horizontal, Spatial2DView, TimeSeriesView, Ver
 /// The blueprint; `ellipse_scale` is named in the world view's title.
 pub fn blueprint(ellipse_scale: f64) -> Blueprint {
     let world = Spatial2DView::new(format!(
-        "world: map, trajectories, robot, scan (match ellipses 1σ ×{ellipse_scale})"
+        "world: map, trajectories, robot, scan (match ellipses 1σ ×{ellipse_scale}, latest and trail)"
     ))
     .with_origin("/world");
     let radii = TimeSeriesView::new("wheel radii (m)")

@@ -4,9 +4,11 @@
 //! (`send_columns`), a chunk per few hundred rows, so recording a whole run
 //! costs little next to computing it.
 
+use super::clock::ScanClock;
 use super::logger::{entity, CalibEstimate, Logger, Stamp, TrajectoryKind};
 use super::shapes::{ellipse, growth_steps, thin_prefix};
 use super::subsample::systematic_subsample;
+use super::trail::{Trail, TrailUpdate};
 use super::VizError;
 use crate::geom::Pose2;
 use nalgebra::Point2;
@@ -45,6 +47,11 @@ pub struct RerunOptions {
     pub growth_steps: usize,
     /// Most poses in each grown line (every k-th, and the last).
     pub growth_points: usize,
+    /// Most scan-matching ellipses in the trail (then every k-th match's).
+    pub max_trail: usize,
+    /// Most scans remembered to place the grown lines on the `scan`
+    /// timeline (then every k-th: a line may show up to k − 1 scans early).
+    pub max_clock: usize,
 }
 
 impl Default for RerunOptions {
@@ -56,6 +63,8 @@ impl Default for RerunOptions {
             ellipse_scale: 100.0,
             growth_steps: 300,
             growth_points: 1000,
+            max_trail: 4096,
+            max_clock: 1 << 17,
         }
     }
 }
@@ -77,6 +86,15 @@ struct TransformRows {
 struct StripRows {
     scans: Vec<i64>,
     times: Vec<f64>,
+    strips: Vec<Vec<[f32; 2]>>,
+}
+
+/// Rows of a line-strips entity with any number of strips a row.
+#[derive(Default)]
+struct MultiStripRows {
+    scans: Vec<i64>,
+    times: Vec<f64>,
+    lengths: Vec<usize>,
     strips: Vec<Vec<[f32; 2]>>,
 }
 
@@ -111,15 +129,41 @@ pub struct RerunLogger {
     scalars: BTreeMap<&'static str, ScalarRows>,
     robot: TransformRows,
     ellipses: StripRows,
+    /// Every match's ellipse (world frame) up to the cursor.
+    trail: Trail<Vec<[f32; 2]>>,
+    /// Rows of the trail's levels waiting to be sent.
+    trail_rows: BTreeMap<usize, MultiStripRows>,
+    /// Scans logged, to place the grown lines on the `scan` timeline.
+    clock: ScanClock,
     /// The laser mounting last logged (static).
     mount: Option<Pose2>,
 }
 
-fn rerun_err(e: impl std::fmt::Display) -> VizError {
+pub(super) fn rerun_err(e: impl std::fmt::Display) -> VizError {
     VizError::Rerun(e.to_string())
 }
 
-fn temp_rrd(path: &Path) -> PathBuf {
+/// Sends what `rec` holds and closes it; a file sink's temporary file
+/// `(temporary, final)` is then synced and renamed into place.
+pub(super) fn close(
+    rec: RecordingStream,
+    file: Option<(PathBuf, PathBuf)>,
+) -> Result<(), VizError> {
+    rec.flush_blocking().map_err(rerun_err)?;
+    // Dropping the last handle closes the sink; a file sink writes its
+    // footer and joins its writer thread.
+    drop(rec);
+    if let Some((tmp, path)) = file {
+        let f = std::fs::File::open(&tmp).map_err(|e| VizError::io(&tmp, e))?;
+        f.sync_all().map_err(|e| VizError::io(&tmp, e))?;
+        std::fs::rename(&tmp, &path).map_err(|e| VizError::io(&path, e))?;
+    }
+    Ok(())
+}
+
+/// Beside `path`, the temporary file a recording is written to until it is
+/// complete.
+pub(super) fn temp_rrd(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -171,9 +215,19 @@ impl RerunLogger {
     /// beside the target until [`Logger::finish`]; `Spawn` fails clearly when
     /// no `rerun` binary is on `PATH`.
     pub fn new(sink: RerunSink, options: RerunOptions) -> Result<Self, VizError> {
-        if options.max_particles == 0 || options.batch_rows == 0 || options.growth_steps == 0 {
+        if [
+            options.max_particles,
+            options.batch_rows,
+            options.growth_steps,
+            options.max_trail,
+            options.max_clock,
+        ]
+        .contains(&0)
+        {
             return Err(VizError::Input(
-                "max_particles, batch_rows and growth_steps must be positive".into(),
+                "max_particles, batch_rows, growth_steps, max_trail and max_clock must be \
+                 positive"
+                    .into(),
             ));
         }
         if !(options.ellipse_scale.is_finite() && options.ellipse_scale > 0.0) {
@@ -210,6 +264,9 @@ impl RerunLogger {
         };
         let logger = RerunLogger {
             rec: Some(rec),
+            trail: Trail::new(options.max_trail),
+            trail_rows: BTreeMap::new(),
+            clock: ScanClock::new(options.max_clock),
             options,
             file,
             scans: PointRows::default(),
@@ -226,6 +283,7 @@ impl RerunLogger {
             .rec()?
             .log_static(entity::ROBOT_HEADING, &heading)
             .map_err(rerun_err)?;
+        logger.style_ellipses()?;
         Ok(logger)
     }
 
@@ -338,7 +396,61 @@ impl RerunLogger {
         self.send_rows(entity::ICP_COVARIANCE, rows.scans, rows.times, columns)
     }
 
-    /// The trajectory up to each of [`growth_steps`]'s poses, on `time`.
+    /// The colour of the latest ellipse (bright), static, so that the rows
+    /// carry the outlines only.
+    fn style_ellipses(&self) -> Result<(), VizError> {
+        let latest = LineStrips2D::update_fields()
+            .with_colors([Color::from_rgb(230, 120, 0)])
+            .with_radii([Radius::new_ui_points(1.5)]);
+        self.rec()?
+            .log_static(entity::ICP_COVARIANCE, &latest)
+            .map_err(rerun_err)
+    }
+
+    /// Queues the trail's changed levels as rows at `at`; a level used for
+    /// the first time gets its faint colour (static).
+    fn push_trail(
+        &mut self,
+        at: Stamp,
+        updates: Vec<TrailUpdate<Vec<[f32; 2]>>>,
+    ) -> Result<(), VizError> {
+        for u in updates {
+            if !self.trail_rows.contains_key(&u.level) {
+                let faint = LineStrips2D::update_fields()
+                    .with_colors([Color::from_unmultiplied_rgba(31, 119, 180, 110)])
+                    .with_radii([Radius::new_ui_points(0.75)]);
+                self.rec()?
+                    .log_static(entity::trail_level(u.level), &faint)
+                    .map_err(rerun_err)?;
+            }
+            let rows = self.trail_rows.entry(u.level).or_default();
+            rows.scans.push(at.scan);
+            rows.times.push(at.time);
+            rows.lengths.push(u.items.len());
+            rows.strips.extend(u.items);
+            if rows.lengths.len() >= self.options.batch_rows {
+                self.flush_trail(u.level)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn flush_trail(&mut self, level: usize) -> Result<(), VizError> {
+        let Some(rows) = self.trail_rows.get_mut(&level) else {
+            return Ok(());
+        };
+        if rows.lengths.is_empty() {
+            return Ok(());
+        }
+        let rows = std::mem::take(rows);
+        let columns = LineStrips2D::new(rows.strips)
+            .columns(rows.lengths)
+            .map_err(rerun_err)?;
+        self.send_rows(&entity::trail_level(level), rows.scans, rows.times, columns)
+    }
+
+    /// The trajectory up to each of [`growth_steps`]'s poses, on `time`, and
+    /// on `scan` at the last scan logged at or before each (when any was).
     fn log_growth(
         &mut self,
         kind: TrajectoryKind,
@@ -356,6 +468,12 @@ impl RerunLogger {
             })
             .collect();
         let t: Vec<f64> = steps.iter().map(|&i| times[i]).collect();
+        let mut timelines = vec![];
+        if !self.clock.is_empty() {
+            let scans: Vec<i64> = t.iter().filter_map(|&x| self.clock.scan_at(x)).collect();
+            timelines.push(TimeColumn::new_sequence(entity::SCAN, scans));
+        }
+        timelines.push(TimeColumn::new_duration_secs(entity::TIME, t));
         let n = strips.len();
         let mut columns: Vec<_> = LineStrips2D::new(strips)
             .columns_of_unit_batches()
@@ -370,17 +488,17 @@ impl RerunLogger {
                 .map_err(rerun_err)?,
         );
         self.rec()?
-            .send_columns(
-                kind.entity(),
-                [TimeColumn::new_duration_secs(entity::TIME, t)],
-                columns,
-            )
+            .send_columns(kind.entity(), timelines, columns)
             .map_err(rerun_err)
     }
 
     fn flush_all(&mut self) -> Result<(), VizError> {
         self.flush_robot()?;
         self.flush_ellipses()?;
+        let levels: Vec<usize> = self.trail_rows.keys().copied().collect();
+        for level in levels {
+            self.flush_trail(level)?;
+        }
         self.flush_points(entity::SCAN_POINTS)?;
         self.flush_points(entity::PARTICLES)?;
         let keys: Vec<&'static str> = self.scalars.keys().copied().collect();
@@ -419,6 +537,7 @@ impl Logger for RerunLogger {
                 .log_static(entity::LASER, &planar_transform(base_from_sensor))
                 .map_err(rerun_err)?;
         }
+        self.clock.note(at.time, at.scan);
         let robot = &mut self.robot;
         robot.scans.push(at.scan);
         robot.times.push(at.time);
@@ -491,11 +610,13 @@ impl Logger for RerunLogger {
                 at.scan
             ))
         })?;
+        let strip: Vec<[f32; 2]> = outline.iter().map(|p| [p[0] as f32, p[1] as f32]).collect();
+        let updates = self.trail.push(strip.clone());
+        self.push_trail(at, updates)?;
         let rows = &mut self.ellipses;
         rows.scans.push(at.scan);
         rows.times.push(at.time);
-        rows.strips
-            .push(outline.iter().map(|p| [p[0] as f32, p[1] as f32]).collect());
+        rows.strips.push(strip);
         if rows.strips.len() >= self.options.batch_rows {
             self.flush_ellipses()?;
         }
@@ -585,22 +706,35 @@ impl Logger for RerunLogger {
         self.push_scalar(entity::ICP_COV_TRACE, at, covariance_trace)
     }
 
+    fn notes(&self) -> Vec<String> {
+        let mut notes = Vec::new();
+        if self.trail.stride() > 1 {
+            notes.push(format!(
+                "the scan-matching ellipse trail shows one match in {} ({} matches, at most {} \
+                 ellipses)",
+                self.trail.stride(),
+                self.trail.seen(),
+                self.options.max_trail
+            ));
+        }
+        if self.clock.stride() > 1 {
+            notes.push(format!(
+                "on the scan timeline the grown trajectories are placed to within {} scans \
+                 (at most {} scans remembered)",
+                self.clock.stride(),
+                self.options.max_clock
+            ));
+        }
+        notes
+    }
+
     fn finish(&mut self) -> Result<(), VizError> {
         if self.rec.is_none() {
             return Ok(());
         }
         self.flush_all()?;
         let rec = self.rec.take().expect("checked above");
-        rec.flush_blocking().map_err(rerun_err)?;
-        // Dropping the last handle closes the sink; a file sink writes its
-        // footer and joins its writer thread.
-        drop(rec);
-        if let Some((tmp, path)) = self.file.take() {
-            let f = std::fs::File::open(&tmp).map_err(|e| VizError::io(&tmp, e))?;
-            f.sync_all().map_err(|e| VizError::io(&tmp, e))?;
-            std::fs::rename(&tmp, &path).map_err(|e| VizError::io(&path, e))?;
-        }
-        Ok(())
+        close(rec, self.file.take())
     }
 }
 

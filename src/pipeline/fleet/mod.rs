@@ -2,7 +2,8 @@
 //! result cached by the recording's content hash and the settings, so a
 //! re-run only processes new files), then per robot the parameter history,
 //! its trends and alarms ([`crate::fleet`]), written as a table (CSV and
-//! JSON) and a report (markdown and PNG).
+//! JSON), a report (markdown and PNG) and, when asked, a Rerun recording
+//! ([`recording`]).
 //!
 //! The run is three steps so that another engine can do the middle one:
 //! [`plan`] lists the recordings and what the cache already holds,
@@ -13,6 +14,7 @@
 
 mod cache;
 pub mod inputs;
+pub mod recording;
 mod report;
 
 use super::calibrate::{CalibSource, CalibrateJob, CalibratorChoice};

@@ -6,12 +6,12 @@ use super::FleetSummary;
 use crate::fleet::{Entry, Outcome};
 use crate::pipeline::PipelineError;
 use crate::viz::plot::{render_line_chart, LineChart, Series};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// One recording in the fleet table.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Row {
     /// The robot.
     pub robot: String,
