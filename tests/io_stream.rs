@@ -389,7 +389,7 @@ fn kalman_calibration_of_a_bag_matches_the_in_memory_run_without_and_with_gyro()
         let rows = std::fs::read_to_string(b.join("calibration.csv")).unwrap();
         let mut expect = Vec::new();
         let last = mem.history.last().unwrap().history_row();
-        odocal::io::csv::write_history_row(&mut expect, &last).unwrap();
+        odocal::io::csv::write_history_row(&mut expect, &last, "").unwrap();
         assert_eq!(
             rows.lines().last().unwrap(),
             String::from_utf8(expect).unwrap().trim_end()

@@ -5,6 +5,7 @@
 
 pub use super::calibrate_job::Start;
 pub use super::calibrate_job::{CalibSource, CalibrateJob, CalibrateOutcome, CalibratorChoice};
+use super::changes::ChangeWatch;
 use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
@@ -116,7 +117,8 @@ pub fn run(
         None => &mut quiet,
     };
     let mut files = CalibFiles::create(&job.out)?;
-    let mut obs = Observers(vec![&mut files, rec_obs, watch]);
+    let mut changes = ChangeWatch::default();
+    let mut obs = Observers(vec![&mut files, rec_obs, watch, &mut changes]);
     let run = Run {
         cfg: &cfg,
         nominal: &nominal,
@@ -161,6 +163,10 @@ pub fn run(
     )?;
     if let Some(w) = wheel_source {
         super::wheels::state(&mut summary, w);
+    }
+    if params.change.naming.enabled && changes.fired() {
+        summary.changes = changes.name(robot, &params.change.naming);
+        files.name_changes(summary.changes.iter().map(|c| c.effect.clone()).collect());
     }
     if let Some(s) = started {
         summary.rebase(nominal.robot.diff_drive());
