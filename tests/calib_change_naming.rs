@@ -106,3 +106,120 @@ fn a_latency_change_is_not_named_a_radius_step() {
     assert!((est - 0.08).abs() < 0.2 * 0.08, "latency {est} s vs 0.08 s");
     assert_eq!(named_rows(&csv).len(), changes.len());
 }
+
+/// A logger that keeps the text entries of what changed and the stamps of
+/// the estimates.
+#[derive(Default)]
+struct Notes {
+    changes: Vec<(i64, f64, String)>,
+    estimates: Vec<(i64, f64)>,
+}
+
+impl odocal::viz::Logger for Notes {
+    fn map(&mut self, _: &[[nalgebra::Point2<f64>; 2]]) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn scan(
+        &mut self,
+        _: odocal::viz::Stamp,
+        _: &odocal::geom::Pose2,
+        _: &odocal::geom::Pose2,
+        _: &[nalgebra::Point2<f64>],
+    ) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn trajectory(
+        &mut self,
+        _: odocal::viz::TrajectoryKind,
+        _: &[f64],
+        _: &[odocal::geom::Pose2],
+    ) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn particles(
+        &mut self,
+        _: odocal::viz::Stamp,
+        _: &[f64],
+        _: &[f64],
+        _: &[f64],
+    ) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn estimate(
+        &mut self,
+        at: odocal::viz::Stamp,
+        _: &odocal::viz::CalibEstimate,
+    ) -> Result<(), odocal::viz::VizError> {
+        self.estimates.push((at.scan, at.time));
+        Ok(())
+    }
+    fn icp(&mut self, _: odocal::viz::Stamp, _: u32, _: f64) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn change(&mut self, at: odocal::viz::Stamp, text: &str) -> Result<(), odocal::viz::VizError> {
+        self.changes.push((at.scan, at.time, text.to_string()));
+        Ok(())
+    }
+    fn finish(&mut self) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+}
+
+#[test]
+fn the_recording_carries_what_changed_at_the_firing() {
+    use odocal::pipeline::changes::{describe, ChangeWatch};
+    use odocal::pipeline::observe::Observers;
+    use odocal::pipeline::recorder::{RecorderOptions, StreamRecorder};
+    let robot = odocal::robot::RobotConfig::default();
+    let cfg = odocal::pipeline::Config::load(None).unwrap();
+    let sim = odocal::sim::SimConfig {
+        duration_s: 60.0,
+        seed: 4,
+        ..Default::default()
+    };
+    let effects =
+        [odocal::effects::Effect::parse("radius_step:time=30,right=0,left=0.005").unwrap()];
+    let (rec, _) = odocal::sim::simulate(&sim, &robot, &effects, &mut |_| {}).unwrap();
+    let params = odocal::pipeline::calibrate::params_for_robot(&cfg.calib, &robot);
+    let mut notes = Notes::default();
+    let mut watch = ChangeWatch::default();
+    let mut recorder = StreamRecorder::new(
+        &mut notes,
+        RecorderOptions::default(),
+        robot.diff_drive(),
+        robot.laser.unwrap().pose(),
+    );
+    let mut source = odocal::io::RecordingSource::new(&rec);
+    odocal::pipeline::drive::run_calibration(
+        &mut source,
+        &robot,
+        &cfg.icp,
+        &params,
+        &cfg.measurements,
+        &mut Observers(vec![&mut recorder, &mut watch]),
+    )
+    .unwrap();
+    let changes = watch.name(&robot, &params.change.naming);
+    assert!(!changes.is_empty(), "the detector fired");
+    assert_eq!(changes[0].effect, "radius_step");
+    assert_eq!(changes[0].parameter, "left");
+    let texts: Vec<String> = changes.iter().map(describe).collect();
+    recorder.changes(&texts);
+    recorder.finish().unwrap();
+    assert_eq!(notes.changes.len(), changes.len());
+    let (scan, time, text) = &notes.changes[0];
+    assert!(text.contains("radius_step left"), "{text}");
+    // At the estimate of the step that fired, on both timelines (the
+    // recording's time starts at its first sample).
+    let at = notes
+        .estimates
+        .iter()
+        .find(|e| e.1 == *time)
+        .expect("an estimate at the firing's time");
+    assert_eq!(at.0, *scan);
+    assert!(
+        (time - changes[0].time_s).abs() < 0.5,
+        "{time} vs {}",
+        changes[0].time_s
+    );
+}

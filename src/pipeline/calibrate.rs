@@ -176,7 +176,15 @@ pub fn run(
     files.commit(&paste.with(&summary))?;
     paste.write(&job.out)?;
     let notes = match recorder {
-        Some(r) => r.finish().map_err(super::viewer::viz_error)?,
+        Some(mut r) => {
+            let texts: Vec<String> = summary
+                .changes
+                .iter()
+                .map(super::changes::describe)
+                .collect();
+            r.changes(&texts);
+            r.finish().map_err(super::viewer::viz_error)?
+        }
         None => Vec::new(),
     };
     Ok(CalibrateOutcome {

@@ -59,6 +59,8 @@ pub mod entity {
     pub const ICP_ITERATIONS: &str = "icp/iterations";
     /// Trace of the ICP motion covariance (m², rad² mixed; a quality gauge).
     pub const ICP_COV_TRACE: &str = "icp/covariance_trace";
+    /// What changed where the change detector fired (text log).
+    pub const CHANGES: &str = "calib/changes";
 }
 
 /// Where on the timelines an item belongs.
@@ -211,6 +213,12 @@ pub trait Logger {
 
     /// ICP quality for the scan pair ending at `at`.
     fn icp(&mut self, at: Stamp, iterations: u32, covariance_trace: f64) -> Result<(), VizError>;
+
+    /// A text entry at `at` on `entity::CHANGES`: what changed where the
+    /// change detector fired.
+    fn change(&mut self, _at: Stamp, _text: &str) -> Result<(), VizError> {
+        Ok(())
+    }
 
     /// Sends everything still buffered and closes the sink (a file is
     /// complete and in place only after this). Calling it twice is harmless.
