@@ -77,10 +77,12 @@ impl RunObserver for ChangeWatch {
 /// One line per named change for the terminal.
 pub fn describe(c: &NamedChange) -> String {
     if c.effect == crate::diagnose::onset::UNDETERMINED {
-        return format!(
-            "change at {:.2} s: undetermined (no candidate lowers BIC by the margin)",
-            c.time_s
-        );
+        let why = if c.candidates.is_empty() {
+            "too few scan-matching rows on a side of the window"
+        } else {
+            "no candidate lowers BIC by the margin"
+        };
+        return format!("change at {:.2} s: undetermined ({why})", c.time_s);
     }
     format!(
         "change at {:.2} s (onset {:.2} s): {} {} = {:.6} ± {:.6}, ΔBIC {:.1}",
