@@ -154,7 +154,7 @@ fn cli_pipeline_chains_and_prints_the_contract_keys() {
     assert!(rr - rl > 0.003, "R_R {rr} vs R_L {rl}");
     let csv = std::fs::read_to_string(cal_dir.join("calibration.csv")).unwrap();
     assert!(csv.starts_with(
-        "t,r_right,r_left,wheel_base,std_r_right,std_r_left,std_wheel_base,particles,process_sigma\n"
+        "t,r_right,r_left,wheel_base,std_r_right,std_r_left,std_wheel_base,particles,process_sigma,change\n"
     ));
     assert!(cal_dir.join("trajectory.tum").is_file() && cal_dir.join("summary.json").is_file());
     no_temp_files(&cal_dir);

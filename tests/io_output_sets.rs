@@ -66,6 +66,7 @@ fn one_run(dir: &Path) -> String {
         .last()
         .unwrap()
         .split(',')
+        .take(9)
         .map(|x| x.parse().unwrap())
         .collect();
     for (i, key) in ["r_right", "r_left", "wheel_base"].iter().enumerate() {

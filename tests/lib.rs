@@ -3,6 +3,7 @@
 mod architecture;
 mod calib_batch;
 mod calib_censi;
+mod calib_change_naming;
 mod calib_checks;
 mod calib_end_to_end;
 mod calib_filters;

@@ -103,20 +103,24 @@ impl Calibrator for AugmentedKf {
         for i in 2..5 {
             self.x[i] = self.x[i].max(1e-6);
         }
+        let mut changed = false;
         if let Some(c) = &mut self.change {
             let theta = Vector3::new(self.x[2], self.x[3], self.x[4]);
             let mut pt = self.p.fixed_view::<3, 3>(2, 2).into_owned();
             if c.end_step(&theta, &mut pt) {
                 self.p.fixed_view_mut::<3, 3>(2, 2).copy_from(&pt);
+                changed = true;
             }
         }
-        kalman_estimate(
+        let mut est = kalman_estimate(
             s.t1,
             [self.x[2], self.x[3], self.x[4]],
             [self.p[(2, 2)], self.p[(3, 3)], self.p[(4, 4)]],
             [self.x[0], self.x[1]],
             self.q[2],
-        )
+        );
+        est.changed = changed;
+        est
     }
 
     fn name(&self) -> &'static str {

@@ -57,6 +57,9 @@ pub struct ChangeParams {
     /// Smallest spread (σ, m) added to R_R, R_L, D when the test fires; the
     /// spread is widened to the window's estimate of the jump when larger.
     pub jump_sigma: [f64; 3],
+    /// Naming of what changed at each firing, after the run
+    /// ([`crate::diagnose::onset`]).
+    pub naming: crate::diagnose::onset::OnsetParams,
 }
 
 impl Default for ChangeParams {
@@ -67,6 +70,7 @@ impl Default for ChangeParams {
             window: 5.0,
             false_alarm: 1e-5,
             jump_sigma: [3e-3, 3e-3, 0.0],
+            naming: Default::default(),
         }
     }
 }
@@ -83,7 +87,7 @@ impl ChangeParams {
         if !self.jump_sigma.iter().all(|s| s.is_finite() && *s >= 0.0) {
             return Err("change.jump_sigma entries must be finite and ≥ 0".into());
         }
-        Ok(())
+        self.naming.validate()
     }
 
     /// The χ²₃ quantile of `1 − false_alarm` (Wilson–Hilferty).

@@ -104,10 +104,11 @@ impl Calibrator for DualKf {
         }
         self.p_theta = 0.5 * (self.p_theta + self.p_theta.transpose());
         self.theta = self.theta.map(|t| t.max(1e-6));
-        if let Some(c) = &mut self.change {
-            c.end_step(&self.theta, &mut self.p_theta);
-        }
-        kalman_estimate(
+        let changed = self
+            .change
+            .as_mut()
+            .is_some_and(|c| c.end_step(&self.theta, &mut self.p_theta));
+        let mut est = kalman_estimate(
             s.t1,
             self.theta.into(),
             [
@@ -117,7 +118,9 @@ impl Calibrator for DualKf {
             ],
             [x[0], x[1]],
             self.q_theta,
-        )
+        );
+        est.changed = changed;
+        est
     }
 
     fn name(&self) -> &'static str {

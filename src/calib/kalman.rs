@@ -104,6 +104,7 @@ pub(super) fn kalman_estimate(
         process_sigma: q.sqrt(),
         resampled: false,
         weights_reset: false,
+        changed: false,
     }
 }
 

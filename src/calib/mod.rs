@@ -100,6 +100,9 @@ pub struct Estimate {
     /// Whether every weight underflowed and the weights were reset.
     #[serde(skip)]
     pub weights_reset: bool,
+    /// Whether the change detector fired at this step ([`ChangeDetector`]).
+    #[serde(skip)]
+    pub changed: bool,
 }
 
 impl Estimate {

@@ -34,6 +34,7 @@ impl Calibrator for Nominal {
             process_sigma: 0.0,
             resampled: false,
             weights_reset: false,
+            changed: false,
         }
     }
 

@@ -374,6 +374,7 @@ impl ParticleFilter {
             process_sigma: self.sigma,
             resampled: false,
             weights_reset: reset,
+            changed: false,
         }
     }
 
@@ -535,6 +536,7 @@ impl Calibrator for ParticleFilter {
             self.resample(n_new, Some(spread));
             self.jumps += 1;
             est.resampled = true;
+            est.changed = true;
         } else if self
             .trigger
             .fires(&self.weights, self.neff_ratio, self.max_weight_factor)

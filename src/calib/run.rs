@@ -88,6 +88,10 @@ pub struct CalibSummary {
     /// under `start`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub start: Option<super::batch::BatchEstimate>,
+    /// What changed at each firing of the change detector (set by the
+    /// command that ran; [`crate::diagnose::onset`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub changes: Vec<crate::diagnose::onset::NamedChange>,
 }
 
 /// Result of [`run`].
@@ -159,6 +163,7 @@ impl CalibSummary {
             odometry_scale: None,
             batch: None,
             start: None,
+            changes: Vec::new(),
             multipliers: Multipliers {
                 left_wheel_radius: ratio(final_params.r_left, nominal.r_left),
                 right_wheel_radius: ratio(final_params.r_right, nominal.r_right),

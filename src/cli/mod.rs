@@ -117,6 +117,9 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<()> {
     for n in &done.notes {
         eprintln!("note: {n}");
     }
+    for c in &done.summary.changes {
+        eprintln!("{}", pipeline::changes::describe(c));
+    }
     if a.json {
         return print_json(&done.paste.with(&done.summary));
     }

@@ -23,6 +23,7 @@ pub mod free;
 pub mod gain;
 pub mod model;
 pub mod odometry;
+pub mod onset;
 pub mod remaining;
 pub mod residuals;
 pub mod run;

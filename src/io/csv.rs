@@ -22,7 +22,7 @@ pub const MOTIONS_HEADER_CORE: &str =
 
 /// Header of the calibration history CSV.
 pub const HISTORY_HEADER: &str =
-    "t,r_right,r_left,wheel_base,std_r_right,std_r_left,std_wheel_base,particles,process_sigma";
+    "t,r_right,r_left,wheel_base,std_r_right,std_r_left,std_wheel_base,particles,process_sigma,change";
 
 /// Writes ICP motions (base frame; m, rad) with covariance and quality.
 pub fn write_motions(path: &Path, motions: &[Motion]) -> io::Result<()> {
@@ -253,11 +253,13 @@ pub fn write_wheels(path: &Path, wheels: &[WheelSample]) -> io::Result<()> {
 /// One row of the calibration history (design.md column order).
 pub type HistoryFields = [f64; 9];
 
-/// One line of the calibration history CSV (after [`HISTORY_HEADER`]).
-pub fn write_history_row(w: &mut impl Write, r: &HistoryFields) -> io::Result<()> {
+/// One line of the calibration history CSV (after [`HISTORY_HEADER`]);
+/// `change` names the effect that changed where the change detector fired
+/// (empty elsewhere).
+pub fn write_history_row(w: &mut impl Write, r: &HistoryFields, change: &str) -> io::Result<()> {
     writeln!(
         w,
-        "{:.6},{:.9},{:.9},{:.9},{:e},{:e},{:e},{},{:e}",
+        "{:.6},{:.9},{:.9},{:.9},{:e},{:e},{:e},{},{:e},{change}",
         r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7] as u64, r[8]
     )
 }

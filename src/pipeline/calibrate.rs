@@ -5,6 +5,7 @@
 
 pub use super::calibrate_job::Start;
 pub use super::calibrate_job::{CalibSource, CalibrateJob, CalibrateOutcome, CalibratorChoice};
+use super::changes::ChangeWatch;
 use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
@@ -116,7 +117,8 @@ pub fn run(
         None => &mut quiet,
     };
     let mut files = CalibFiles::create(&job.out)?;
-    let mut obs = Observers(vec![&mut files, rec_obs, watch]);
+    let mut changes = ChangeWatch::default();
+    let mut obs = Observers(vec![&mut files, rec_obs, watch, &mut changes]);
     let run = Run {
         cfg: &cfg,
         nominal: &nominal,
@@ -162,6 +164,7 @@ pub fn run(
     if let Some(w) = wheel_source {
         super::wheels::state(&mut summary, w);
     }
+    name_changes(&mut summary, &changes, &mut files, robot, &params);
     if let Some(s) = started {
         summary.rebase(nominal.robot.diff_drive());
         summary.start = Some(s.est);
@@ -170,7 +173,7 @@ pub fn run(
     files.commit(&paste.with(&summary))?;
     paste.write(&job.out)?;
     let notes = match recorder {
-        Some(r) => r.finish().map_err(super::viewer::viz_error)?,
+        Some(r) => finish_recording(r, &summary)?,
         None => Vec::new(),
     };
     Ok(CalibrateOutcome {
@@ -178,6 +181,36 @@ pub fn run(
         notes,
         paste,
     })
+}
+
+/// What changed at each firing of the change detector, into the summary
+/// and the history's `change` column (when naming is on and it fired).
+fn name_changes(
+    summary: &mut CalibSummary,
+    changes: &ChangeWatch,
+    files: &mut CalibFiles,
+    robot: &RobotConfig,
+    params: &CalibParams,
+) {
+    if params.change.naming.enabled && changes.fired() {
+        summary.changes = changes.name(robot, &params.change.naming);
+        files.name_changes(summary.changes.iter().map(|c| c.effect.clone()).collect());
+    }
+}
+
+/// The Rerun recording's last entries (what changed at each firing), then
+/// its end; returns what it left out.
+fn finish_recording(
+    mut r: StreamRecorder,
+    summary: &CalibSummary,
+) -> Result<Vec<String>, PipelineError> {
+    let texts: Vec<String> = summary
+        .changes
+        .iter()
+        .map(super::changes::describe)
+        .collect();
+    r.changes(&texts);
+    r.finish().map_err(super::viewer::viz_error)
 }
 
 /// The batch start of `--init batch` (`None` for `--init nominal`).

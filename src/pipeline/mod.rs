@@ -5,6 +5,7 @@
 pub mod batch;
 pub mod calibrate;
 mod calibrate_job;
+pub mod changes;
 mod config;
 pub mod demo;
 pub mod diagnose;

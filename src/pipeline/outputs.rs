@@ -221,6 +221,11 @@ pub struct CalibFiles {
     dir: PathBuf,
     history: RowFile,
     trajectory: TumFile,
+    /// The history rows and whether the change detector fired at each,
+    /// written at commit: what changed is named only after the run.
+    rows: Vec<(crate::io::csv::HistoryFields, bool)>,
+    /// The names of the changes, in firing order.
+    names: Vec<String>,
 }
 
 impl CalibFiles {
@@ -240,11 +245,29 @@ impl CalibFiles {
             dir: dir.to_path_buf(),
             history: RowFile::create(&history, crate::io::csv::HISTORY_HEADER)?,
             trajectory: TumFile::create(&trajectory)?,
+            rows: Vec::new(),
+            names: Vec::new(),
         })
     }
 
+    /// The effect named at each firing of the change detector, in order
+    /// (the history's `change` column at those rows).
+    pub fn name_changes(&mut self, names: Vec<String>) {
+        self.names = names;
+    }
+
     /// Commits the history and trajectory, then writes `summary.json`.
-    pub fn commit(self, summary: &impl serde::Serialize) -> Result<(), PipelineError> {
+    pub fn commit(mut self, summary: &impl serde::Serialize) -> Result<(), PipelineError> {
+        let mut names = self.names.iter();
+        for (row, fired) in std::mem::take(&mut self.rows) {
+            let name = if fired {
+                names.next().map_or("", String::as_str)
+            } else {
+                ""
+            };
+            self.history
+                .row(|w| crate::io::csv::write_history_row(w, &row, name));
+        }
         self.history.commit()?;
         self.trajectory.file.commit()?;
         let [_, _, js] = Self::paths(&self.dir);
@@ -256,9 +279,7 @@ impl CalibFiles {
 
 impl RunObserver for CalibFiles {
     fn step(&mut self, e: &Estimate, _cloud: Option<CloudView<'_>>) {
-        let row = e.history_row();
-        self.history
-            .row(|w| crate::io::csv::write_history_row(w, &row));
+        self.rows.push((e.history_row(), e.changed));
     }
 
     fn calibrated_pose(&mut self, t: f64, pose: &Pose2) {

@@ -150,6 +150,8 @@ pub struct StreamRecorder<'a> {
     raw: Polyline,
     raw_pose: Pose2,
     last_wheel: Option<WheelSample>,
+    /// Where the change detector fired, for [`Self::changes`].
+    fired: Vec<Stamp>,
     calibrated: Polyline,
     pts: Vec<Point2<f64>>,
     /// Scan-match covariances (2×2, m²) waiting for their matched pose:
@@ -196,6 +198,7 @@ impl<'a> StreamRecorder<'a> {
             raw: Polyline::new(opts.max_polyline),
             raw_pose: Pose2::identity(),
             last_wheel: None,
+            fired: Vec::new(),
             calibrated: Polyline::new(opts.max_polyline),
             pts: Vec::new(),
             covariances: VecDeque::new(),
@@ -310,6 +313,15 @@ impl<'a> StreamRecorder<'a> {
     /// A trajectory's stamps on the `time` timeline.
     fn times(&self, traj: &Trajectory) -> Vec<f64> {
         traj.stamps.iter().map(|&t| self.time(t)).collect()
+    }
+
+    /// Logs `texts` (what changed, in firing order) at the steps where the
+    /// change detector fired.
+    pub fn changes(&mut self, texts: &[String]) {
+        for (at, text) in self.fired.clone().into_iter().zip(texts) {
+            let r = self.logger.change(at, text);
+            self.keep(r);
+        }
     }
 
     /// Logs the trajectories and finishes the recording. Returns the notes
@@ -468,6 +480,9 @@ impl RunObserver for StreamRecorder<'_> {
         };
         let r = self.logger.estimate(at, &est);
         self.keep(r);
+        if e.changed {
+            self.fired.push(at);
+        }
         self.steps += 1;
     }
 

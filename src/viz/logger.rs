@@ -68,6 +68,8 @@ pub mod entity {
     pub const ICP_ITERATIONS: &str = "icp/iterations";
     /// Trace of the ICP motion covariance (m², rad² mixed; a quality gauge).
     pub const ICP_COV_TRACE: &str = "icp/covariance_trace";
+    /// What changed where the change detector fired (text log).
+    pub const CHANGES: &str = "calib/changes";
 }
 
 /// Where on the timelines an item belongs.
@@ -228,6 +230,12 @@ pub trait Logger {
     /// nothing).
     fn notes(&self) -> Vec<String> {
         Vec::new()
+    }
+
+    /// A text entry at `at` on `entity::CHANGES`: what changed where the
+    /// change detector fired.
+    fn change(&mut self, _at: Stamp, _text: &str) -> Result<(), VizError> {
+        Ok(())
     }
 
     /// Sends everything still buffered and closes the sink (a file is

@@ -692,6 +692,13 @@ impl Logger for RerunLogger {
         Ok(())
     }
 
+    fn change(&mut self, at: Stamp, text: &str) -> Result<(), VizError> {
+        at.check()?;
+        let log = rerun::TextLog::new(text).with_level(rerun::TextLogLevel::WARN);
+        let columns = log.columns_of_unit_batches().map_err(rerun_err)?;
+        self.send_rows(entity::CHANGES, vec![at.scan], vec![at.time], columns)
+    }
+
     fn icp(&mut self, at: Stamp, iterations: u32, covariance_trace: f64) -> Result<(), VizError> {
         at.check()?;
         self.rec()?;

@@ -1,0 +1,225 @@
+//! What changed at a firing of the change detector, through the whole chain:
+//! `odocal simulate` with a known change → `odocal calibrate` (ICP on the
+//! simulated scans, the Adaptive-PF and its detector) → the named change in
+//! `--json`, `summary.json` and the history's `change` column, against the
+//! simulator's truth.
+
+use crate::support::{odocal, scratch};
+use std::path::Path;
+
+/// Simulates 60 s with `effect`, calibrates, returns the `--json` output and
+/// the history CSV.
+fn run(dir: &Path, effect: &str) -> (serde_json::Value, String) {
+    let bag = dir.join("run.mcap");
+    let truth = dir.join("truth.json");
+    let out = dir.join("cal");
+    let s = odocal(&[
+        "simulate",
+        "--seed",
+        "2",
+        "--duration",
+        "60",
+        "--effect",
+        effect,
+        "--out",
+        bag.to_str().unwrap(),
+        "--truth",
+        truth.to_str().unwrap(),
+    ]);
+    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let c = odocal(&[
+        "calibrate",
+        "--input",
+        bag.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&c.stdout).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["changes"], summary["changes"]);
+    let csv = std::fs::read_to_string(out.join("calibration.csv")).unwrap();
+    (json, csv)
+}
+
+/// The `change` column's non-empty entries, with their row's time.
+fn named_rows(csv: &str) -> Vec<(f64, String)> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header.last(), Some(&"change"));
+    assert_eq!(
+        header[..9].join(","),
+        "t,r_right,r_left,wheel_base,std_r_right,std_r_left,std_wheel_base,particles,process_sigma"
+    );
+    lines
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            assert_eq!(f.len(), header.len(), "{l}");
+            (!f[9].is_empty()).then(|| (f[0].parse().unwrap(), f[9].to_string()))
+        })
+        .collect()
+}
+
+#[test]
+fn a_radius_step_on_the_right_wheel_is_named_with_its_size() {
+    let d = scratch("change-naming-step");
+    let truth = 0.005;
+    let (json, csv) = run(&d, &format!("radius_step:time=30,right={truth},left=0"));
+    let changes = json["changes"].as_array().expect("the detector fired");
+    let first = &changes[0];
+    assert_eq!(first["effect"], "radius_step", "{first}");
+    assert_eq!(first["parameter"], "right", "{first}");
+    let est = first["estimate"].as_f64().unwrap();
+    assert!(
+        (est - truth).abs() < 0.2 * truth,
+        "step {est} m vs {truth} m"
+    );
+    let se = first["stderr"].as_f64().unwrap();
+    assert!(se > 0.0 && se < 0.2 * truth, "stderr {se}");
+    assert!(first["delta_bic"].as_f64().unwrap() > 10.0);
+    // The left wheel did not change: its size is small against the right's.
+    let left = first["parameters"]["left"].as_f64().unwrap();
+    assert!(left.abs() < 0.2 * truth, "left {left}");
+    // The detector fires after the step, within the window.
+    let t = first["time_s"].as_f64().unwrap();
+    assert!((30.0..40.0).contains(&t), "fired at {t} s");
+    let onset = first["onset_s"].as_f64().unwrap();
+    assert!((onset - 30.0).abs() < 1.0, "onset {onset} s");
+    let rows = named_rows(&csv);
+    assert_eq!(rows.len(), changes.len());
+    assert!((rows[0].0 - t).abs() < 1e-6 && rows[0].1 == "radius_step");
+}
+
+#[test]
+fn a_latency_change_is_not_named_a_radius_step() {
+    let d = scratch("change-naming-latency");
+    let (json, csv) = run(&d, "latency_change:time=30,delay=0.08");
+    let changes = json["changes"].as_array().expect("the detector fired");
+    for c in changes {
+        assert_ne!(c["effect"], "radius_step", "{c}");
+    }
+    let first = &changes[0];
+    assert_eq!(first["effect"], "latency", "{first}");
+    let est = first["estimate"].as_f64().unwrap();
+    assert!((est - 0.08).abs() < 0.2 * 0.08, "latency {est} s vs 0.08 s");
+    assert_eq!(named_rows(&csv).len(), changes.len());
+}
+
+/// A logger that keeps the text entries of what changed and the stamps of
+/// the estimates.
+#[derive(Default)]
+struct Notes {
+    changes: Vec<(i64, f64, String)>,
+    estimates: Vec<(i64, f64)>,
+}
+
+impl odocal::viz::Logger for Notes {
+    fn map(&mut self, _: &[[nalgebra::Point2<f64>; 2]]) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn scan(
+        &mut self,
+        _: odocal::viz::Stamp,
+        _: &odocal::geom::Pose2,
+        _: &odocal::geom::Pose2,
+        _: &[nalgebra::Point2<f64>],
+    ) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn trajectory(
+        &mut self,
+        _: odocal::viz::TrajectoryKind,
+        _: &[f64],
+        _: &[odocal::geom::Pose2],
+    ) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn particles(
+        &mut self,
+        _: odocal::viz::Stamp,
+        _: &[f64],
+        _: &[f64],
+        _: &[f64],
+    ) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn estimate(
+        &mut self,
+        at: odocal::viz::Stamp,
+        _: &odocal::viz::CalibEstimate,
+    ) -> Result<(), odocal::viz::VizError> {
+        self.estimates.push((at.scan, at.time));
+        Ok(())
+    }
+    fn icp(&mut self, _: odocal::viz::Stamp, _: u32, _: f64) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+    fn change(&mut self, at: odocal::viz::Stamp, text: &str) -> Result<(), odocal::viz::VizError> {
+        self.changes.push((at.scan, at.time, text.to_string()));
+        Ok(())
+    }
+    fn finish(&mut self) -> Result<(), odocal::viz::VizError> {
+        Ok(())
+    }
+}
+
+#[test]
+fn the_recording_carries_what_changed_at_the_firing() {
+    use odocal::pipeline::changes::{describe, ChangeWatch};
+    use odocal::pipeline::observe::Observers;
+    use odocal::pipeline::recorder::{RecorderOptions, StreamRecorder};
+    let robot = odocal::robot::RobotConfig::default();
+    let cfg = odocal::pipeline::Config::load(None).unwrap();
+    let sim = odocal::sim::SimConfig {
+        duration_s: 60.0,
+        seed: 4,
+        ..Default::default()
+    };
+    let effects =
+        [odocal::effects::Effect::parse("radius_step:time=30,right=0,left=0.005").unwrap()];
+    let (rec, _) = odocal::sim::simulate(&sim, &robot, &effects, &mut |_| {}).unwrap();
+    let params = odocal::pipeline::calibrate::params_for_robot(&cfg.calib, &robot);
+    let mut notes = Notes::default();
+    let mut watch = ChangeWatch::default();
+    let mut recorder = StreamRecorder::new(
+        &mut notes,
+        RecorderOptions::default(),
+        robot.diff_drive(),
+        robot.laser.unwrap().pose(),
+    );
+    let mut source = odocal::io::RecordingSource::new(&rec);
+    odocal::pipeline::drive::run_calibration(
+        &mut source,
+        &robot,
+        &cfg.icp,
+        &params,
+        &cfg.measurements,
+        &mut Observers(vec![&mut recorder, &mut watch]),
+    )
+    .unwrap();
+    let changes = watch.name(&robot, &params.change.naming);
+    assert!(!changes.is_empty(), "the detector fired");
+    assert_eq!(changes[0].effect, "radius_step");
+    assert_eq!(changes[0].parameter, "left");
+    let texts: Vec<String> = changes.iter().map(describe).collect();
+    recorder.changes(&texts);
+    recorder.finish().unwrap();
+    assert_eq!(notes.changes.len(), changes.len());
+    let (scan, time, text) = &notes.changes[0];
+    assert!(text.contains("radius_step left"), "{text}");
+    // At the estimate of the step that fired, on both timelines (the
+    // recording's time starts at its first sample).
+    let at = notes
+        .estimates
+        .iter()
+        .find(|e| e.1 == *time)
+        .expect("an estimate at the firing's time");
+    assert_eq!(at.0, *scan);
+    assert!(
+        (time - changes[0].time_s).abs() < 0.5,
+        "{time} vs {}",
+        changes[0].time_s
+    );
+}
