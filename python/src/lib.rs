@@ -231,7 +231,7 @@ fn calibrate(
     let done = py
         .detach(|| pipeline::calibrate::run(&job, &mut NoObserver))
         .map_err(raise)?;
-    json(&done.summary)
+    json(&done.paste.with(&done.summary))
 }
 
 /// `odocal eval --json`.
