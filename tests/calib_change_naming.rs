@@ -167,8 +167,9 @@ impl odocal::viz::Logger for Notes {
 
 #[test]
 fn the_recording_carries_what_changed_at_the_firing() {
-    use odocal::pipeline::changes::{describe, ChangeWatch};
+    use odocal::pipeline::changes::describe;
     use odocal::pipeline::observe::Observers;
+    use odocal::pipeline::outputs::CalibFiles;
     use odocal::pipeline::recorder::{RecorderOptions, StreamRecorder};
     let robot = odocal::robot::RobotConfig::default();
     let cfg = odocal::pipeline::Config::load(None).unwrap();
@@ -182,7 +183,9 @@ fn the_recording_carries_what_changed_at_the_firing() {
     let (rec, _) = odocal::sim::simulate(&sim, &robot, &effects, &mut |_| {}).unwrap();
     let params = odocal::pipeline::calibrate::params_for_robot(&cfg.calib, &robot);
     let mut notes = Notes::default();
-    let mut watch = ChangeWatch::default();
+    let mut files = CalibFiles::create(&scratch("change_naming_recorder"))
+        .unwrap()
+        .naming_changes(&robot, &params.change.naming);
     let mut recorder = StreamRecorder::new(
         &mut notes,
         RecorderOptions::default(),
@@ -196,10 +199,10 @@ fn the_recording_carries_what_changed_at_the_firing() {
         &cfg.icp,
         &params,
         &cfg.measurements,
-        &mut Observers(vec![&mut recorder, &mut watch]),
+        &mut Observers(vec![&mut recorder, &mut files]),
     )
     .unwrap();
-    let changes = watch.name(&robot, &params.change.naming);
+    let changes = files.changes();
     assert!(!changes.is_empty(), "the detector fired");
     assert_eq!(changes[0].effect, "radius_step");
     assert_eq!(changes[0].parameter, "left");

@@ -5,7 +5,6 @@
 
 pub use super::calibrate_job::Start;
 pub use super::calibrate_job::{CalibSource, CalibrateJob, CalibrateOutcome, CalibratorChoice};
-use super::changes::ChangeWatch;
 use super::drive;
 pub use super::drive::MeasurementConfig;
 use super::observe::{NoObserver, Observers, RunObserver};
@@ -117,8 +116,10 @@ pub fn run(
         None => &mut quiet,
     };
     let mut files = CalibFiles::create(&job.out)?;
-    let mut changes = ChangeWatch::default();
-    let mut obs = Observers(vec![&mut files, rec_obs, watch, &mut changes]);
+    if params.change.naming.enabled {
+        files = files.naming_changes(robot, &params.change.naming);
+    }
+    let mut obs = Observers(vec![&mut files, rec_obs, watch]);
     let run = Run {
         cfg: &cfg,
         nominal: &nominal,
@@ -164,7 +165,7 @@ pub fn run(
     if let Some(w) = wheel_source {
         super::wheels::state(&mut summary, w);
     }
-    name_changes(&mut summary, &changes, &mut files, robot, &params);
+    summary.changes = files.changes();
     if let Some(s) = started {
         summary.rebase(nominal.robot.diff_drive());
         summary.start = Some(s.est);
@@ -181,21 +182,6 @@ pub fn run(
         notes,
         paste,
     })
-}
-
-/// What changed at each firing of the change detector, into the summary
-/// and the history's `change` column (when naming is on and it fired).
-fn name_changes(
-    summary: &mut CalibSummary,
-    changes: &ChangeWatch,
-    files: &mut CalibFiles,
-    robot: &RobotConfig,
-    params: &CalibParams,
-) {
-    if params.change.naming.enabled && changes.fired() {
-        summary.changes = changes.name(robot, &params.change.naming);
-        files.name_changes(summary.changes.iter().map(|c| c.effect.clone()).collect());
-    }
 }
 
 /// The Rerun recording's last entries (what changed at each firing), then

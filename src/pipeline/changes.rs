@@ -1,76 +1,144 @@
-//! Keeps what a calibration run needs to name its changes after the run:
-//! the wheel, gyro and ICP streams and the estimate at every step, then,
-//! at every firing of the change detector, the effect that changed
-//! ([`crate::diagnose::onset`]) against the filter's estimate at the start of
-//! the firing's window.
+//! Names what changed at every firing of a calibration run's change
+//! detector ([`crate::diagnose::onset`]), against the filter's estimate at
+//! the start of the firing's window, as soon as the run has passed the
+//! window: the wheel, gyro and ICP streams and the estimates are kept only
+//! as far back as a window reaches.
 
-use super::observe::RunObserver;
-use crate::calib::{CloudView, Estimate};
+use crate::calib::Estimate;
 use crate::diagnose::onset::{name_change, NamedChange, OnsetParams};
 use crate::diagnose::Measured;
 use crate::io::Item;
 use crate::motion::Motion;
 use crate::recording::{GyroSample, WheelSample};
 use crate::robot::RobotConfig;
+use std::collections::VecDeque;
 
-/// The streams and estimates of a run (an observer).
-#[derive(Debug, Default)]
+/// Time (s) kept beyond a firing's window on either side, on top of the
+/// naming's own margin and gyro window: streams arrive interleaved, not in
+/// one order.
+const SLACK_S: f64 = 1.0;
+
+/// The streams and estimates of the last seconds of a run (a window that
+/// slides with it, so that a run of any length is named in bounded memory),
+/// the firings of the change detector still to be named and those named.
+#[derive(Debug)]
 pub struct ChangeWatch {
-    wheels: Vec<WheelSample>,
-    gyro: Vec<GyroSample>,
-    motions: Vec<Motion>,
-    /// (end of step (s), estimated radii and wheel base (m), detector fired).
-    steps: Vec<(f64, [f64; 3], bool)>,
+    robot: RobotConfig,
+    p: OnsetParams,
+    wheels: VecDeque<WheelSample>,
+    gyro: VecDeque<GyroSample>,
+    motions: VecDeque<Motion>,
+    /// (end of step (s), estimated radii and wheel base (m)).
+    steps: VecDeque<(f64, [f64; 3])>,
+    /// Firing times (s) whose window is not complete yet.
+    pending: VecDeque<f64>,
+    /// Latest stamp seen (s).
+    now: f64,
 }
 
 impl ChangeWatch {
-    /// Whether the detector fired at all.
-    pub fn fired(&self) -> bool {
-        self.steps.iter().any(|s| s.2)
+    /// A watch for a filter started from `robot` (the baseline of a firing
+    /// before any estimate), naming by `p`.
+    pub fn new(robot: &RobotConfig, p: &OnsetParams) -> Self {
+        Self {
+            robot: robot.clone(),
+            p: p.clone(),
+            wheels: VecDeque::new(),
+            gyro: VecDeque::new(),
+            motions: VecDeque::new(),
+            steps: VecDeque::new(),
+            pending: VecDeque::new(),
+            now: f64::NEG_INFINITY,
+        }
     }
 
-    /// What changed at each firing, in order; `robot` is the model the
-    /// filter started from (the baseline of a firing before any estimate).
-    pub fn name(&self, robot: &RobotConfig, p: &OnsetParams) -> Vec<NamedChange> {
-        let measured = Measured {
-            wheels: &self.wheels,
-            motions: &self.motions,
-            gyro: &self.gyro,
-            reference: &[],
-        };
-        self.steps
-            .iter()
-            .filter(|s| s.2)
-            .map(|&(t, _, _)| {
-                let start = t - p.before_s;
-                let mut base = robot.clone();
-                if let Some((_, [rr, rl, d], _)) =
-                    self.steps.iter().take_while(|s| s.0 <= start).last()
-                {
-                    (base.r_right, base.r_left, base.wheel_base) = (*rr, *rl, *d);
-                }
-                name_change(&base, &measured, t, p).unwrap_or_else(|| NamedChange::undetermined(t))
-            })
-            .collect()
-    }
-}
-
-impl RunObserver for ChangeWatch {
-    fn item(&mut self, item: &Item) {
+    /// Takes a stream item.
+    pub fn item(&mut self, item: &Item) {
         match item {
-            Item::Wheel(w) => self.wheels.push(*w),
-            Item::Gyro(g) => self.gyro.push(*g),
+            Item::Wheel(w) => {
+                self.now = self.now.max(w.stamp);
+                self.wheels.push_back(*w);
+            }
+            Item::Gyro(g) => {
+                self.now = self.now.max(g.stamp);
+                self.gyro.push_back(*g);
+            }
             _ => {}
         }
     }
 
-    fn motion(&mut self, motion: &Motion) {
-        self.motions.push(motion.clone());
+    /// Takes a scan-matching motion.
+    pub fn motion(&mut self, motion: &Motion) {
+        self.now = self.now.max(motion.t1);
+        self.motions.push_back(motion.clone());
     }
 
-    fn step(&mut self, e: &Estimate, _cloud: Option<CloudView<'_>>) {
+    /// Takes the estimate after a filter step; returns the firings whose
+    /// window is now complete, named, in firing order.
+    pub fn step(&mut self, e: &Estimate) -> Vec<NamedChange> {
+        self.now = self.now.max(e.t);
         self.steps
-            .push((e.t, [e.r_right, e.r_left, e.wheel_base], e.changed));
+            .push_back((e.t, [e.r_right, e.r_left, e.wheel_base]));
+        if e.changed {
+            self.pending.push_back(e.t);
+        }
+        let named = self.name_ready(false);
+        self.forget_old();
+        named
+    }
+
+    /// Names the firings still pending at the end of the run.
+    pub fn finish(&mut self) -> Vec<NamedChange> {
+        self.name_ready(true)
+    }
+
+    /// Names the pending firings whose window has passed (all at the end).
+    fn name_ready(&mut self, end: bool) -> Vec<NamedChange> {
+        let mut out = Vec::new();
+        while let Some(&t) = self.pending.front() {
+            if !end && self.now < t + self.p.after_s + self.p.margin + SLACK_S {
+                break;
+            }
+            out.push(self.name(t));
+            self.pending.pop_front();
+        }
+        out
+    }
+
+    /// What changed at the firing at `t` (s), against the filter's estimate
+    /// at the start of its window.
+    fn name(&mut self, t: f64) -> NamedChange {
+        let start = t - self.p.before_s;
+        let mut base = self.robot.clone();
+        if let Some((_, [rr, rl, d])) = self.steps.iter().take_while(|s| s.0 <= start).last() {
+            (base.r_right, base.r_left, base.wheel_base) = (*rr, *rl, *d);
+        }
+        let measured = Measured {
+            wheels: self.wheels.make_contiguous(),
+            motions: self.motions.make_contiguous(),
+            gyro: self.gyro.make_contiguous(),
+            reference: &[],
+        };
+        name_change(&base, &measured, t, &self.p).unwrap_or_else(|| NamedChange::undetermined(t))
+    }
+
+    /// Forgets what no pending or future firing's window reaches.
+    fn forget_old(&mut self) {
+        let from = self.pending.front().copied().unwrap_or(self.now);
+        let keep = from - self.p.before_s - self.p.margin - self.p.gyro_window - SLACK_S;
+        while self.wheels.front().is_some_and(|w| w.stamp < keep) {
+            self.wheels.pop_front();
+        }
+        while self.gyro.front().is_some_and(|g| g.stamp < keep) {
+            self.gyro.pop_front();
+        }
+        while self.motions.front().is_some_and(|m| m.t1 < keep) {
+            self.motions.pop_front();
+        }
+        // The last step before the window stays: it is a firing's baseline.
+        while self.steps.get(1).is_some_and(|s| s.0 <= keep) {
+            self.steps.pop_front();
+        }
     }
 }
 

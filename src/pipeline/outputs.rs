@@ -221,11 +221,16 @@ pub struct CalibFiles {
     dir: PathBuf,
     history: RowFile,
     trajectory: TumFile,
-    /// The history rows and whether the change detector fired at each,
-    /// written at commit: what changed is named only after the run.
-    rows: Vec<(crate::io::csv::HistoryFields, bool)>,
-    /// The names of the changes, in firing order.
-    names: Vec<String>,
+    /// Names what changed at each firing of the change detector (when
+    /// naming is on).
+    watch: Option<super::changes::ChangeWatch>,
+    /// History rows from the first firing not yet named on, and whether the
+    /// detector fired at each: a row is written once its name is known.
+    held: std::collections::VecDeque<(crate::io::csv::HistoryFields, bool)>,
+    /// Names of firings not yet written into the history.
+    names: std::collections::VecDeque<String>,
+    /// Every firing named so far, in order.
+    changes: Vec<crate::diagnose::onset::NamedChange>,
 }
 
 impl CalibFiles {
@@ -245,29 +250,63 @@ impl CalibFiles {
             dir: dir.to_path_buf(),
             history: RowFile::create(&history, crate::io::csv::HISTORY_HEADER)?,
             trajectory: TumFile::create(&trajectory)?,
-            rows: Vec::new(),
-            names: Vec::new(),
+            watch: None,
+            held: Default::default(),
+            names: Default::default(),
+            changes: Vec::new(),
         })
     }
 
-    /// The effect named at each firing of the change detector, in order
-    /// (the history's `change` column at those rows).
-    pub fn name_changes(&mut self, names: Vec<String>) {
-        self.names = names;
+    /// Names the changes of a filter started from `robot` by `p` (the
+    /// history's `change` column, [`Self::changes`]).
+    pub fn naming_changes(
+        mut self,
+        robot: &crate::robot::RobotConfig,
+        p: &crate::diagnose::onset::OnsetParams,
+    ) -> Self {
+        self.watch = Some(super::changes::ChangeWatch::new(robot, p));
+        self
+    }
+
+    /// Names the firings still pending at the end of the run; returns every
+    /// firing named, in order (empty when the detector never fired or
+    /// naming is off).
+    pub fn changes(&mut self) -> Vec<crate::diagnose::onset::NamedChange> {
+        if let Some(w) = self.watch.as_mut() {
+            let last = w.finish();
+            self.take_names(last);
+        }
+        self.changes.clone()
+    }
+
+    /// Records newly named firings and writes the rows they complete.
+    fn take_names(&mut self, named: Vec<crate::diagnose::onset::NamedChange>) {
+        for c in named {
+            self.names.push_back(c.effect.clone());
+            self.changes.push(c);
+        }
+        self.flush(false);
+    }
+
+    /// Writes the held rows whose `change` cell is known (all at the end).
+    fn flush(&mut self, end: bool) {
+        let naming = self.watch.is_some();
+        while let Some((_, fired)) = self.held.front() {
+            let name = match (*fired && naming, self.names.front()) {
+                (false, _) => String::new(),
+                (true, Some(_)) => self.names.pop_front().unwrap_or_default(),
+                (true, None) if end => String::new(),
+                (true, None) => break,
+            };
+            let (row, _) = self.held.pop_front().expect("front checked");
+            self.history
+                .row(|w| crate::io::csv::write_history_row(w, &row, &name));
+        }
     }
 
     /// Commits the history and trajectory, then writes `summary.json`.
     pub fn commit(mut self, summary: &impl serde::Serialize) -> Result<(), PipelineError> {
-        let mut names = self.names.iter();
-        for (row, fired) in std::mem::take(&mut self.rows) {
-            let name = if fired {
-                names.next().map_or("", String::as_str)
-            } else {
-                ""
-            };
-            self.history
-                .row(|w| crate::io::csv::write_history_row(w, &row, name));
-        }
+        self.flush(true);
         self.history.commit()?;
         self.trajectory.file.commit()?;
         let [_, _, js] = Self::paths(&self.dir);
@@ -278,8 +317,22 @@ impl CalibFiles {
 }
 
 impl RunObserver for CalibFiles {
+    fn item(&mut self, item: &crate::io::Item) {
+        if let Some(w) = self.watch.as_mut() {
+            w.item(item);
+        }
+    }
+
+    fn motion(&mut self, motion: &crate::motion::Motion) {
+        if let Some(w) = self.watch.as_mut() {
+            w.motion(motion);
+        }
+    }
+
     fn step(&mut self, e: &Estimate, _cloud: Option<CloudView<'_>>) {
-        self.rows.push((e.history_row(), e.changed));
+        self.held.push_back((e.history_row(), e.changed));
+        let named = self.watch.as_mut().map(|w| w.step(e)).unwrap_or_default();
+        self.take_names(named);
     }
 
     fn calibrated_pose(&mut self, t: f64, pose: &Pose2) {
