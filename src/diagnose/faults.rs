@@ -139,7 +139,7 @@ pub fn floor_slip(f: &super::floor::SlipFit) -> Fault {
              {:.1} ± {:.1} % (statistical; ± {:.1} % place-dependent scan-matching scale, \
              from null runs) more from the wheels than from the scan matching in one region \
              of the path than elsewhere (z = {:.1}, Newey–West; likelihood ratio {:.0} against \
-             one constant scale per stream; the region searched over bands of the path), and \
+             constant radii and wheel base (linearised); the region searched over bands of the path), and \
              still so against the effects fitted outside it; region: along the axis at \
              {:.0}° from {} to {} of the scan-matched path (origin and axes at its start \
              pose), x {:.1}…{:.1} m, y {:.1}…{:.1} m, {:.0} % of the rows; the effects \

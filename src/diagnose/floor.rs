@@ -8,11 +8,14 @@
 //! there. With ê = measured − predicted on ICP's forward velocity and turn
 //! rate, and p̂ the predicted V or W:
 //!
-//!   constant:  ê_V = g_V · p̂_V,              ê_W = g_W · p̂_W
-//!   region R:  ê_V = (g_V + Δ·1_R) · p̂_V,    ê_W = (g_W + Δ·1_R) · p̂_W
+//!   constant:  ê = M · p̂                 (p̂ = (p̂_V, p̂_W), M 2 × 2)
+//!   region R:  ê = (M + Δ·1_R · I) · p̂
 //!
-//! (g_V, g_W absorb a common radius scale and a wheel-base scale; Δ is the
-//! same on both streams because slip scales both wheels alike). Weighted
+//! (M is the linear part of every constant wheel effect: both radii and the
+//! wheel base change V and W linearly in the two wheel rates, so a radius
+//! difference, which turns the robot while it drives straight, is not taken
+//! for a place; Δ is the same on both streams because slip scales both
+//! wheels alike). Weighted
 //! least squares with each row's ICP σ and one robust scale per stream; the
 //! likelihood-ratio statistic of the region model against the constant one
 //! is maximised over bands {p : lo ≤ p·u < hi} of the scan-matched path
@@ -28,7 +31,7 @@
 use super::data::{GyroRow, IcpRow, Part};
 use super::stats::robust;
 use crate::effects::Departures;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix2, Matrix5, Vector5};
 
 /// Systematic standard error of a slip (relative): the root mean square of
 /// the slip the search finds on null runs (the blind suite's null group,
@@ -96,7 +99,7 @@ pub struct SlipFit {
     /// The region.
     pub region: Region,
     /// Relative over-reading of the wheels inside against outside:
-    /// (1 + g_V) / (1 + g_V + Δ) − 1.
+    /// (1 + g) / (1 + g + Δ) − 1, g the fitted forward scale outside.
     pub slip: f64,
     /// Its Newey–West standard error.
     pub stderr: f64,
@@ -206,8 +209,9 @@ pub fn corrected(
 /// Per ICP row: weighted regressor and residual of both streams, its
 /// position and time.
 struct Rows {
-    /// [w_V p̂_V², w_V p̂_V ê_V, w_W p̂_W², w_W p̂_W ê_W] per row.
-    q: Vec<[f64; 4]>,
+    /// Per row: w_V (p̂_V², p̂_V p̂_W, p̂_W²), w_W (p̂_V², p̂_V p̂_W, p̂_W²),
+    /// w_V (p̂_V ê_V, p̂_W ê_V), w_W (p̂_V ê_W, p̂_W ê_W).
+    q: Vec<[f64; Q]>,
     /// (p̂_V, ê_V, w_V, p̂_W, ê_W, w_W) per row.
     raw: Vec<[f64; 6]>,
     pos: Vec<[f64; 2]>,
@@ -247,12 +251,18 @@ fn rows(all: Part, x: &Departures) -> Option<Rows> {
         .collect();
     let q = raw
         .iter()
-        .map(|r| {
+        .map(|&[pv, ev, wv, pw, ew, ww]| {
             [
-                r[2] * r[0] * r[0],
-                r[2] * r[0] * r[1],
-                r[5] * r[3] * r[3],
-                r[5] * r[3] * r[4],
+                wv * pv * pv,
+                wv * pv * pw,
+                wv * pw * pw,
+                ww * pv * pv,
+                ww * pv * pw,
+                ww * pw * pw,
+                wv * pv * ev,
+                wv * pw * ev,
+                ww * pv * ew,
+                ww * pw * ew,
             ]
         })
         .collect();
@@ -265,59 +275,77 @@ fn rows(all: Part, x: &Departures) -> Option<Rows> {
     })
 }
 
+/// Sums per row kept for the search.
+const Q: usize = 10;
+
 /// Normal equations of the region model from the totals `t` and the sums
-/// `s` inside: (A, r) with A β = r, β = (g_V, g_W, Δ).
-fn normal(t: &[f64; 4], s: &[f64; 4]) -> (Matrix3<f64>, Vector3<f64>) {
-    let a = Matrix3::new(t[0], 0.0, s[0], 0.0, t[2], s[2], s[0], s[2], s[0] + s[2]);
-    (a, Vector3::new(t[1], t[3], s[1] + s[3]))
+/// `s` inside: (A, r) with A β = r, β = (M_VV, M_VW, M_WV, M_WW, Δ).
+fn normal(t: &[f64; Q], s: &[f64; Q]) -> (Matrix5<f64>, Vector5<f64>) {
+    let mut a = Matrix5::zeros();
+    a.fixed_view_mut::<2, 2>(0, 0)
+        .copy_from(&Matrix2::new(t[0], t[1], t[1], t[2]));
+    a.fixed_view_mut::<2, 2>(2, 2)
+        .copy_from(&Matrix2::new(t[3], t[4], t[4], t[5]));
+    for (k, v) in [s[0], s[1], s[4], s[5]].into_iter().enumerate() {
+        a[(k, 4)] = v;
+        a[(4, k)] = v;
+    }
+    a[(4, 4)] = s[0] + s[5];
+    (a, Vector5::new(t[6], t[7], t[8], t[9], s[6] + s[9]))
 }
 
 /// β and the likelihood-ratio statistic against the constant model.
-fn solve(t: &[f64; 4], s: &[f64; 4]) -> Option<(Vector3<f64>, f64)> {
+fn solve(t: &[f64; Q], s: &[f64; Q]) -> Option<(Vector5<f64>, f64)> {
     let (a, r) = normal(t, s);
     let b = a.try_inverse()? * r;
-    let lr = b.dot(&r) - t[1] * t[1] / t[0] - t[3] * t[3] / t[2];
-    Some((b, lr))
+    let a0 = a.fixed_view::<4, 4>(0, 0).into_owned();
+    let r0 = r.fixed_rows::<4>(0).into_owned();
+    let b0 = a0.try_inverse()? * r0;
+    Some((b, b.dot(&r) - b0.dot(&r0)))
+}
+
+/// Column sums of the rows' search sums.
+fn totals<'a>(q: impl Iterator<Item = &'a [f64; Q]>) -> [f64; Q] {
+    q.fold([0.0; Q], |a, r| std::array::from_fn(|j| a[j] + r[j]))
 }
 
 /// The region model on the rows flagged `inside`, with its Newey–West
 /// sandwich standard error.
 fn fit(rows: &Rows, inside: &[bool], region: Region, lag_seconds: f64) -> Option<SlipFit> {
-    let mut t = [0.0; 4];
-    let mut s = [0.0; 4];
-    for (q, &k) in rows.q.iter().zip(inside) {
-        for j in 0..4 {
-            t[j] += q[j];
-            if k {
-                s[j] += q[j];
-            }
-        }
-    }
+    let t = totals(rows.q.iter());
+    let s = totals(
+        rows.q
+            .iter()
+            .zip(inside)
+            .filter(|(_, k)| **k)
+            .map(|(q, _)| q),
+    );
     let (b, lr) = solve(&t, &s)?;
     let (a, _) = normal(&t, &s);
     let ainv = a.try_inverse()?;
-    let scores: Vec<Vector3<f64>> = rows
+    let scores: Vec<Vector5<f64>> = rows
         .raw
         .iter()
         .zip(inside)
-        .map(|(r, &k)| {
-            let d = if k { b[2] } else { 0.0 };
-            let uv = r[2] * r[0] * (r[1] - (b[0] + d) * r[0]);
-            let uw = r[5] * r[3] * (r[4] - (b[1] + d) * r[3]);
-            Vector3::new(uv, uw, if k { uv + uw } else { 0.0 })
+        .map(|(&[pv, ev, wv, pw, ew, ww], &k)| {
+            let d = if k { b[4] } else { 0.0 };
+            let uv = wv * (ev - (b[0] + d) * pv - b[1] * pw);
+            let uw = ww * (ew - b[2] * pv - (b[3] + d) * pw);
+            let inner = if k { pv * uv + pw * uw } else { 0.0 };
+            Vector5::new(pv * uv, pw * uv, pv * uw, pw * uw, inner)
         })
         .collect();
     let lags = (lag_seconds * rows.rate).ceil() as usize;
-    let mut meat: Matrix3<f64> = scores.iter().map(|g| g * g.transpose()).sum();
+    let mut meat: Matrix5<f64> = scores.iter().map(|g| g * g.transpose()).sum();
     for l in 1..=lags.min(scores.len().saturating_sub(1)) {
         let w = 1.0 - l as f64 / (lags as f64 + 1.0);
-        let gamma: Matrix3<f64> = (l..scores.len())
+        let gamma: Matrix5<f64> = (l..scores.len())
             .map(|i| scores[i] * scores[i - l].transpose())
             .sum();
         meat += (gamma + gamma.transpose()) * w;
     }
     let cov = ainv * meat * ainv;
-    let se = cov[(2, 2)].max(0.0).sqrt();
+    let se = cov[(4, 4)].max(0.0).sqrt();
     let inner: Vec<[f64; 2]> = rows
         .pos
         .iter()
@@ -330,7 +358,15 @@ fn fit(rows: &Rows, inside: &[bool], region: Region, lag_seconds: f64) -> Option
     }
     let ext =
         |k: usize, f: fn(f64, f64) -> f64, init: f64| inner.iter().map(|p| p[k]).fold(init, f);
-    let (g, d) = (b[0], b[2]);
+    // The forward scale outside: the fitted M p̂ over p̂ on the rows outside
+    // (M itself is not identified when V and W stay proportional).
+    let (num, den) = rows.raw.iter().zip(inside).filter(|(_, k)| !**k).fold(
+        (0.0, 0.0),
+        |(n, d), (&[pv, _, wv, pw, _, _], _)| {
+            (n + wv * pv * (b[0] * pv + b[1] * pw), d + wv * pv * pv)
+        },
+    );
+    let (g, d) = (if den > 0.0 { num / den } else { 0.0 }, b[4]);
     let slip = (1.0 + g) / (1.0 + g + d) - 1.0;
     Some(SlipFit {
         region,
@@ -355,12 +391,7 @@ fn fit(rows: &Rows, inside: &[bool], region: Region, lag_seconds: f64) -> Option
 /// a fifth of a step apart, bounds on five times finer quantiles).
 pub fn search(all: Part, x: &Departures, s: &FloorSettings) -> Option<SlipFit> {
     let rows = rows(all, x)?;
-    let mut t = [0.0; 4];
-    for q in &rows.q {
-        for j in 0..4 {
-            t[j] += q[j];
-        }
-    }
+    let t = totals(rows.q.iter());
     let d = s.directions.max(1);
     let step = std::f64::consts::PI / d as f64;
     let coarse: Vec<f64> = (0..d).map(|k| step * k as f64).collect();
@@ -378,7 +409,7 @@ pub fn search(all: Part, x: &Departures, s: &FloorSettings) -> Option<SlipFit> {
 /// share of the rows inside `share`: (likelihood ratio, band).
 fn best_band(
     rows: &Rows,
-    t: &[f64; 4],
+    t: &[f64; Q],
     angles: &[f64],
     quantiles: usize,
     share: (f64, f64),
@@ -390,7 +421,7 @@ fn best_band(
         let proj: Vec<f64> = rows.pos.iter().map(|p| p[0] * c + p[1] * sn).collect();
         let mut order: Vec<usize> = (0..n).collect();
         order.sort_by(|a, b| proj[*a].total_cmp(&proj[*b]));
-        let mut prefix = vec![[0.0; 4]; n + 1];
+        let mut prefix = vec![[0.0; Q]; n + 1];
         for (i, &o) in order.iter().enumerate() {
             prefix[i + 1] = std::array::from_fn(|j| prefix[i][j] + rows.q[o][j]);
         }
@@ -406,11 +437,11 @@ fn best_band(
                 if part < share.0 || part > share.1 {
                     continue;
                 }
-                let inside: [f64; 4] = std::array::from_fn(|j| prefix[b1][j] - prefix[b0][j]);
+                let inside: [f64; Q] = std::array::from_fn(|j| prefix[b1][j] - prefix[b0][j]);
                 let Some((b, lr)) = solve(t, &inside) else {
                     continue;
                 };
-                if b[2] < 0.0 && best.is_none_or(|(l, _)| lr > l) {
+                if b[4] < 0.0 && best.is_none_or(|(l, _)| lr > l) {
                     let region = Region {
                         angle,
                         lo: bound(b0),
