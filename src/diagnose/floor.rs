@@ -15,9 +15,8 @@
 //! wheel base change V and W linearly in the two wheel rates, so a radius
 //! difference, which turns the robot while it drives straight, is not taken
 //! for a place; Δ is the same on both streams because slip scales both
-//! wheels alike). Weighted
-//! least squares with each row's ICP σ and one robust scale per stream; the
-//! likelihood-ratio statistic of the region model against the constant one
+//! wheels alike). Weighted least squares with each row's ICP σ and one
+//! robust scale per stream; the likelihood-ratio statistic of the region model against the constant one
 //! is maximised over bands {p : lo ≤ p·u < hi} of the scan-matched path
 //! (directions u every 180°/`directions`, bounds on a grid of the rows'
 //! quantiles: a change-point search in two dimensions that includes every
