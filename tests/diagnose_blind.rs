@@ -75,9 +75,20 @@ fn faults_outside_the_table_are_named_as_themselves() {
         ("left encoder reversed", "square", 52),
         ("right wheel out of round (1 %)", "corridor-loop", 53),
         ("latency +60 ms halfway", "square-ccw", 54),
+        // Wheels 10 % faster over half the hall: named as the floor, not
+        // spread over table effects.
+        (
+            "slip on part of the floor (10 %, half the area)",
+            "hall",
+            55,
+        ),
     ] {
         let r = blind(label, scenario, seed);
         assert!(r.right, "{r:?}");
         assert!(r.false_causes.is_empty(), "{r:?}");
+        if label.starts_with("slip") {
+            // The floor slip's size against the hidden 10 %.
+            assert_eq!(r.estimates_ok, Some(true), "{r:?}");
+        }
     }
 }

@@ -92,3 +92,76 @@ pub fn out_of_round(
             .into(),
     }
 }
+
+/// Slip on part of the floor from the region model fitted against the
+/// selected table effects ([`super::floor`]). Parameters: `slip` (relative
+/// over-reading of both wheels inside the region against the rest of the
+/// path) and `slip_stderr` (the Newey–West one and `slip_systematic`, what
+/// the scan matching's own place-dependent scale leaves, in quadrature); the region as a band of the scan-matched path
+/// (origin and axes at its start pose): `axis` (rad), `from`, `to` (m along
+/// it, ±∞ when open), and the box the path covers inside it, `x_min`,
+/// `x_max`, `y_min`, `y_max` (m); `share` of the ICP rows inside.
+pub fn floor_slip(f: &super::floor::SlipFit) -> Fault {
+    use super::floor::SYSTEMATIC_SLIP;
+    let r = &f.region;
+    let share = f.rows.0 as f64 / f.rows.1.max(1) as f64;
+    let mut parameters = BTreeMap::new();
+    for (k, v) in [
+        ("slip", f.slip),
+        ("slip_stderr", f.stderr.hypot(SYSTEMATIC_SLIP)),
+        ("axis", r.angle),
+        ("from", r.lo),
+        ("to", r.hi),
+        ("slip_systematic", SYSTEMATIC_SLIP),
+        ("x_min", f.bbox[0]),
+        ("x_max", f.bbox[1]),
+        ("y_min", f.bbox[2]),
+        ("y_max", f.bbox[3]),
+        ("share", share),
+    ] {
+        // An open side of the band has no bound (JSON has no infinity).
+        if v.is_finite() {
+            parameters.insert(k.to_string(), v);
+        }
+    }
+    let bound = |v: f64| {
+        if v.is_finite() {
+            format!("{v:.1} m")
+        } else {
+            "the path's end".to_string()
+        }
+    };
+    Fault {
+        name: "floor_slip".into(),
+        parameters,
+        evidence: format!(
+            "before any effect is fitted, forward speed and turn rate both read \
+             {:.1} ± {:.1} % (statistical; ± {:.1} % place-dependent scan-matching scale, \
+             from null runs) more from the wheels than from the scan matching in one region \
+             of the path than elsewhere (z = {:.1}, Newey–West; likelihood ratio {:.0} against \
+             constant radii and wheel base (linearised); the region searched over bands of the path), and \
+             still so against the effects fitted outside it; region: along the axis at \
+             {:.0}° from {} to {} of the scan-matched path (origin and axes at its start \
+             pose), x {:.1}…{:.1} m, y {:.1}…{:.1} m, {:.0} % of the rows; the effects \
+             below are fitted with the measurements there scaled by that slip and the \
+             rows within 1 m of the region's bounds left out",
+            100.0 * f.slip,
+            100.0 * f.stderr,
+            100.0 * SYSTEMATIC_SLIP,
+            f.z.abs(),
+            f.lr,
+            r.angle.to_degrees(),
+            bound(r.lo),
+            bound(r.hi),
+            f.bbox[0],
+            f.bbox[1],
+            f.bbox[2],
+            f.bbox[3],
+            100.0 * share
+        ),
+        fix: "the floor there lets the wheels spin (wet, dusty, loose, a ramp): odometry \
+              over it cannot be calibrated by constants; trust the scan matching there, \
+              weight the wheels down, or keep calibration drives off that area"
+            .into(),
+    }
+}

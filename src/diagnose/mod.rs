@@ -19,6 +19,7 @@ pub mod diagnosis;
 pub mod encoder_table;
 pub mod faults;
 pub mod fit;
+pub mod floor;
 pub mod free;
 pub mod gain;
 pub mod model;

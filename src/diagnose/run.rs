@@ -6,6 +6,7 @@ use super::data::{drop_outliers, gyro_rows, icp_rows, merge_motions, GyroRow, Ic
 use super::diagnosis::{Cause, Diagnosis, Fault, Remaining, Verdict};
 use super::faults;
 use super::fit::Fit;
+use super::floor::{self, FloorSettings};
 use super::gain::heldout_gain;
 use super::model::Replay;
 use super::remaining::{remaining_tests, RemainingTest, PERIODIC};
@@ -37,33 +38,94 @@ pub fn run(
     let merged = merge_motions(m.motions, p.min_interval);
     let icp0 = icp_rows(&merged, span, p.margin);
     let gyro0 = gyro_rows(m.gyro, span, p.margin, p.gyro_window);
-    // Screen gross failures against the nominal model, select, then reject
-    // outliers against the selected model and select again on those rows.
-    let first = Pass::new(
-        &replay,
-        &icp0,
-        &gyro0,
-        &Departures::default(),
+    let mut found: Vec<Fault> = rewired.into_iter().map(|r| r.1).collect();
+    let rows = Rows {
+        replay: &replay,
+        span,
+        origin,
+        reference: m.reference,
+    };
+    if let Some((pass, fault)) = floor_slip(&rows, &icp0, &gyro0, p) {
+        found.push(fault);
+        return Ok(pass.diagnosis(&replay, m, p, robot, found));
+    }
+    let pass = select_twice(&rows, &icp0, &gyro0, p)?;
+    Ok(pass.diagnosis(&replay, m, p, robot, found))
+}
+
+/// What every selection pass shares: the replay, the wheel span, the time
+/// origin and the reference.
+struct Rows<'a> {
+    replay: &'a Replay,
+    span: (f64, f64),
+    origin: f64,
+    reference: &'a [crate::recording::StampedPose],
+}
+
+/// Screens gross failures against the nominal model and selects, then
+/// rejects outliers against the selected model and selects again on those
+/// rows.
+fn select_twice(
+    r: &Rows,
+    icp0: &[IcpRow],
+    gyro0: &[GyroRow],
+    p: &DiagnoseParams,
+) -> Result<Pass, DiagnoseError> {
+    let pass = |x: &Departures, sigma: f64| {
+        Pass::new(
+            r.replay,
+            icp0,
+            gyro0,
+            x,
+            sigma,
+            r.span,
+            p,
+            r.origin,
+            r.reference,
+        )
+    };
+    let first = pass(&Departures::default(), 4.0 * p.outlier_sigma)?;
+    pass(&Departures::of(&first.model().effects), p.outlier_sigma)
+}
+
+/// Slip on part of the floor, looked for on the nominal residuals before any
+/// selection ([`floor::search`]); when a region stands out, the table
+/// effects are selected on the rows with that slip taken out
+/// ([`floor::corrected`]), and the region must still stand out in the
+/// measured rows against that model ([`floor::refit`]) for the fault to be
+/// named. Returns the pass on the corrected rows and the fault.
+fn floor_slip(
+    r: &Rows,
+    icp0: &[IcpRow],
+    gyro0: &[GyroRow],
+    p: &DiagnoseParams,
+) -> Option<(Pass, Fault)> {
+    let s = FloorSettings {
+        lag_seconds: p.structure_lag,
+        ..Default::default()
+    };
+    let (mut icp, mut gyro) = (icp0.to_vec(), gyro0.to_vec());
+    let nominal = Departures::default();
+    drop_outliers(
+        r.replay,
+        &mut icp,
+        &mut gyro,
         4.0 * p.outlier_sigma,
-        span,
-        p,
-        origin,
-        m.reference,
-    )?;
-    let fitted = Departures::of(&first.model().effects);
-    let pass = Pass::new(
-        &replay,
-        &icp0,
-        &gyro0,
-        &fitted,
-        p.outlier_sigma,
-        span,
-        p,
-        origin,
-        m.reference,
-    )?;
-    let wiring: Vec<Fault> = rewired.into_iter().map(|r| r.1).collect();
-    Ok(pass.diagnosis(&replay, m, p, robot, wiring))
+        &nominal,
+    );
+    let all = Part {
+        replay: r.replay,
+        icp: &icp,
+        gyro: &gyro,
+    };
+    let candidate = floor::search(all, &nominal, &s).filter(|f| f.reported(&s))?;
+    let (icp_c, gyro_c) =
+        floor::corrected(&icp, &gyro, &candidate.region, candidate.slip, s.margin);
+    let pass = select_twice(r, &icp_c, &gyro_c, p).ok()?;
+    let xm = Departures::of(&pass.model().effects);
+    let confirmed =
+        floor::refit(all, &xm, &candidate.region, s.lag_seconds).filter(|f| f.reported(&s))?;
+    Some((pass, faults::floor_slip(&confirmed)))
 }
 
 /// One selection on the rows kept by an outlier screen.
@@ -159,7 +221,6 @@ impl Pass {
             ..Default::default()
         };
         faults.extend(stability::latency_change(all, &xm, &st));
-        faults.extend(stability::floor_slip(all, &xm, &st));
         let tests = remaining_tests(
             all,
             &xm,

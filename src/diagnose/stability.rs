@@ -1,20 +1,13 @@
-//! Whether what the model holds constant stays constant: a latency that
-//! changes during the run, and a slip that happens only on part of the
-//! floor. Both are faults outside the effect table; each is tested on the
-//! residuals the selected model leaves.
+//! Whether what the model holds constant stays constant in time: a latency
+//! that changes during the run, a fault outside the effect table tested on
+//! the residuals the selected model leaves (slip on part of the floor, which
+//! changes with place, is [`super::floor`]'s).
 //!
 //! Latency: a replay whose encoder delay is off by δτ leaves a residual
 //! δτ · dV/dt (and δτ · dW/dt): the delay error is regressed on the
 //! predicted accelerations in consecutive time windows, and the windows'
 //! estimates are tested for one common value (χ², K − 1 degrees of freedom,
 //! Newey–West standard errors within each window).
-//!
-//! Floor: the ICP motions are chained into a path; the forward-velocity
-//! residual relative to the speed is averaged per pass through each cell of
-//! a grid over that path, and the passes are compared across cells by a
-//! one-way analysis of variance (a slippery patch is the same patch at every
-//! pass; the pass-to-pass scatter within a cell is the noise it is judged
-//! against).
 
 use super::data::Part;
 use super::diagnosis::Fault;
@@ -31,11 +24,6 @@ pub struct StabilitySettings {
     pub latency_floor: f64,
     /// Share of the windows' scatter a single change must explain.
     pub change_share: f64,
-    /// Grid cell of the floor test (m).
-    pub cell: f64,
-    /// Smallest difference of relative speed residual between the slippery
-    /// and the other cells reported (relative).
-    pub slip_floor: f64,
     /// Family level of each test.
     pub alpha: f64,
     /// Newey–West span (s).
@@ -48,8 +36,6 @@ impl Default for StabilitySettings {
             windows: 12,
             latency_floor: 0.02,
             change_share: 0.7,
-            cell: 3.0,
-            slip_floor: 0.05,
             alpha: 1e-3,
             lag_seconds: 3.0,
         }
@@ -222,132 +208,4 @@ fn best_split(est: &[(f64, f64, f64)]) -> Option<(f64, f64, f64, f64)> {
             (0.5 * (a[k - 1].0 + b[0].0), 1.0 - left / total, ma, mb)
         })
         .max_by(|x, y| x.1.total_cmp(&y.1))
-}
-
-/// Relative speed residual of one pass through one cell.
-struct Pass {
-    cell: (i64, i64),
-    mean: f64,
-}
-
-/// Passes of the chained ICP path through the grid cells, each with its mean
-/// relative forward-velocity residual (rows slower than `min_speed` m/s skipped).
-fn passes(all: Part, x: &Departures, cell: f64, min_speed: f64) -> Vec<Pass> {
-    let phys = all.physical(x);
-    let nominal = Departures::default();
-    let (mut px, mut py, mut th) = (0.0f64, 0.0f64, 0.0f64);
-    let mut out: Vec<Pass> = Vec::new();
-    let (mut cur, mut sum, mut n) = ((i64::MIN, i64::MIN), 0.0, 0usize);
-    for (i, r) in all.icp.iter().enumerate() {
-        let dt = r.t1 - r.t0;
-        let (c, s) = (th.cos(), th.sin());
-        px += (c * r.z[0] - s * r.z[1]) * dt;
-        py += (s * r.z[0] + c * r.z[1]) * dt;
-        th += r.z[2] * dt;
-        let here = ((px / cell).floor() as i64, (py / cell).floor() as i64);
-        if here != cur {
-            if n >= 5 {
-                out.push(Pass {
-                    cell: cur,
-                    mean: sum / n as f64,
-                });
-            }
-            (cur, sum, n) = (here, 0.0, 0);
-        }
-        let v = all.replay.body(&nominal, r.t0, r.t1).0;
-        if v.abs() >= min_speed {
-            sum += phys[0][i] / v;
-            n += 1;
-        }
-    }
-    if n >= 5 {
-        out.push(Pass {
-            cell: cur,
-            mean: sum / n as f64,
-        });
-    }
-    out
-}
-
-/// Slip on part of the floor: cells whose passes share a different relative
-/// speed residual than the rest, beyond chance (one-way ANOVA over cells
-/// with ≥ 2 passes) and the floor.
-pub fn floor_slip(all: Part, x: &Departures, s: &StabilitySettings) -> Option<Fault> {
-    let ps = passes(all, x, s.cell, 0.2);
-    let mut cells: BTreeMap<(i64, i64), Vec<f64>> = BTreeMap::new();
-    for p in &ps {
-        cells.entry(p.cell).or_default().push(p.mean);
-    }
-    cells.retain(|_, v| v.len() >= 2);
-    let k = cells.len();
-    let n: usize = cells.values().map(Vec::len).sum();
-    if k < 3 || n <= k {
-        return None;
-    }
-    let grand = cells.values().flatten().sum::<f64>() / n as f64;
-    let means: BTreeMap<(i64, i64), f64> = cells
-        .iter()
-        .map(|(c, v)| (*c, v.iter().sum::<f64>() / v.len() as f64))
-        .collect();
-    let between: f64 = cells
-        .iter()
-        .map(|(c, v)| v.len() as f64 * (means[c] - grand).powi(2))
-        .sum();
-    let within: f64 = cells
-        .iter()
-        .map(|(c, v)| v.iter().map(|y| (y - means[c]).powi(2)).sum::<f64>())
-        .sum();
-    let f = (between / (k - 1) as f64) / (within / (n - k) as f64).max(1e-300);
-    // F(k−1, n−k) tail through the χ² approximation of (k−1)·F for large n − k.
-    let p = chi2_sf(f * (k - 1) as f64, k - 1);
-    // The slippery cells: those more than halfway from the best to the worst.
-    let (lo, hi) = means
-        .values()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| {
-            (l.min(*m), h.max(*m))
-        });
-    if !(p < s.alpha && hi - lo > s.slip_floor && n - k >= 10) {
-        return None;
-    }
-    let mid = 0.5 * (lo + hi);
-    let slippery: Vec<(i64, i64)> = means
-        .iter()
-        .filter(|(_, m)| **m < mid)
-        .map(|(c, _)| *c)
-        .collect();
-    let inside: Vec<f64> = slippery.iter().map(|c| means[c]).collect();
-    let outside: Vec<f64> = means
-        .iter()
-        .filter(|(_, m)| **m >= mid)
-        .map(|(_, m)| *m)
-        .collect();
-    let avg = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    let slip = avg(&outside) - avg(&inside);
-    let (xs, ys): (Vec<i64>, Vec<i64>) = slippery.iter().copied().unzip();
-    let bbox = |v: &[i64]| {
-        (
-            *v.iter().min().unwrap_or(&0) as f64 * s.cell,
-            (*v.iter().max().unwrap_or(&0) + 1) as f64 * s.cell,
-        )
-    };
-    let (x0, x1) = bbox(&xs);
-    let (y0, y1) = bbox(&ys);
-    let mut parameters = BTreeMap::new();
-    parameters.insert("slip".to_string(), slip);
-    parameters.insert("cells".to_string(), slippery.len() as f64);
-    Some(Fault {
-        name: "floor_slip".into(),
-        parameters,
-        evidence: format!(
-            "the forward-speed residual differs between places of the path, the same at every \
-             pass (one-way ANOVA over {k} cells of {} m, {n} passes: F = {f:.1}, p = {p:.1e}); \
-             the wheels over-read by {:.1} % in x {x0:.0}…{x1:.0} m, y {y0:.0}…{y1:.0} m of the \
-             scan-matched path (origin at its start)",
-            s.cell,
-            100.0 * slip
-        ),
-        fix: "the floor there lets the wheels spin (wet, dusty, a ramp): odometry over it \
-              cannot be calibrated by constants; weight the scan matching there or avoid the area"
-            .into(),
-    })
 }

@@ -6,7 +6,7 @@
 use super::cases::{Case, Group};
 use super::BlindParams;
 use crate::diagnose::{Diagnosis, Verdict};
-use crate::effects::Effect;
+use crate::effects::{Effect, FaultEffect};
 use crate::experiments::ExperimentInputs;
 use crate::io::{ReadOptions, TopicConfig};
 use crate::pipeline::PipelineError;
@@ -38,7 +38,8 @@ pub struct BlindRun {
     pub right: bool,
     /// Every estimate of a rightly named effect within tolerance (20 % of
     /// the true value or 2 standard errors, whichever is wider; a radius
-    /// step's time within 2 s); `None` when nothing was rightly named.
+    /// step's time within 2 s; a floor slip's size); `None` when nothing
+    /// was rightly named.
     pub estimates_ok: Option<bool>,
     /// The estimates outside tolerance, as `effect.key: got (true)`.
     pub estimate_misses: Vec<String>,
@@ -103,11 +104,14 @@ pub fn score(case: &Case, scenario: &str, seed: u64, d: &Diagnosis) -> BlindRun 
         _ => d.verdict != Verdict::NoDiscrepancy,
     };
     let right = false_causes.is_empty() && missed.is_empty() && verdict_fits;
-    let estimate_misses = estimate_misses(&case.effects, d);
+    let mut estimate_misses = estimate_misses(&case.effects, d);
+    let slip = slip_miss(case, d);
     let rightly: bool = case
         .effects
         .iter()
-        .any(|e| d.causes.iter().any(|c| c.effect == e.name()));
+        .any(|e| d.causes.iter().any(|c| c.effect == e.name()))
+        || slip.is_some();
+    estimate_misses.extend(slip.flatten());
     BlindRun {
         case: case.label.clone(),
         group: case.group,
@@ -125,6 +129,21 @@ pub fn score(case: &Case, scenario: &str, seed: u64, d: &Diagnosis) -> BlindRun 
         estimate_misses,
         gain: d.gain.relative,
     }
+}
+
+/// A floor slip's size against the hidden one (within 20 % of it or 2
+/// standard errors, whichever is wider): `None` when no floor slip was both
+/// hidden and named, `Some(None)` when its size is within tolerance.
+fn slip_miss(case: &Case, d: &Diagnosis) -> Option<Option<String>> {
+    let want = case.faults.iter().find_map(|f| match *f {
+        FaultEffect::FloorSlip { slip, .. } => Some(slip),
+        _ => None,
+    })?;
+    let f = d.faults.iter().find(|f| f.name == "floor_slip")?;
+    let got = f.parameters.get("slip").copied().unwrap_or(f64::NAN);
+    let se = f.parameters.get("slip_stderr").copied().unwrap_or(0.0);
+    let ok = (got - want).abs() <= (0.2 * want).max(2.0 * se);
+    Some((!ok).then(|| format!("floor_slip.slip: {got:.4} ({want})")))
 }
 
 /// The estimates of the hidden table effects that the diagnosis named, out
