@@ -5,7 +5,8 @@
 //! as far back as a window reaches.
 
 use crate::calib::Estimate;
-use crate::diagnose::onset::{name_change, NamedChange, OnsetParams};
+use crate::diagnose::mount::MountWatch;
+use crate::diagnose::onset::{name_change, NamedChange, OnsetParams, FILTER, MOUNT};
 use crate::diagnose::Measured;
 use crate::io::Item;
 use crate::motion::Motion;
@@ -30,10 +31,16 @@ pub struct ChangeWatch {
     motions: VecDeque<Motion>,
     /// (end of step (s), estimated radii and wheel base (m)).
     steps: VecDeque<(f64, [f64; 3])>,
-    /// Firing times (s) whose window is not complete yet.
-    pending: VecDeque<f64>,
+    /// Firings (time (s), detector) whose window is not complete yet, in
+    /// time order.
+    pending: VecDeque<(f64, &'static str)>,
+    /// The laser-mounting watch (when on).
+    mount: Option<MountWatch>,
     /// Latest stamp seen (s).
     now: f64,
+    /// The last change reported: its effect, its firing's time and the
+    /// time of the latest firing that continued it (s).
+    last: Option<(String, f64, f64)>,
 }
 
 impl ChangeWatch {
@@ -48,7 +55,9 @@ impl ChangeWatch {
             motions: VecDeque::new(),
             steps: VecDeque::new(),
             pending: VecDeque::new(),
+            mount: p.mount.enabled.then(|| MountWatch::new(&p.mount)),
             now: f64::NEG_INFINITY,
+            last: None,
         }
     }
 
@@ -67,10 +76,15 @@ impl ChangeWatch {
         }
     }
 
-    /// Takes a scan-matching motion.
+    /// Takes a scan-matching motion (the mounting watch dates a firing
+    /// back to where the mounting moved).
     pub fn motion(&mut self, motion: &Motion) {
         self.now = self.now.max(motion.t1);
         self.motions.push_back(motion.clone());
+        if let Some(t) = self.mount.as_mut().and_then(|w| w.motion(motion)) {
+            let at = self.pending.partition_point(|p| p.0 <= t);
+            self.pending.insert(at, (t, MOUNT));
+        }
     }
 
     /// Takes the estimate after a filter step; returns the firings whose
@@ -80,7 +94,8 @@ impl ChangeWatch {
         self.steps
             .push_back((e.t, [e.r_right, e.r_left, e.wheel_base]));
         if e.changed {
-            self.pending.push_back(e.t);
+            let at = self.pending.partition_point(|p| p.0 <= e.t);
+            self.pending.insert(at, (e.t, FILTER));
         }
         let named = self.name_ready(false);
         self.forget_old();
@@ -95,11 +110,15 @@ impl ChangeWatch {
     /// Names the pending firings whose window has passed (all at the end).
     fn name_ready(&mut self, end: bool) -> Vec<NamedChange> {
         let mut out = Vec::new();
-        while let Some(&t) = self.pending.front() {
+        while let Some(&(t, detector)) = self.pending.front() {
             if !end && self.now < t + self.p.after_s + self.p.margin + SLACK_S {
                 break;
             }
-            out.push(self.name(t));
+            let named = NamedChange {
+                detector,
+                ..self.name(t)
+            };
+            out.push(self.merge(named));
             self.pending.pop_front();
         }
         out
@@ -122,9 +141,38 @@ impl ChangeWatch {
         name_change(&base, &measured, t, &self.p).unwrap_or_else(|| NamedChange::undetermined(t))
     }
 
-    /// Forgets what no pending or future firing's window reaches.
+    /// Marks a firing that continues the last change reported: the same
+    /// effect, begun (its onset) no later than the previous firing, so the
+    /// detector fired again on a change its filter does not model (a
+    /// latency) rather than on a second one.
+    /// A firing whose window shows the last change's effect there all
+    /// along (before its onset too) continues it as well.
+    fn merge(&mut self, mut c: NamedChange) -> NamedChange {
+        let undetermined = c.effect == crate::diagnose::onset::UNDETERMINED;
+        match self.last.as_mut() {
+            Some((effect, first, latest))
+                if (!undetermined && *effect == c.effect && c.onset_s <= *latest)
+                    || (undetermined && *effect == c.standing) =>
+            {
+                c.continues = Some(*first);
+                c.effect = effect.clone();
+                *latest = c.time_s;
+            }
+            _ if !undetermined => self.last = Some((c.effect.clone(), c.time_s, c.time_s)),
+            _ => {}
+        }
+        c
+    }
+
+    /// Forgets what no pending or future firing's window reaches (the
+    /// mounting watch dates its firings back by up to its lag).
     fn forget_old(&mut self) {
-        let from = self.pending.front().copied().unwrap_or(self.now);
+        let lag = self.mount.as_ref().map_or(0.0, MountWatch::lag_s);
+        let from = self
+            .pending
+            .front()
+            .map_or(self.now, |p| p.0)
+            .min(self.now - lag);
         let keep = from - self.p.before_s - self.p.margin - self.p.gyro_window - SLACK_S;
         while self.wheels.front().is_some_and(|w| w.stamp < keep) {
             self.wheels.pop_front();
@@ -144,16 +192,45 @@ impl ChangeWatch {
 
 /// One line per named change for the terminal.
 pub fn describe(c: &NamedChange) -> String {
+    let by = if c.detector == MOUNT {
+        " (laser-mounting watch)"
+    } else {
+        ""
+    };
     if c.effect == crate::diagnose::onset::UNDETERMINED {
+        let stood;
         let why = if c.candidates.is_empty() {
             "too few scan-matching rows on a side of the window"
+        } else if !c.standing.is_empty() {
+            stood = format!(
+                "{} explains the window, but was there before its onset too: not a change here",
+                c.standing
+            );
+            &stood
         } else {
             "no candidate lowers BIC by the margin"
         };
-        return format!("change at {:.2} s: undetermined ({why})", c.time_s);
+        return format!("change at {:.2} s{by}: undetermined ({why})", c.time_s);
     }
-    format!(
-        "change at {:.2} s (onset {:.2} s): {} {} = {:.6} ± {:.6}, ΔBIC {:.1}",
-        c.time_s, c.onset_s, c.effect, c.parameter, c.estimate, c.stderr, c.delta_bic
-    )
+    let mut line = format!(
+        "change at {:.2} s{by} (onset {:.2} s, between {:.2} and {:.2} s): {} {} = {:.6} ± {:.6}, \
+         ΔBIC {:.1}",
+        c.time_s,
+        c.onset_s,
+        c.onset_interval_s[0],
+        c.onset_interval_s[1],
+        c.effect,
+        c.parameter,
+        c.estimate,
+        c.stderr,
+        c.delta_bic
+    );
+    if !c.refired_s.is_empty() {
+        let at: Vec<String> = c.refired_s.iter().map(|t| format!("{t:.2} s")).collect();
+        line += &format!(
+            "; the detector fired again at {} on this same change (begun before)",
+            at.join(", ")
+        );
+    }
+    line
 }
