@@ -30,7 +30,7 @@ pub struct SplitRange {
 const INTERVAL_DROP: f64 = 3.84;
 
 /// A split found by [`search_split`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Found {
     /// The best split time (s from the origin).
     pub time: f64,
@@ -40,6 +40,11 @@ pub struct Found {
     /// within 3.84 of the best: where the data put the change (the effect
     /// may not show for a while, e.g. a latency at constant speed).
     pub interval: (f64, f64),
+    /// The effect's free parameters after the split, linearised (units of
+    /// the effect table; 0 in directions the rows do not determine).
+    pub params: Vec<f64>,
+    /// Their standard errors, with the σ scales of the current model.
+    pub stderr: Vec<f64>,
 }
 
 /// The best split of `part` for `effect` (its free parameters' values are
@@ -59,6 +64,7 @@ pub fn search_split(
     let mut a = DMatrix::<f64>::zeros(k, k);
     let mut b = DVector::<f64>::zeros(k);
     let mut all: Vec<(f64, f64)> = Vec::new();
+    let mut at_best: Option<(f64, DMatrix<f64>, DVector<f64>)> = None;
     for i in (1..n).rev() {
         let (_, j, r) = &rows[i];
         for p in 0..k {
@@ -76,6 +82,9 @@ pub fn search_split(
         }
         if let Some(drop) = explained(&a, &b) {
             all.push((t, drop));
+            if at_best.as_ref().is_none_or(|x| drop > x.0) {
+                at_best = Some((drop, a.clone(), b.clone()));
+            }
         }
     }
     // Latest first: among equal drops the latest split is kept.
@@ -83,11 +92,31 @@ pub fn search_split(
     let near = all.iter().filter(|x| x.1 >= drop - INTERVAL_DROP);
     let lo = near.clone().map(|x| x.0).fold(time, f64::min);
     let hi = near.map(|x| x.0).fold(time, f64::max);
+    let (params, stderr) = at_best.map(|(_, a, b)| solved(&a, &b))?;
     Some(Found {
         time,
         drop,
         interval: (lo, hi),
+        params,
+        stderr,
     })
+}
+
+/// θ = −A⁺b (the residual is r + Jθ) and √diag(A⁺) over the
+/// well-determined directions (as [`explained`]).
+fn solved(a: &DMatrix<f64>, b: &DVector<f64>) -> (Vec<f64>, Vec<f64>) {
+    let eig = a.clone().symmetric_eigen();
+    let top = eig.eigenvalues.max();
+    let k = b.len();
+    let mut pinv = DMatrix::<f64>::zeros(k, k);
+    for (l, u) in eig.eigenvalues.iter().zip(eig.eigenvectors.column_iter()) {
+        if *l > 1e-9 * top {
+            pinv += u * u.transpose() / *l;
+        }
+    }
+    let theta = -(&pinv * b);
+    let se = (0..k).map(|i| pinv[(i, i)].max(0.0).sqrt()).collect();
+    (theta.iter().copied().collect(), se)
 }
 
 /// bᵀA⁺b over the well-determined directions of A (eigenvalues above 10⁻⁹

@@ -1,7 +1,15 @@
 //! Whether what the model holds constant stays constant: a latency that
-//! changes during the run, and a slip that happens only on part of the
-//! floor. Both are faults outside the effect table; each is tested on the
-//! residuals the selected model leaves.
+//! changes during the run, a laser knocked on its mounting during the run,
+//! and a slip that happens only on part of the floor. All are faults
+//! outside the effect table; each is tested on the residuals the selected
+//! model leaves.
+//!
+//! Knock: a laser mounting change (x, y, yaw) from a time on, on top of the
+//! selected model, at the split time that explains the residuals best
+//! ([`super::split::search_split`], linearised); reported when it lowers
+//! BIC by the margin (the three sizes and the time counted) and turns the
+//! laser by more than `knock_floor_rad` (the scan matching leans by a few
+//! 10⁻³ rad from one stretch of wall to the next).
 //!
 //! Latency: a replay whose encoder delay is off by δτ leaves a residual
 //! δτ · dV/dt (and δτ · dW/dt): the delay error is regressed on the
@@ -18,6 +26,8 @@
 
 use super::data::Part;
 use super::diagnosis::Fault;
+use super::fit::Fit;
+use super::split::{search_split, SplitRange};
 use super::stats::chi2_sf;
 use crate::effects::Departures;
 use std::collections::BTreeMap;
@@ -38,6 +48,10 @@ pub struct StabilitySettings {
     pub slip_floor: f64,
     /// Family level of each test.
     pub alpha: f64,
+    /// BIC margin of a knocked laser.
+    pub knock_margin: f64,
+    /// Smallest turn of a knocked laser reported (rad).
+    pub knock_floor_rad: f64,
     /// Newey–West span (s).
     pub lag_seconds: f64,
 }
@@ -51,6 +65,8 @@ impl Default for StabilitySettings {
             cell: 3.0,
             slip_floor: 0.05,
             alpha: 1e-3,
+            knock_margin: 10.0,
+            knock_floor_rad: 0.01,
             lag_seconds: 3.0,
         }
     }
@@ -222,6 +238,63 @@ fn best_split(est: &[(f64, f64, f64)]) -> Option<(f64, f64, f64, f64)> {
             (0.5 * (a[k - 1].0 + b[0].0), 1.0 - left / total, ma, mb)
         })
         .max_by(|x, y| x.1.total_cmp(&y.1))
+}
+
+/// A laser knocked during the run: its mounting change from the split
+/// time on, on top of `model`, when it lowers BIC by the margin and turns
+/// the laser beyond the floor.
+pub fn laser_knock(all: Part, model: &Fit, s: &StabilitySettings) -> Option<Fault> {
+    let e = crate::effects::Effect::LaserOffset {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let c = all.counts();
+    let n: usize = c.iter().sum();
+    let span = all
+        .icp
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+            (a.min(r.t0), b.max(r.t1))
+        });
+    let origin = all.replay.origin;
+    let range = SplitRange {
+        time: (span.0 - origin, span.1 - origin),
+        min_rows: 100,
+    };
+    let f = search_split(all, model, &e, range)?;
+    let delta_bic = f.drop - 4.0 * (n as f64).ln();
+    let [dx, dy, dyaw] = [f.params[0], f.params[1], f.params[2]];
+    if !(delta_bic > s.knock_margin && dyaw.abs() > s.knock_floor_rad) {
+        return None;
+    }
+    let mut parameters = BTreeMap::new();
+    parameters.insert("time".to_string(), f.time);
+    parameters.insert("dx".to_string(), dx);
+    parameters.insert("dy".to_string(), dy);
+    parameters.insert("dyaw".to_string(), dyaw);
+    Some(Fault {
+        name: "laser_knock".into(),
+        parameters,
+        evidence: format!(
+            "from {:.1} s on (between {:.1} and {:.1} s) the scan matching moves as a laser \
+             mounted {:+.1} ± {:.1} mm forward, {:+.1} ± {:.1} mm left and turned {:+.2} ± \
+             {:.2}° from before would (ΔBIC {delta_bic:.1} on top of the model)",
+            f.time,
+            f.interval.0,
+            f.interval.1,
+            1e3 * dx,
+            1e3 * f.stderr[0],
+            1e3 * dy,
+            1e3 * f.stderr[1],
+            dyaw.to_degrees(),
+            f.stderr[2].to_degrees()
+        ),
+        fix: "the laser moved on its bracket during the run: fasten it and measure its \
+              mounting again; the recording before and after is two mountings, calibrate \
+              each part on its own"
+            .into(),
+    })
 }
 
 /// Relative speed residual of one pass through one cell.

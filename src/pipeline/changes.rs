@@ -6,7 +6,9 @@
 
 use crate::calib::Estimate;
 use crate::diagnose::mount::MountWatch;
-use crate::diagnose::onset::{name_change, NamedChange, OnsetParams, FILTER, MOUNT};
+use crate::diagnose::onset::{
+    name_change, NamedChange, OnsetParams, CANDIDATES, FILTER, FILTER_CANDIDATES, MOUNT,
+};
 use crate::diagnose::Measured;
 use crate::io::Item;
 use crate::motion::Motion;
@@ -116,7 +118,7 @@ impl ChangeWatch {
             }
             let named = NamedChange {
                 detector,
-                ..self.name(t)
+                ..self.name(t, detector)
             };
             out.push(self.merge(named));
             self.pending.pop_front();
@@ -124,9 +126,9 @@ impl ChangeWatch {
         out
     }
 
-    /// What changed at the firing at `t` (s), against the filter's estimate
-    /// at the start of its window.
-    fn name(&mut self, t: f64) -> NamedChange {
+    /// What changed at the firing at `t` (s) of `detector`, against the
+    /// filter's estimate at the start of its window.
+    fn name(&mut self, t: f64, detector: &str) -> NamedChange {
         let start = t - self.p.before_s;
         let mut base = self.robot.clone();
         if let Some((_, [rr, rl, d])) = self.steps.iter().take_while(|s| s.0 <= start).last() {
@@ -138,7 +140,13 @@ impl ChangeWatch {
             gyro: self.gyro.make_contiguous(),
             reference: &[],
         };
-        name_change(&base, &measured, t, &self.p).unwrap_or_else(|| NamedChange::undetermined(t))
+        let candidates: &[&str] = if detector == MOUNT {
+            &CANDIDATES
+        } else {
+            &FILTER_CANDIDATES
+        };
+        name_change(&base, &measured, t, candidates, &self.p)
+            .unwrap_or_else(|| NamedChange::undetermined(t))
     }
 
     /// Marks a firing that continues the last change reported: the same
