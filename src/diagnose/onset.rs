@@ -5,9 +5,10 @@
 //! The baseline is the filter's estimate at the window's start (radii and
 //! wheel base; the nominal laser mount, no latency): before the change the
 //! filter had that model, and the window's first part checks it. The
-//! candidates are a radius step (right and left sizes fitted separately), a
-//! wheel-base change, a turn-slip change, a latency change and a laser
-//! mounting change; each acts from its own onset on, the split time that
+//! candidates (the caller's: [`CANDIDATES`] or [`FILTER_CANDIDATES`]) are a
+//! radius step (right and left sizes fitted separately), a wheel-base
+//! change, a turn-slip change, a latency change and a laser mounting
+//! change; each acts from its own onset on, the split time that
 //! best explains the window's residuals by that candidate
 //! ([`super::split::search_split`]), restricted to the part of the window
 //! before the firing (a detector fires after the change). Rows before the
@@ -17,10 +18,11 @@
 //! RSS_after,g)/n_g) + k ln N ([`super::fit::bic`], σ scale per stream
 //! profiled out; k counts the onset too). A candidate is named when it is
 //! identifiable, physical ([`physical`]) and lowers BIC by more than
-//! `bic_margin` against both "nothing changed" and the same effect there all
-//! window long (fitted on every row: a departure the baseline lacked before
-//! the onset too, such as a constant latency, is not a change at this
-//! firing); the best such is reported, or `undetermined`.
+//! `bic_margin` against "nothing changed", against the same effect there
+//! all window long (fitted on every row: a departure the baseline lacked
+//! before the onset too, such as a constant latency, is not a change at this
+//! firing) and against every candidate there all window long; the best such
+//! is reported, or `undetermined`.
 
 use super::data::{gyro_rows, icp_rows, GyroRow, IcpRow, Part};
 use super::fit::{bic, fit, Fit};

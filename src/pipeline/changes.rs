@@ -43,6 +43,9 @@ pub struct ChangeWatch {
     /// The last change reported: its effect, its firing's time and the
     /// time of the latest firing that continued it (s).
     last: Option<(String, f64, f64)>,
+    /// The effect the last window showed there all along, and that
+    /// firing's time (s).
+    standing: Option<(String, f64)>,
 }
 
 impl ChangeWatch {
@@ -60,6 +63,7 @@ impl ChangeWatch {
             mount: p.mount.enabled.then(|| MountWatch::new(&p.mount)),
             now: f64::NEG_INFINITY,
             last: None,
+            standing: None,
         }
     }
 
@@ -120,6 +124,7 @@ impl ChangeWatch {
                 detector,
                 ..self.name(t, detector)
             };
+            let named = self.still_standing(named);
             out.push(self.merge(named));
             self.pending.pop_front();
         }
@@ -172,6 +177,38 @@ impl ChangeWatch {
         c
     }
 
+    /// A firing that names the effect an earlier window within reach (its
+    /// window and this one's together) showed there all along: the same
+    /// departure of the baseline showing again where the streams let it
+    /// (a constant latency in the turns after a straight stretch), not a
+    /// change; it stands too.
+    fn still_standing(&mut self, mut c: NamedChange) -> NamedChange {
+        let reach = self.p.before_s + self.p.after_s;
+        let effect = if c.effect == crate::diagnose::onset::UNDETERMINED {
+            c.standing.clone()
+        } else {
+            match &self.standing {
+                Some((e, t)) if *e == c.effect && c.time_s - t <= reach => {
+                    c = NamedChange {
+                        standing: c.effect.clone(),
+                        onset_s: c.onset_s,
+                        onset_interval_s: c.onset_interval_s,
+                        candidates: std::mem::take(&mut c.candidates),
+                        rows: c.rows,
+                        detector: c.detector,
+                        ..NamedChange::undetermined(c.time_s)
+                    };
+                    c.standing.clone()
+                }
+                _ => String::new(),
+            }
+        };
+        if !effect.is_empty() {
+            self.standing = Some((effect, c.time_s));
+        }
+        c
+    }
+
     /// Forgets what no pending or future firing's window reaches (the
     /// mounting watch dates its firings back by up to its lag).
     fn forget_old(&mut self) {
@@ -211,7 +248,8 @@ pub fn describe(c: &NamedChange) -> String {
             "too few scan-matching rows on a side of the window"
         } else if !c.standing.is_empty() {
             stood = format!(
-                "{} explains the window, but was there before its onset too: not a change here",
+                "{} explains the window, but stood before it too (before its onset, or all \
+                 window long at a firing just before): not a change here",
                 c.standing
             );
             &stood
