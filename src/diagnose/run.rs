@@ -159,7 +159,7 @@ impl Pass {
             ..Default::default()
         };
         faults.extend(stability::latency_change(all, &xm, &st));
-        faults.extend(stability::laser_knock(all, model, &st));
+        faults.extend(stability::laser_knock(all, model, m.motions, &st));
         faults.extend(stability::floor_slip(all, &xm, &st));
         let tests = remaining_tests(
             all,

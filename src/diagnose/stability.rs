@@ -4,7 +4,9 @@
 //! outside the effect table; each is tested on the residuals the selected
 //! model leaves.
 //!
-//! Knock: a laser mounting change (x, y, yaw) from a time on, on top of the
+//! Knock: when the laser-mounting watch fires on the scan-matched motions
+//! (the lean of the motions changes, [`super::mount`]), a laser mounting
+//! change (x, y, yaw) from a time before that firing on, on top of the
 //! selected model, at the split time that explains the residuals best
 //! ([`super::split::search_split`], linearised); reported when it lowers
 //! BIC by the margin (the three sizes and the time counted) and turns the
@@ -240,10 +242,20 @@ fn best_split(est: &[(f64, f64, f64)]) -> Option<(f64, f64, f64, f64)> {
         .max_by(|x, y| x.1.total_cmp(&y.1))
 }
 
-/// A laser knocked during the run: its mounting change from the split
-/// time on, on top of `model`, when it lowers BIC by the margin and turns
-/// the laser beyond the floor.
-pub fn laser_knock(all: Part, model: &Fit, s: &StabilitySettings) -> Option<Fault> {
+/// A laser knocked during the run: when the laser-mounting watch
+/// ([`super::mount`], its default settings, the same as `calibrate`'s) fires
+/// on the scan-matched `motions`, the mounting change from the split time
+/// before that firing on, on top of `model`, when it lowers BIC by the
+/// margin and turns the laser beyond the floor.
+pub fn laser_knock(
+    all: Part,
+    model: &Fit,
+    motions: &[crate::motion::Motion],
+    s: &StabilitySettings,
+) -> Option<Fault> {
+    let p = super::mount::MountParams::default();
+    let mut watch = super::mount::MountWatch::new(&p);
+    let fired = motions.iter().find_map(|m| watch.motion(m))?;
     let e = crate::effects::Effect::LaserOffset {
         x: 0.0,
         y: 0.0,
@@ -251,15 +263,9 @@ pub fn laser_knock(all: Part, model: &Fit, s: &StabilitySettings) -> Option<Faul
     };
     let c = all.counts();
     let n: usize = c.iter().sum();
-    let span = all
-        .icp
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
-            (a.min(r.t0), b.max(r.t1))
-        });
     let origin = all.replay.origin;
     let range = SplitRange {
-        time: (span.0 - origin, span.1 - origin),
+        time: (fired - watch.lag_s() - origin, fired - origin),
         min_rows: 100,
     };
     let f = search_split(all, model, &e, range)?;
