@@ -7,25 +7,27 @@
 use crate::support::{odocal, scratch};
 use std::path::Path;
 
-/// Simulates 60 s with `effect`, calibrates, returns the `--json` output and
+/// Simulates 60 s with `effect` (none when empty), calibrates, returns the `--json` output and
 /// the history CSV.
 fn run(dir: &Path, effect: &str) -> (serde_json::Value, String) {
     let bag = dir.join("run.mcap");
     let truth = dir.join("truth.json");
     let out = dir.join("cal");
-    let s = odocal(&[
+    let mut args = vec![
         "simulate",
         "--seed",
         "2",
         "--duration",
         "60",
-        "--effect",
-        effect,
         "--out",
         bag.to_str().unwrap(),
         "--truth",
         truth.to_str().unwrap(),
-    ]);
+    ];
+    if !effect.is_empty() {
+        args.extend(["--effect", effect]);
+    }
+    let s = odocal(&args);
     assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
     let c = odocal(&[
         "calibrate",
@@ -104,7 +106,52 @@ fn a_latency_change_is_not_named_a_radius_step() {
     assert_eq!(first["effect"], "latency", "{first}");
     let est = first["estimate"].as_f64().unwrap();
     assert!((est - 0.08).abs() < 0.2 * 0.08, "latency {est} s vs 0.08 s");
-    assert_eq!(named_rows(&csv).len(), changes.len());
+    // The filter has no latency and fires again on the same one: reported
+    // once, with the later firing, and both rows of the history name it.
+    assert_eq!(changes.len(), 1, "{changes:?}");
+    let again = first["refired_s"].as_array().unwrap();
+    assert!(!again.is_empty(), "{first}");
+    let rows = named_rows(&csv);
+    assert_eq!(rows.len(), 1 + again.len());
+    assert!(rows.iter().all(|r| r.1 == "latency"), "{rows:?}");
+}
+
+#[test]
+fn a_knocked_laser_is_named_a_mounting_change_with_its_turn() {
+    let d = scratch("change-naming-knock");
+    let (json, csv) = run(&d, "laser_knock:time=30,dx=0,dy=0,dyaw=0.035");
+    let changes = json["changes"]
+        .as_array()
+        .expect("the mounting watch fired");
+    assert_eq!(changes.len(), 1, "{changes:?}");
+    let c = &changes[0];
+    assert_eq!(c["detector"], "laser_mount", "{c}");
+    assert_eq!(c["effect"], "laser_offset", "{c}");
+    assert_eq!(c["parameter"], "yaw", "{c}");
+    let yaw = c["estimate"].as_f64().unwrap();
+    assert!(
+        (yaw - 0.035).abs() < 0.2 * 0.035,
+        "yaw {yaw} rad vs 0.035 rad"
+    );
+    for k in ["x", "y"] {
+        let v = c["parameters"][k].as_f64().unwrap();
+        assert!(v.abs() < 0.02, "{k} {v} m");
+    }
+    let onset = c["onset_s"].as_f64().unwrap();
+    assert!((onset - 30.0).abs() < 1.0, "onset {onset} s");
+    // The filter's detector did not fire: the history names nothing.
+    assert!(named_rows(&csv).is_empty());
+}
+
+#[test]
+fn nothing_is_named_on_a_run_where_nothing_changed() {
+    let d = scratch("change-naming-null");
+    let (json, csv) = run(&d, "");
+    let changes = json["changes"].as_array().cloned().unwrap_or_default();
+    for c in &changes {
+        assert_eq!(c["effect"], "undetermined", "{c}");
+    }
+    assert!(named_rows(&csv).iter().all(|r| r.1 == "undetermined"));
 }
 
 /// A logger that keeps the text entries of what changed and the stamps of

@@ -221,6 +221,7 @@ impl Pass {
             ..Default::default()
         };
         faults.extend(stability::latency_change(all, &xm, &st));
+        faults.extend(stability::laser_knock(all, model, m.motions, &st));
         let tests = remaining_tests(
             all,
             &xm,

@@ -6,7 +6,7 @@ use super::data::Part;
 use super::fit::{fit, wald, Fit};
 use super::free::{free_names, free_params, zero_effect};
 use super::stats::chi2_sf;
-use crate::effects::{Departures, Effect, EffectKind, Step};
+use crate::effects::{Departures, Effect, EffectKind};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -99,81 +99,19 @@ pub fn named(f: &Fit, i: usize) -> (BTreeMap<String, f64>, BTreeMap<String, f64>
     (p, s)
 }
 
-/// The radius-step time that best explains the residuals of `current`: with
-/// the other parameters held, the step sizes are linear, so the RSS drop of
-/// every split time follows from suffix sums of JᵀJ and Jᵀr in one pass.
+/// The radius-step time that best explains the residuals of `current`
+/// ([`super::split::search_split`] with the step's two sizes).
 pub fn search_step_time(part: Part, current: &Fit, s: &SelectSettings) -> Option<f64> {
-    let x0 = Departures::of(&current.effects);
-    let mut base: [Vec<f64>; 4] = Default::default();
-    part.normalised(&x0, &mut base);
-    let h = 1e-4;
-    let mut cols: Vec<[Vec<f64>; 4]> = Vec::new();
-    for c in 0..2 {
-        let mut x = x0.clone();
-        x.radius_steps.push(Step {
-            time: f64::NEG_INFINITY,
-            right: if c == 0 { h } else { 0.0 },
-            left: if c == 1 { h } else { 0.0 },
-        });
-        let mut r: [Vec<f64>; 4] = Default::default();
-        part.normalised(&x, &mut r);
-        cols.push(r);
-    }
-    // Rows: (midpoint time from origin, j0, j1, residual), scaled per group.
-    let mut rows: Vec<(f64, f64, f64, f64)> = Vec::new();
-    let mid_icp: Vec<f64> = part
-        .icp
-        .iter()
-        .map(|r| 0.5 * (r.t0 + r.t1) - part.replay.origin)
-        .collect();
-    let mid_gyro: Vec<f64> = part
-        .gyro
-        .iter()
-        .map(|r| 0.5 * (r.t0 + r.t1) - part.replay.origin)
-        .collect();
-    for g in 0..4 {
-        let mids = if g < 3 { &mid_icp } else { &mid_gyro };
-        let sc = current.scale[g];
-        for (i, t) in mids.iter().enumerate() {
-            let r = base[g][i] / sc;
-            let j0 = (cols[0][g][i] - base[g][i]) / (h * sc);
-            let j1 = (cols[1][g][i] - base[g][i]) / (h * sc);
-            rows.push((*t, j0, j1, r));
-        }
-    }
-    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let n = rows.len();
-    if n < 2 * s.step_min_rows + 2 {
-        return None;
-    }
-    // Suffix sums.
-    let (mut a00, mut a01, mut a11, mut b0, mut b1) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    let mut best: Option<(f64, f64)> = None;
-    for k in (1..n).rev() {
-        let (_, j0, j1, r) = rows[k];
-        a00 += j0 * j0;
-        a01 += j0 * j1;
-        a11 += j1 * j1;
-        b0 += j0 * r;
-        b1 += j1 * r;
-        let after = n - k;
-        if after < s.step_min_rows || k < s.step_min_rows {
-            continue;
-        }
-        let t = 0.5 * (rows[k - 1].0 + rows[k].0);
-        if t < s.step_range.0 || t > s.step_range.1 || rows[k - 1].0 == rows[k].0 {
-            continue;
-        }
-        let det = a00 * a11 - a01 * a01;
-        if det.is_nan() || det <= 1e-12 * (a00 * a11).max(1e-300) {
-            continue;
-        }
-        let drop = (a11 * b0 * b0 - 2.0 * a01 * b0 * b1 + a00 * b1 * b1) / det;
-        if best.is_none_or(|(d, _)| drop > d) {
-            best = Some((drop, t));
-        }
-    }
-    best.map(|b| b.1)
+    let step = Effect::RadiusStep {
+        time: 0.0,
+        right: 0.0,
+        left: 0.0,
+    };
+    let range = super::split::SplitRange {
+        time: s.step_range,
+        min_rows: s.step_min_rows,
+    };
+    super::split::search_split(part, current, &step, range).map(|f| f.time)
 }
 
 fn score(round: usize, f: &Fit, base_bic: f64) -> CandidateScore {

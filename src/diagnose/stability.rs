@@ -1,7 +1,17 @@
 //! Whether what the model holds constant stays constant in time: a latency
-//! that changes during the run, a fault outside the effect table tested on
-//! the residuals the selected model leaves (slip on part of the floor, which
-//! changes with place, is [`super::floor`]'s).
+//! that changes during the run and a laser knocked on its mounting during
+//! the run, faults outside the effect table tested on the residuals the
+//! selected model leaves (slip on part of the floor, which changes with
+//! place, is [`super::floor`]'s).
+//!
+//! Knock: when the laser-mounting watch fires on the scan-matched motions
+//! (the lean of the motions changes, [`super::mount`]), a laser mounting
+//! change (x, y, yaw) from a time before that firing on, on top of the
+//! selected model, at the split time that explains the residuals best
+//! ([`super::split::search_split`], linearised); reported when it lowers
+//! BIC by the margin (the three sizes and the time counted) and turns the
+//! laser by more than `knock_floor_rad` (the scan matching leans by a few
+//! 10⁻³ rad from one stretch of wall to the next).
 //!
 //! Latency: a replay whose encoder delay is off by δτ leaves a residual
 //! δτ · dV/dt (and δτ · dW/dt): the delay error is regressed on the
@@ -11,6 +21,8 @@
 
 use super::data::Part;
 use super::diagnosis::Fault;
+use super::fit::Fit;
+use super::split::{search_split, SplitRange};
 use super::stats::chi2_sf;
 use crate::effects::Departures;
 use std::collections::BTreeMap;
@@ -26,6 +38,10 @@ pub struct StabilitySettings {
     pub change_share: f64,
     /// Family level of each test.
     pub alpha: f64,
+    /// BIC margin of a knocked laser.
+    pub knock_margin: f64,
+    /// Smallest turn of a knocked laser reported (rad).
+    pub knock_floor_rad: f64,
     /// Newey–West span (s).
     pub lag_seconds: f64,
 }
@@ -37,6 +53,8 @@ impl Default for StabilitySettings {
             latency_floor: 0.02,
             change_share: 0.7,
             alpha: 1e-3,
+            knock_margin: 10.0,
+            knock_floor_rad: 0.01,
             lag_seconds: 3.0,
         }
     }
@@ -208,4 +226,65 @@ fn best_split(est: &[(f64, f64, f64)]) -> Option<(f64, f64, f64, f64)> {
             (0.5 * (a[k - 1].0 + b[0].0), 1.0 - left / total, ma, mb)
         })
         .max_by(|x, y| x.1.total_cmp(&y.1))
+}
+
+/// A laser knocked during the run: when the laser-mounting watch
+/// ([`super::mount`], its default settings, the same as `calibrate`'s) fires
+/// on the scan-matched `motions`, the mounting change from the split time
+/// before that firing on, on top of `model`, when it lowers BIC by the
+/// margin and turns the laser beyond the floor.
+pub fn laser_knock(
+    all: Part,
+    model: &Fit,
+    motions: &[crate::motion::Motion],
+    s: &StabilitySettings,
+) -> Option<Fault> {
+    let p = super::mount::MountParams::default();
+    let mut watch = super::mount::MountWatch::new(&p);
+    let fired = motions.iter().find_map(|m| watch.motion(m))?;
+    let e = crate::effects::Effect::LaserOffset {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let c = all.counts();
+    let n: usize = c.iter().sum();
+    let origin = all.replay.origin;
+    let range = SplitRange {
+        time: (fired - watch.lag_s() - origin, fired - origin),
+        min_rows: 100,
+    };
+    let f = search_split(all, model, &e, range)?;
+    let delta_bic = f.drop - 4.0 * (n as f64).ln();
+    let [dx, dy, dyaw] = [f.params[0], f.params[1], f.params[2]];
+    if !(delta_bic > s.knock_margin && dyaw.abs() > s.knock_floor_rad) {
+        return None;
+    }
+    let mut parameters = BTreeMap::new();
+    parameters.insert("time".to_string(), f.time);
+    parameters.insert("dx".to_string(), dx);
+    parameters.insert("dy".to_string(), dy);
+    parameters.insert("dyaw".to_string(), dyaw);
+    Some(Fault {
+        name: "laser_knock".into(),
+        parameters,
+        evidence: format!(
+            "from {:.1} s on (between {:.1} and {:.1} s) the scan matching moves as a laser \
+             mounted {:+.1} ± {:.1} mm forward, {:+.1} ± {:.1} mm left and turned {:+.2} ± \
+             {:.2}° from before would (ΔBIC {delta_bic:.1} on top of the model)",
+            f.time,
+            f.interval.0,
+            f.interval.1,
+            1e3 * dx,
+            1e3 * f.stderr[0],
+            1e3 * dy,
+            1e3 * f.stderr[1],
+            dyaw.to_degrees(),
+            f.stderr[2].to_degrees()
+        ),
+        fix: "the laser moved on its bracket during the run: fasten it and measure its \
+              mounting again; the recording before and after is two mountings, calibrate \
+              each part on its own"
+            .into(),
+    })
 }

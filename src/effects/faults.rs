@@ -1,7 +1,9 @@
 //! Departures outside the effect table that the simulator can hide in a
 //! recording so the diagnosis can be tested on them blind: wiring faults
 //! (swapped joints, an encoder counting backwards), an out-of-round wheel,
-//! slip on part of the floor and a latency that changes during the run.
+//! slip on part of the floor, a latency that changes during the run and a
+//! laser knocked on its mounting during the run (the recording's
+//! `/tf_static` keeps the mounting it had at the start).
 //! The diagnosis never fits them as table effects; it names those it
 //! recognises under their own names (design.md). A SPEC is `NAME` or
 //! `NAME:key=value,...`, like an effect's; `simulate --effect` takes both.
@@ -46,13 +48,26 @@ pub enum FaultEffect {
         /// Extra delay from then on (s).
         delay: f64,
     },
+    /// From `time` (s) on, the laser sits on the robot moved by (dx, dy)
+    /// (m, forward and leftward in the base frame) and turned by `dyaw`
+    /// (rad) from where it was mounted: a knock.
+    LaserKnock {
+        /// When the laser is knocked (s from the start).
+        time: f64,
+        /// Forward shift of the mounting (m).
+        dx: f64,
+        /// Leftward shift of the mounting (m).
+        dy: f64,
+        /// Turn of the mounting (rad).
+        dyaw: f64,
+    },
 }
 
 /// Parameter keys of a fault with their (lo, hi) ranges.
 type Keys = &'static [(&'static str, f64, f64)];
 
 /// Every fault name, with its parameter keys and (lo, hi) ranges.
-const TABLE: [(&str, Keys); 6] = [
+const TABLE: [(&str, Keys); 7] = [
     ("swapped_wheels", &[]),
     ("reversed_left_encoder", &[]),
     ("reversed_right_encoder", &[]),
@@ -72,11 +87,22 @@ const TABLE: [(&str, Keys); 6] = [
         "latency_change",
         &[("time", 0.0, 86400.0), ("delay", -1.0, 1.0)],
     ),
+    // A knock moves the laser on its bracket, not off the robot: ≤ 0.5 m
+    // and ≤ 0.5 rad (29°).
+    (
+        "laser_knock",
+        &[
+            ("time", 0.0, 86400.0),
+            ("dx", -0.5, 0.5),
+            ("dy", -0.5, 0.5),
+            ("dyaw", -0.5, 0.5),
+        ],
+    ),
 ];
 
 /// Every fault name.
-pub const FAULT_NAMES: [&str; 6] = [
-    TABLE[0].0, TABLE[1].0, TABLE[2].0, TABLE[3].0, TABLE[4].0, TABLE[5].0,
+pub const FAULT_NAMES: [&str; 7] = [
+    TABLE[0].0, TABLE[1].0, TABLE[2].0, TABLE[3].0, TABLE[4].0, TABLE[5].0, TABLE[6].0,
 ];
 
 impl FaultEffect {
@@ -93,6 +119,7 @@ impl FaultEffect {
             Self::WheelOutOfRound { .. } => 3,
             Self::FloorSlip { .. } => 4,
             Self::LatencyChange { .. } => 5,
+            Self::LaserKnock { .. } => 6,
         }
     }
 
@@ -102,6 +129,7 @@ impl FaultEffect {
             Self::WheelOutOfRound { right, left } => vec![right, left],
             Self::FloorSlip { x_min, x_max, slip } => vec![x_min, x_max, slip],
             Self::LatencyChange { time, delay } => vec![time, delay],
+            Self::LaserKnock { time, dx, dy, dyaw } => vec![time, dx, dy, dyaw],
             _ => Vec::new(),
         }
     }
@@ -153,9 +181,15 @@ impl FaultEffect {
                 x_max: v[1],
                 slip: v[2],
             },
-            _ => Self::LatencyChange {
+            5 => Self::LatencyChange {
                 time: v[0],
                 delay: v[1],
+            },
+            _ => Self::LaserKnock {
+                time: v[0],
+                dx: v[1],
+                dy: v[2],
+                dyaw: v[3],
             },
         })
     }
@@ -181,6 +215,17 @@ impl FaultEffect {
         match *self {
             Self::LatencyChange { time, delay } if t >= time => delay,
             _ => 0.0,
+        }
+    }
+
+    /// How far the laser's mounting has moved by true time `t` (s):
+    /// (forward m, leftward m, yaw rad), added to the mounting's own.
+    pub fn mount_shift(&self, t: f64) -> [f64; 3] {
+        match *self {
+            Self::LaserKnock {
+                time, dx, dy, dyaw, ..
+            } if t >= time => [dx, dy, dyaw],
+            _ => [0.0; 3],
         }
     }
 
@@ -220,6 +265,7 @@ mod tests {
             "wheel_out_of_round:right=0.01,left=0",
             "floor_slip:x_min=1,x_max=3,slip=0.05",
             "latency_change:time=40,delay=0.05",
+            "laser_knock:time=30,dx=0.01,dy=-0.02,dyaw=0.035",
         ] {
             let f = FaultEffect::parse(spec).unwrap();
             assert_eq!(FaultEffect::parse(&f.to_string()).unwrap(), f, "{spec}");
@@ -227,6 +273,19 @@ mod tests {
         assert!(FaultEffect::parse("floor_slip:x_min=1,slip=0.05").is_err());
         assert!(FaultEffect::parse("wheel_out_of_round:right=0.5,left=0").is_err());
         assert!(FaultEffect::parse("radius_scale").is_err());
+    }
+
+    #[test]
+    fn a_knock_is_refused_beyond_the_bracket_and_moves_the_laser_from_its_time_on() {
+        assert!(FaultEffect::parse("laser_knock:time=30,dx=0,dy=0").is_err());
+        assert!(FaultEffect::parse("laser_knock:time=30,dx=0.6,dy=0,dyaw=0").is_err());
+        assert!(FaultEffect::parse("laser_knock:time=30,dx=0,dy=0,dyaw=-0.6").is_err());
+        assert!(FaultEffect::parse("laser_knock:time=-1,dx=0,dy=0,dyaw=0").is_err());
+        let k = FaultEffect::parse("laser_knock:time=30,dx=0.01,dy=-0.02,dyaw=0.035").unwrap();
+        assert_eq!(k.mount_shift(29.999), [0.0; 3]);
+        assert_eq!(k.mount_shift(30.0), [0.01, -0.02, 0.035]);
+        assert_eq!(k.extra_delay(100.0), 0.0);
+        assert_eq!(k.wire((1.0, 2.0)), (1.0, 2.0));
     }
 
     #[test]

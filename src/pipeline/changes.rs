@@ -5,7 +5,10 @@
 //! as far back as a window reaches.
 
 use crate::calib::Estimate;
-use crate::diagnose::onset::{name_change, NamedChange, OnsetParams};
+use crate::diagnose::mount::MountWatch;
+use crate::diagnose::onset::{
+    name_change, NamedChange, OnsetParams, CANDIDATES, FILTER, FILTER_CANDIDATES, MOUNT,
+};
 use crate::diagnose::Measured;
 use crate::io::Item;
 use crate::motion::Motion;
@@ -30,10 +33,19 @@ pub struct ChangeWatch {
     motions: VecDeque<Motion>,
     /// (end of step (s), estimated radii and wheel base (m)).
     steps: VecDeque<(f64, [f64; 3])>,
-    /// Firing times (s) whose window is not complete yet.
-    pending: VecDeque<f64>,
+    /// Firings (time (s), detector) whose window is not complete yet, in
+    /// time order.
+    pending: VecDeque<(f64, &'static str)>,
+    /// The laser-mounting watch (when on).
+    mount: Option<MountWatch>,
     /// Latest stamp seen (s).
     now: f64,
+    /// The last change reported: its effect, its firing's time and the
+    /// time of the latest firing that continued it (s).
+    last: Option<(String, f64, f64)>,
+    /// The effect the last window showed there all along, and that
+    /// firing's time (s).
+    standing: Option<(String, f64)>,
 }
 
 impl ChangeWatch {
@@ -48,7 +60,10 @@ impl ChangeWatch {
             motions: VecDeque::new(),
             steps: VecDeque::new(),
             pending: VecDeque::new(),
+            mount: p.mount.enabled.then(|| MountWatch::new(&p.mount)),
             now: f64::NEG_INFINITY,
+            last: None,
+            standing: None,
         }
     }
 
@@ -67,10 +82,15 @@ impl ChangeWatch {
         }
     }
 
-    /// Takes a scan-matching motion.
+    /// Takes a scan-matching motion (the mounting watch dates a firing
+    /// back to where the mounting moved).
     pub fn motion(&mut self, motion: &Motion) {
         self.now = self.now.max(motion.t1);
         self.motions.push_back(motion.clone());
+        if let Some(t) = self.mount.as_mut().and_then(|w| w.motion(motion)) {
+            let at = self.pending.partition_point(|p| p.0 <= t);
+            self.pending.insert(at, (t, MOUNT));
+        }
     }
 
     /// Takes the estimate after a filter step; returns the firings whose
@@ -80,7 +100,8 @@ impl ChangeWatch {
         self.steps
             .push_back((e.t, [e.r_right, e.r_left, e.wheel_base]));
         if e.changed {
-            self.pending.push_back(e.t);
+            let at = self.pending.partition_point(|p| p.0 <= e.t);
+            self.pending.insert(at, (e.t, FILTER));
         }
         let named = self.name_ready(false);
         self.forget_old();
@@ -95,19 +116,24 @@ impl ChangeWatch {
     /// Names the pending firings whose window has passed (all at the end).
     fn name_ready(&mut self, end: bool) -> Vec<NamedChange> {
         let mut out = Vec::new();
-        while let Some(&t) = self.pending.front() {
+        while let Some(&(t, detector)) = self.pending.front() {
             if !end && self.now < t + self.p.after_s + self.p.margin + SLACK_S {
                 break;
             }
-            out.push(self.name(t));
+            let named = NamedChange {
+                detector,
+                ..self.name(t, detector)
+            };
+            let named = self.still_standing(named);
+            out.push(self.merge(named));
             self.pending.pop_front();
         }
         out
     }
 
-    /// What changed at the firing at `t` (s), against the filter's estimate
-    /// at the start of its window.
-    fn name(&mut self, t: f64) -> NamedChange {
+    /// What changed at the firing at `t` (s) of `detector`, against the
+    /// filter's estimate at the start of its window.
+    fn name(&mut self, t: f64, detector: &str) -> NamedChange {
         let start = t - self.p.before_s;
         let mut base = self.robot.clone();
         if let Some((_, [rr, rl, d])) = self.steps.iter().take_while(|s| s.0 <= start).last() {
@@ -119,12 +145,79 @@ impl ChangeWatch {
             gyro: self.gyro.make_contiguous(),
             reference: &[],
         };
-        name_change(&base, &measured, t, &self.p).unwrap_or_else(|| NamedChange::undetermined(t))
+        let candidates: &[&str] = if detector == MOUNT {
+            &CANDIDATES
+        } else {
+            &FILTER_CANDIDATES
+        };
+        name_change(&base, &measured, t, candidates, &self.p)
+            .unwrap_or_else(|| NamedChange::undetermined(t))
     }
 
-    /// Forgets what no pending or future firing's window reaches.
+    /// Marks a firing that continues the last change reported: the same
+    /// effect, begun (its onset) no later than the previous firing, so the
+    /// detector fired again on a change its filter does not model (a
+    /// latency) rather than on a second one.
+    /// A firing whose window shows the last change's effect there all
+    /// along (before its onset too) continues it as well.
+    fn merge(&mut self, mut c: NamedChange) -> NamedChange {
+        let undetermined = c.effect == crate::diagnose::onset::UNDETERMINED;
+        match self.last.as_mut() {
+            Some((effect, first, latest))
+                if (!undetermined && *effect == c.effect && c.onset_s <= *latest)
+                    || (undetermined && *effect == c.standing) =>
+            {
+                c.continues = Some(*first);
+                c.effect = effect.clone();
+                *latest = c.time_s;
+            }
+            _ if !undetermined => self.last = Some((c.effect.clone(), c.time_s, c.time_s)),
+            _ => {}
+        }
+        c
+    }
+
+    /// A firing that names the effect an earlier window within reach (its
+    /// window and this one's together) showed there all along: the same
+    /// departure of the baseline showing again where the streams let it
+    /// (a constant latency in the turns after a straight stretch), not a
+    /// change; it stands too.
+    fn still_standing(&mut self, mut c: NamedChange) -> NamedChange {
+        let reach = self.p.before_s + self.p.after_s;
+        let effect = if c.effect == crate::diagnose::onset::UNDETERMINED {
+            c.standing.clone()
+        } else {
+            match &self.standing {
+                Some((e, t)) if *e == c.effect && c.time_s - t <= reach => {
+                    c = NamedChange {
+                        standing: c.effect.clone(),
+                        onset_s: c.onset_s,
+                        onset_interval_s: c.onset_interval_s,
+                        candidates: std::mem::take(&mut c.candidates),
+                        rows: c.rows,
+                        detector: c.detector,
+                        ..NamedChange::undetermined(c.time_s)
+                    };
+                    c.standing.clone()
+                }
+                _ => String::new(),
+            }
+        };
+        if !effect.is_empty() {
+            self.standing = Some((effect, c.time_s));
+        }
+        c
+    }
+
+    /// Forgets what no pending or future firing's window reaches (the
+    /// mounting watch dates its firings back by up to its lag).
     fn forget_old(&mut self) {
-        let from = self.pending.front().copied().unwrap_or(self.now);
+        let lag = self.mount.as_ref().map_or(0.0, MountWatch::lag_s);
+        let from = self
+            .pending
+            .front()
+            .map_or(self.now, |p| p.0)
+            .min(self.now - lag);
         let keep = from - self.p.before_s - self.p.margin - self.p.gyro_window - SLACK_S;
         while self.wheels.front().is_some_and(|w| w.stamp < keep) {
             self.wheels.pop_front();
@@ -144,16 +237,46 @@ impl ChangeWatch {
 
 /// One line per named change for the terminal.
 pub fn describe(c: &NamedChange) -> String {
+    let by = if c.detector == MOUNT {
+        " (laser-mounting watch)"
+    } else {
+        ""
+    };
     if c.effect == crate::diagnose::onset::UNDETERMINED {
+        let stood;
         let why = if c.candidates.is_empty() {
             "too few scan-matching rows on a side of the window"
+        } else if !c.standing.is_empty() {
+            stood = format!(
+                "{} explains the window, but stood before it too (before its onset, or all \
+                 window long at a firing just before): not a change here",
+                c.standing
+            );
+            &stood
         } else {
             "no candidate lowers BIC by the margin"
         };
-        return format!("change at {:.2} s: undetermined ({why})", c.time_s);
+        return format!("change at {:.2} s{by}: undetermined ({why})", c.time_s);
     }
-    format!(
-        "change at {:.2} s (onset {:.2} s): {} {} = {:.6} ± {:.6}, ΔBIC {:.1}",
-        c.time_s, c.onset_s, c.effect, c.parameter, c.estimate, c.stderr, c.delta_bic
-    )
+    let mut line = format!(
+        "change at {:.2} s{by} (onset {:.2} s, between {:.2} and {:.2} s): {} {} = {:.6} ± {:.6}, \
+         ΔBIC {:.1}",
+        c.time_s,
+        c.onset_s,
+        c.onset_interval_s[0],
+        c.onset_interval_s[1],
+        c.effect,
+        c.parameter,
+        c.estimate,
+        c.stderr,
+        c.delta_bic
+    );
+    if !c.refired_s.is_empty() {
+        let at: Vec<String> = c.refired_s.iter().map(|t| format!("{t:.2} s")).collect();
+        line += &format!(
+            "; the detector fired again at {} on this same change (begun before)",
+            at.join(", ")
+        );
+    }
+    line
 }

@@ -282,8 +282,18 @@ impl CalibFiles {
     /// Records newly named firings and writes the rows they complete.
     fn take_names(&mut self, named: Vec<crate::diagnose::onset::NamedChange>) {
         for c in named {
-            self.names.push_back(c.effect.clone());
-            self.changes.push(c);
+            // The history's rows hold the filter's firings only.
+            if c.detector == crate::diagnose::onset::FILTER {
+                self.names.push_back(c.effect.clone());
+            }
+            // A firing on a change already reported is reported once, there.
+            let first = c
+                .continues
+                .and_then(|t| self.changes.iter_mut().rev().find(|p| p.time_s == t));
+            match first {
+                Some(p) => p.refired_s.push(c.time_s),
+                None => self.changes.push(c),
+            }
         }
         self.flush(false);
     }

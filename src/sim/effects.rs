@@ -60,6 +60,19 @@ impl TrueRobot {
             .sum()
     }
 
+    /// True laser mounting `base_from_laser` at true time `t` (s): the
+    /// effects' mounting moved by every knock by then.
+    pub fn laser_at(&self, t: f64) -> LaserMount {
+        let mut m = self.laser;
+        for f in &self.faults {
+            let [dx, dy, dyaw] = f.mount_shift(t);
+            m.x += dx;
+            m.y += dy;
+            m.yaw += dyaw;
+        }
+        m
+    }
+
     /// The (right, left) angles the encoders' wiring reports.
     pub fn wire(&self, angles: (f64, f64)) -> (f64, f64) {
         self.faults.iter().fold(angles, |a, f| f.wire(a))

@@ -384,12 +384,14 @@ impl LaserSim {
         self.tape.held()
     }
 
-    /// True laser pose `[x, y, θ unwrapped]` at `t` (s).
+    /// True laser pose `[x, y, θ unwrapped]` at `t` (s), from the mounting
+    /// it has then (a knock moves it during the run).
     fn laser_pose(&self, t: f64) -> [f64; 3] {
         let [x, y, th] = self.tape.pose_at(t);
-        let p = geom::pose(x, y, th) * self.robot.laser.pose();
+        let mount = self.robot.laser_at(t);
+        let p = geom::pose(x, y, th) * mount.pose();
         // Heading continuous with the body's unwrapped heading.
-        [p.translation.x, p.translation.y, th + self.robot.laser.yaw]
+        [p.translation.x, p.translation.y, th + mount.yaw]
     }
 
     /// Scan `k`: every beam cast from the true laser pose at its own time in

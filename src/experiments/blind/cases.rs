@@ -241,6 +241,10 @@ fn combination_cases(step: &str, step2: &str) -> Vec<Case> {
 fn fault_cases(duration: f64) -> Vec<Case> {
     let mut v = Vec::new();
     let change = format!("latency_change:time={:.1},delay=0.06", 0.5 * duration);
+    let knock = format!(
+        "laser_knock:time={:.1},dx=0,dy=0,dyaw=0.035",
+        0.5 * duration
+    );
     for (label, spec, expect, allowed) in [
         (
             "swapped wheels",
@@ -271,6 +275,12 @@ fn fault_cases(duration: f64) -> Vec<Case> {
             change.as_str(),
             "latency_change",
             &["latency"],
+        ),
+        (
+            "laser knocked 2° halfway",
+            knock.as_str(),
+            "laser_knock",
+            &["laser_offset"],
         ),
     ] {
         v.push(fault_case(label, spec, expect, allowed));
