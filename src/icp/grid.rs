@@ -143,7 +143,10 @@ impl PointGrid {
     }
 
     /// Visits the cells at Chebyshev distance `r` from cell (`cx`, `cy`)
-    /// that lie in the grid, updating `best` (slot, squared distance).
+    /// that lie in the grid, updating `best` (slot, squared distance). A
+    /// cell farther from `q` than the best point found so far is skipped
+    /// unread (a wall passes through a few of the eight cells around the
+    /// query's, and its nearest point is usually in the first).
     fn search_ring(&self, q: [f64; 2], cx: i64, cy: i64, r: i64, best: &mut (usize, f64)) {
         let (nx, ny) = (self.nx as i64, self.ny as i64);
         let (x_lo, x_hi) = ((cx - r).max(0), (cx + r).min(nx - 1));
@@ -156,7 +159,7 @@ impl PointGrid {
         for y in [cy - r, cy + r] {
             if (0..ny).contains(&y) {
                 for x in x_lo..=x_hi {
-                    self.search_cell(q, (y * nx + x) as usize, best);
+                    self.search_cell_within(q, x, y, best);
                 }
             }
         }
@@ -164,21 +167,40 @@ impl PointGrid {
         for x in [cx - r, cx + r] {
             if (0..nx).contains(&x) {
                 for y in y_lo..=y_hi {
-                    self.search_cell(q, (y * nx + x) as usize, best);
+                    self.search_cell_within(q, x, y, best);
                 }
             }
+        }
+    }
+
+    /// [`search_cell`](Self::search_cell) of cell (`x`, `y`) unless every
+    /// point of it is at least as far from `q` as `best`.
+    #[inline]
+    fn search_cell_within(&self, q: [f64; 2], x: i64, y: i64, best: &mut (usize, f64)) {
+        let (lx, ly) = (
+            self.x0 + x as f64 * self.cell,
+            self.y0 + y as f64 * self.cell,
+        );
+        let dx = (lx - q[0]).max(q[0] - lx - self.cell).max(0.0);
+        let dy = (ly - q[1]).max(q[1] - ly - self.cell).max(0.0);
+        if dx * dx + dy * dy < best.1 {
+            self.search_cell(q, (y * self.nx as i64 + x) as usize, best);
         }
     }
 
     #[inline]
     fn search_cell(&self, q: [f64; 2], c: usize, best: &mut (usize, f64)) {
         let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
+        // Locals rather than `best` in the loop: no store per point.
+        let (mut slot, mut d2_min) = *best;
         for (k, p) in self.xy[a..b].iter().enumerate() {
-            let d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]);
-            if d2 < best.1 {
-                *best = (a + k, d2);
+            let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+            let d2 = dx * dx + dy * dy;
+            if d2 < d2_min {
+                (slot, d2_min) = (a + k, d2);
             }
         }
+        *best = (slot, d2_min);
     }
 }
 
