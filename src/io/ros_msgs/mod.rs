@@ -79,6 +79,7 @@ trait Field: Sized {
     /// Writes the value.
     fn write(&self, w: &mut CdrWriter);
     /// Reads the value into `self`, reusing what it owns.
+    #[inline]
     fn read_into(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
         *self = Self::read(r)?;
         Ok(())
@@ -89,6 +90,7 @@ trait Field: Sized {
 /// the other (schema order), each with its own [`Field`] codec.
 macro_rules! fields_in_order {
     ($($field:ident),+ $(,)?) => {
+        #[inline]
         fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
             Ok(Self {
                 $($field: Field::read(r)?,)+
@@ -99,6 +101,7 @@ macro_rules! fields_in_order {
             $(Field::write(&self.$field, w);)+
         }
 
+        #[inline]
         fn read_into(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
             $(Field::read_into(&mut self.$field, r)?;)+
             Ok(())
@@ -113,6 +116,7 @@ macro_rules! primitive_fields {
     ($($t:ident),+) => {
         $(
             impl Field for $t {
+                #[inline]
                 fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
                     r.$t()
                 }
@@ -142,6 +146,7 @@ impl Field for String {
 
 /// Covariance matrices: fixed-size, no length prefix.
 impl<const N: usize> Field for [f64; N] {
+    #[inline]
     fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
         r.f64_array()
     }
