@@ -123,6 +123,8 @@ pub(crate) struct BagStream<'o, M> {
     /// Items decoded per stream, and how many the first pass counted.
     decoded: [usize; 5],
     expected: [usize; 5],
+    /// The items of the message being decoded (kept to reuse its allocation).
+    fresh: Vec<Item>,
 }
 
 impl<'o, M: RawMessages> BagStream<'o, M> {
@@ -148,6 +150,7 @@ impl<'o, M: RawMessages> BagStream<'o, M> {
             ready: VecDeque::new(),
             done: false,
             decoded: [0; 5],
+            fresh: Vec::new(),
         })
     }
 
@@ -204,14 +207,14 @@ impl<'o, M: RawMessages> BagStream<'o, M> {
                 })?;
         }
         let rec = self.state.decoded();
-        let mut fresh: Vec<Item> = Vec::new();
+        let mut fresh = std::mem::take(&mut self.fresh);
         fresh.extend(rec.scans.drain(..).map(Item::Scan));
         fresh.extend(rec.wheels.drain(..).map(Item::Wheel));
         fresh.extend(rec.gyro.drain(..).map(Item::Gyro));
         fresh.extend(rec.odom.drain(..).map(Item::Odom));
         fresh.extend(rec.reference.drain(..).map(Item::Reference));
         let tol = self.opts.reorder_tolerance;
-        for item in fresh {
+        for item in fresh.drain(..) {
             let s = item.stream();
             self.decoded[s] += 1;
             self.buffers[s].insert(item);
@@ -225,6 +228,7 @@ impl<'o, M: RawMessages> BagStream<'o, M> {
                 }
             }
         }
+        self.fresh = fresh;
         Ok(())
     }
 

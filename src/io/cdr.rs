@@ -84,12 +84,21 @@ impl<'a> CdrReader<'a> {
         }
     }
 
-    fn take<const N: usize>(&mut self, what: &str) -> Result<[u8; N], CdrError> {
-        let aligned = if self.ros1 {
+    /// Where the next `N`-byte primitive starts: `pos` rounded up to a
+    /// multiple of `N` in CDR (every primitive is a power of two in size),
+    /// `pos` itself in ROS 1.
+    #[inline(always)]
+    fn aligned<const N: usize>(&self) -> usize {
+        if self.ros1 {
             self.pos
         } else {
-            self.pos.next_multiple_of(N)
-        };
+            (self.pos + (N - 1)) & !(N - 1)
+        }
+    }
+
+    #[inline(always)]
+    fn take<const N: usize>(&mut self, what: &str) -> Result<[u8; N], CdrError> {
+        let aligned = self.aligned::<N>();
         match self.body.get(aligned..aligned + N) {
             Some(b) => {
                 self.pos = aligned + N;
@@ -100,24 +109,72 @@ impl<'a> CdrReader<'a> {
                 }
                 Ok(a)
             }
-            None => {
-                self.pos = aligned.min(self.body.len());
-                Err(self.err(what))
-            }
+            None => Err(self.short(aligned, what)),
+        }
+    }
+
+    /// The error of a primitive at `aligned` that runs past the end.
+    #[cold]
+    #[inline(never)]
+    fn short(&mut self, aligned: usize, what: &str) -> CdrError {
+        self.pos = aligned.min(self.body.len());
+        self.err(what)
+    }
+
+    /// The bytes of `n` consecutive `N`-byte primitives, aligned once for
+    /// the first (the others then fall on multiples of `N` too), so a whole
+    /// array costs one bounds check; `None`, with nothing read, when they do
+    /// not all fit (the caller then reads them one by one for the error).
+    /// An empty run reads nothing and does not align, as reading no element
+    /// does not.
+    #[inline(always)]
+    fn run<const N: usize>(&mut self, n: usize) -> Option<&'a [u8]> {
+        if n == 0 {
+            return Some(&[]);
+        }
+        let aligned = self.aligned::<N>();
+        let end = aligned.checked_add(n.checked_mul(N)?)?;
+        let bytes = self.body.get(aligned..end)?;
+        self.pos = end;
+        Some(bytes)
+    }
+
+    /// A `float64` from 8 bytes in this message's byte order.
+    #[inline(always)]
+    fn f64_of(&self, b: &[u8]) -> f64 {
+        let a: [u8; 8] = b.try_into().expect("8-byte chunk");
+        if self.little {
+            f64::from_le_bytes(a)
+        } else {
+            f64::from_be_bytes(a)
+        }
+    }
+
+    /// A `float32` from 4 bytes in this message's byte order.
+    #[inline(always)]
+    fn f32_of(&self, b: &[u8]) -> f32 {
+        let a: [u8; 4] = b.try_into().expect("4-byte chunk");
+        if self.little {
+            f32::from_le_bytes(a)
+        } else {
+            f32::from_be_bytes(a)
         }
     }
 
     /// Reads a `uint8`/`byte`/`bool`.
+    #[inline]
     pub fn u8(&mut self) -> Result<u8, CdrError> {
         Ok(self.take::<1>("uint8")?[0])
     }
 
     /// Reads an `int32`.
+    #[inline]
     pub fn i32(&mut self) -> Result<i32, CdrError> {
         Ok(i32::from_le_bytes(self.take("int32")?))
     }
 
     /// Reads a `uint32`.
+    #[inline]
     pub fn u32(&mut self) -> Result<u32, CdrError> {
         Ok(u32::from_le_bytes(self.take("uint32")?))
     }
@@ -141,17 +198,20 @@ impl<'a> CdrReader<'a> {
     }
 
     /// Reads a `float32`.
+    #[inline]
     pub fn f32(&mut self) -> Result<f32, CdrError> {
         Ok(f32::from_le_bytes(self.take("float32")?))
     }
 
     /// Reads a `float64`.
+    #[inline]
     pub fn f64(&mut self) -> Result<f64, CdrError> {
         Ok(f64::from_le_bytes(self.take("float64")?))
     }
 
     /// Reads a sequence length and checks that `elem_size`-byte elements of
     /// that count can still fit (so a corrupt count cannot allocate gigabytes).
+    #[inline]
     pub fn seq_len(&mut self, elem_size: usize) -> Result<usize, CdrError> {
         let n = self.u32()? as usize;
         let left = self.body.len().saturating_sub(self.pos);
@@ -164,6 +224,7 @@ impl<'a> CdrReader<'a> {
     }
 
     /// Reads a `string` (u32 length including the NUL, bytes, NUL).
+    #[inline]
     pub fn string(&mut self) -> Result<&'a str, CdrError> {
         let n = self.seq_len(1)?;
         let bytes = &self.body[self.pos..self.pos + n];
@@ -183,8 +244,13 @@ impl<'a> CdrReader<'a> {
         let n = self.seq_len(4)?;
         out.clear();
         out.reserve_exact(n);
-        for _ in 0..n {
-            out.push(self.f32()?);
+        match self.run::<4>(n) {
+            Some(b) => out.extend(b.chunks_exact(4).map(|c| self.f32_of(c))),
+            None => {
+                for _ in 0..n {
+                    out.push(self.f32()?);
+                }
+            }
         }
         Ok(())
     }
@@ -192,14 +258,26 @@ impl<'a> CdrReader<'a> {
     /// Reads a `float64[]` sequence.
     pub fn f64_seq(&mut self) -> Result<Vec<f64>, CdrError> {
         let n = self.seq_len(8)?;
-        (0..n).map(|_| self.f64()).collect()
+        match self.run::<8>(n) {
+            Some(b) => Ok(b.chunks_exact(8).map(|c| self.f64_of(c)).collect()),
+            None => (0..n).map(|_| self.f64()).collect(),
+        }
     }
 
     /// Reads a fixed `float64[N]` array (no count on the wire).
     pub fn f64_array<const N: usize>(&mut self) -> Result<[f64; N], CdrError> {
         let mut a = [0.0; N];
-        for v in &mut a {
-            *v = self.f64()?;
+        match self.run::<8>(N) {
+            Some(b) => {
+                for (v, c) in a.iter_mut().zip(b.chunks_exact(8)) {
+                    *v = self.f64_of(c);
+                }
+            }
+            None => {
+                for v in &mut a {
+                    *v = self.f64()?;
+                }
+            }
         }
         Ok(a)
     }
@@ -397,6 +475,71 @@ mod tests {
         assert!(e.expected.contains("float64"));
         assert!(CdrReader::new(&[0, 1]).is_err());
         assert!(CdrReader::new(&[9, 9, 0, 0]).is_err());
+    }
+
+    /// Bytes of a little-endian CDR message: header, then `body`.
+    fn le(body: &[&[u8]]) -> Vec<u8> {
+        let mut b = vec![0, 1, 0, 0];
+        for part in body {
+            b.extend_from_slice(part);
+        }
+        b
+    }
+
+    #[test]
+    fn arrays_are_read_whole_in_every_byte_order() {
+        // float64[] of 2: count, 4 pad bytes to the 8-byte boundary, values.
+        let b = le(&[
+            &2u32.to_le_bytes(),
+            &[0; 4],
+            &1.25f64.to_le_bytes(),
+            &(-3.5f64).to_le_bytes(),
+        ]);
+        let mut r = CdrReader::new(&b).unwrap();
+        assert_eq!(r.f64_seq().unwrap(), [1.25, -3.5]);
+        r.finish().unwrap();
+        let mut b = vec![0, 0, 0, 0];
+        b.extend_from_slice(&2u32.to_be_bytes());
+        b.extend_from_slice(&0.5f32.to_be_bytes());
+        b.extend_from_slice(&7.0f32.to_be_bytes());
+        b.extend_from_slice(&[0; 4]);
+        b.extend_from_slice(&9.75f64.to_be_bytes());
+        let mut r = CdrReader::new(&b).unwrap();
+        let mut v = vec![1.0; 5];
+        r.f32_seq_into(&mut v).unwrap();
+        assert_eq!(v, [0.5, 7.0]);
+        assert_eq!(r.f64_array::<1>().unwrap(), [9.75]);
+        r.finish().unwrap();
+        // ROS 1: no header, no padding.
+        let mut b = 1u32.to_le_bytes().to_vec();
+        b.extend_from_slice(&6.0f64.to_le_bytes());
+        b.extend_from_slice(&(-1.0f64).to_le_bytes());
+        let mut r = CdrReader::ros1(&b);
+        assert_eq!(r.f64_seq().unwrap(), [6.0]);
+        assert_eq!(r.f64_array::<1>().unwrap(), [-1.0]);
+        r.finish().unwrap();
+    }
+
+    #[test]
+    fn a_cut_array_fails_at_the_first_missing_element() {
+        // u32, 4 pad bytes, then 2 whole float64 and half of a third.
+        let b = le(&[&[0; 8], &[0; 16], &[0; 4]]);
+        let mut r = CdrReader::new(&b).unwrap();
+        r.u32().unwrap();
+        let e = r.f64_array::<3>().unwrap_err();
+        // The third float64 would start at body byte 24, header included 28.
+        assert_eq!(e.offset, 28);
+        assert!(e.expected.contains("float64"), "{e}");
+    }
+
+    #[test]
+    fn an_empty_array_reads_nothing_and_does_not_align() {
+        // float64[] of 0, then a uint8 right after the count (no padding).
+        let b = le(&[&0u32.to_le_bytes(), &[9]]);
+        let mut r = CdrReader::new(&b).unwrap();
+        assert!(r.f64_seq().unwrap().is_empty());
+        assert_eq!(r.u8().unwrap(), 9);
+        r.finish().unwrap();
     }
 
     #[test]

@@ -74,13 +74,35 @@ pub(crate) struct State<'a> {
     opts: &'a ReadOptions,
     wire: Wire,
     rec: Recording,
-    latest: HashMap<&'static str, (f64, bool)>,
+    /// Per stream name (a handful): latest stamp (s), from a log time.
+    latest: Vec<(&'static str, (f64, bool))>,
     wheels: WheelDecoder,
     laser_frame: Option<String>,
     /// child → (parent, parent_from_child).
     tf: HashMap<String, (String, Pose2)>,
     /// The same from /tf: the first transform seen of each child frame.
     tf_dynamic: HashMap<String, (String, Pose2)>,
+    /// The messages decoded into, one after the other.
+    bufs: Buffers,
+}
+
+/// The messages of the busiest streams, each decoded into again and again
+/// ([`RosMsg::read_into`]), so that decoding one allocates nothing but what
+/// its sample keeps (a scan's ranges).
+#[derive(Default)]
+struct Buffers {
+    odom: OdometryMsg,
+    scan: LaserScanMsg,
+    tf: TfMessage,
+}
+
+/// Decodes `data`, serialised as `wire`, into `m`.
+fn decode_into<M: RosMsg>(wire: Wire, m: &mut M, data: &[u8]) -> Result<(), String> {
+    match wire {
+        Wire::Cdr => m.decode_into(data),
+        Wire::Ros1 => m.decode_ros1_into(data),
+    }
+    .map_err(cdr)
 }
 
 /// The stamp (s) of a message: its header stamp, or its log time when the
@@ -143,11 +165,12 @@ impl<'a> State<'a> {
                 source: file.to_string(),
                 ..Default::default()
             },
-            latest: HashMap::new(),
+            latest: Vec::new(),
             wheels: WheelDecoder::default(),
             laser_frame: None,
             tf: HashMap::new(),
             tf_dynamic: HashMap::new(),
+            bufs: Buffers::default(),
         }
     }
 
@@ -170,7 +193,14 @@ impl<'a> State<'a> {
     /// `t` (s), checked against the latest stamp of `stream`; `from_log`:
     /// a log time stood in for an unset header stamp.
     fn in_order(&mut self, stream: &'static str, t: f64, from_log: bool) -> Result<f64, String> {
-        let (last, last_from_log) = *self.latest.entry(stream).or_insert((t, from_log));
+        let i = match self.latest.iter().position(|(s, _)| *s == stream) {
+            Some(i) => i,
+            None => {
+                self.latest.push((stream, (t, from_log)));
+                self.latest.len() - 1
+            }
+        };
+        let (last, last_from_log) = self.latest[i].1;
         if t < last - self.opts.reorder_tolerance {
             let hint = if from_log || last_from_log {
                 "; a zero (unset) header stamp was replaced by the log time, and the \
@@ -188,7 +218,7 @@ impl<'a> State<'a> {
             ));
         }
         if t >= last {
-            self.latest.insert(stream, (t, from_log));
+            self.latest[i].1 = (t, from_log);
         }
         Ok(t)
     }
@@ -206,14 +236,16 @@ impl<'a> State<'a> {
                 Ok(())
             }
             Role::Odom | Role::RefOdometry => {
-                let m: OdometryMsg = self.decode(data)?;
+                decode_into(self.wire, &mut self.bufs.odom, data)?;
+                let m = &self.bufs.odom;
+                let (stamp, posed) = (m.header.stamp, pose_of(&m.pose));
                 let stream = if role == Role::Odom {
                     "odom"
                 } else {
                     "reference"
                 };
-                let t = self.stamp(stream, &m.header.stamp, log_time)?;
-                let (pose, has_heading) = pose_of(&m.pose)?;
+                let t = self.stamp(stream, &stamp, log_time)?;
+                let (pose, has_heading) = posed?;
                 let sp = StampedPose {
                     stamp: t,
                     pose,
@@ -253,21 +285,21 @@ impl<'a> State<'a> {
             }
             Role::Survey => Ok(()),
             Role::TfStatic | Role::Tf => {
-                let m: TfMessage = self.decode(data)?;
+                decode_into(self.wire, &mut self.bufs.tf, data)?;
                 let map = if role == Role::Tf {
                     &mut self.tf_dynamic
                 } else {
                     &mut self.tf
                 };
-                for tr in m.transforms {
+                for tr in &self.bufs.tf.transforms {
                     let yaw = tr.rotation.yaw();
                     finite("transform", &[tr.translation.x, tr.translation.y, yaw])?;
-                    let child = frame(&tr.child_frame_id).to_string();
-                    if role == Role::Tf && map.contains_key(&child) {
+                    let child = frame(&tr.child_frame_id);
+                    if role == Role::Tf && map.contains_key(child) {
                         continue;
                     }
                     map.insert(
-                        child,
+                        child.to_string(),
                         (
                             frame(&tr.header.frame_id).to_string(),
                             geom::pose(tr.translation.x, tr.translation.y, yaw),
@@ -280,8 +312,10 @@ impl<'a> State<'a> {
     }
 
     fn scan(&mut self, data: &[u8], log_time: u64) -> Result<(), String> {
-        let m: LaserScanMsg = self.decode(data)?;
-        let t = self.stamp("scan", &m.header.stamp, log_time)?;
+        decode_into(self.wire, &mut self.bufs.scan, data)?;
+        let stamp = self.bufs.scan.header.stamp;
+        let t = self.stamp("scan", &stamp, log_time)?;
+        let m = &mut self.bufs.scan;
         if m.ranges.is_empty() {
             return Err("LaserScan with zero beams".into());
         }
@@ -314,7 +348,7 @@ impl<'a> State<'a> {
             },
             range_min: m.range_min as f64,
             range_max: m.range_max as f64,
-            ranges: m.ranges,
+            ranges: std::mem::take(&mut m.ranges),
         };
         scan.check_geometry(Some(m.angle_max as f64))?;
         if self.laser_frame.is_none() {
@@ -335,9 +369,10 @@ impl<'a> State<'a> {
                 (t, self.wheels.joint_state(&m, opts)?)
             }
             WheelSourceKind::Odometry => {
-                let m: OdometryMsg = self.decode(data)?;
-                let t = self.stamp("wheels", &m.header.stamp, log_time)?;
-                (t, self.wheels.twist(&m, opts)?)
+                decode_into(self.wire, &mut self.bufs.odom, data)?;
+                let stamp = self.bufs.odom.header.stamp;
+                let t = self.stamp("wheels", &stamp, log_time)?;
+                (t, self.wheels.twist(&self.bufs.odom, opts)?)
             }
             WheelSourceKind::Ticks => {
                 let ty = opts.wheels.ticks_layout().map(|l| l.ticks_type);

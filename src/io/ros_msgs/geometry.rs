@@ -118,6 +118,16 @@ impl RosMsg for TfMessage {
         Ok(Self { transforms })
     }
 
+    fn read_into(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
+        let n = r.seq_len(72)?;
+        self.transforms.truncate(n);
+        self.transforms.resize_with(n, Default::default);
+        for t in &mut self.transforms {
+            t.read_into(r)?;
+        }
+        Ok(())
+    }
+
     fn write(&self, w: &mut CdrWriter) {
         w.seq_len(self.transforms.len());
         for t in &self.transforms {

@@ -21,6 +21,30 @@ pub trait RosMsg: Sized {
     /// Writes the fields in schema order.
     fn write(&self, w: &mut CdrWriter);
 
+    /// Reads the fields in schema order into `self`, reusing its strings and
+    /// vectors (a reader that decodes message after message into one value
+    /// allocates only when a message is longer than any before it). Leaves
+    /// `self` partly overwritten when it fails.
+    fn read_into(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
+        *self = Self::read(r)?;
+        Ok(())
+    }
+
+    /// [`RosMsg::decode`] into `self` (see [`RosMsg::read_into`]); the same
+    /// checks and errors.
+    fn decode_into(&mut self, data: &[u8]) -> Result<(), CdrError> {
+        let mut r = CdrReader::new(data)?;
+        self.read_into(&mut r)?;
+        r.finish()
+    }
+
+    /// [`RosMsg::decode_ros1`] into `self` (see [`RosMsg::read_into`]).
+    fn decode_ros1_into(&mut self, data: &[u8]) -> Result<(), CdrError> {
+        let mut r = CdrReader::ros1(data);
+        self.read_into(&mut r)?;
+        r.finish()
+    }
+
     /// Decodes a whole message (encapsulation header included); trailing
     /// bytes beyond 3 bytes of padding are an error.
     fn decode(data: &[u8]) -> Result<Self, CdrError> {
@@ -54,12 +78,19 @@ trait Field: Sized {
     fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError>;
     /// Writes the value.
     fn write(&self, w: &mut CdrWriter);
+    /// Reads the value into `self`, reusing what it owns.
+    #[inline]
+    fn read_into(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
+        *self = Self::read(r)?;
+        Ok(())
+    }
 }
 
 /// The `read` and `write` of a struct encoded as the listed fields one after
 /// the other (schema order), each with its own [`Field`] codec.
 macro_rules! fields_in_order {
     ($($field:ident),+ $(,)?) => {
+        #[inline]
         fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
             Ok(Self {
                 $($field: Field::read(r)?,)+
@@ -68,6 +99,12 @@ macro_rules! fields_in_order {
 
         fn write(&self, w: &mut CdrWriter) {
             $(Field::write(&self.$field, w);)+
+        }
+
+        #[inline]
+        fn read_into(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
+            $(Field::read_into(&mut self.$field, r)?;)+
+            Ok(())
         }
     };
 }
@@ -79,6 +116,7 @@ macro_rules! primitive_fields {
     ($($t:ident),+) => {
         $(
             impl Field for $t {
+                #[inline]
                 fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
                     r.$t()
                 }
@@ -98,10 +136,17 @@ impl Field for String {
     fn write(&self, w: &mut CdrWriter) {
         w.string(self)
     }
+    fn read_into(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
+        let s = r.string()?;
+        self.clear();
+        self.push_str(s);
+        Ok(())
+    }
 }
 
 /// Covariance matrices: fixed-size, no length prefix.
 impl<const N: usize> Field for [f64; N] {
+    #[inline]
     fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
         r.f64_array()
     }
@@ -174,6 +219,14 @@ impl Field for Header {
     fn write(&self, w: &mut CdrWriter) {
         self.stamp.write(w);
         self.frame_id.write(w);
+    }
+
+    fn read_into(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
+        if r.is_ros1() {
+            r.u32()?;
+        }
+        self.stamp.read_into(r)?;
+        self.frame_id.read_into(r)
     }
 }
 
@@ -312,6 +365,60 @@ mod tests {
         assert_eq!(JointStateMsg::decode(&js.encode()).unwrap(), js);
         let imu = ImuMsg::default();
         assert_eq!(ImuMsg::decode(&imu.encode()).unwrap(), imu);
+    }
+
+    #[test]
+    fn decoding_into_a_used_message_equals_decoding_afresh() {
+        let long = TfMessage {
+            transforms: vec![
+                TransformStamped {
+                    child_frame_id: "a_long_child_frame".into(),
+                    ..Default::default()
+                };
+                3
+            ],
+        };
+        let short = TfMessage {
+            transforms: vec![TransformStamped {
+                header: Header {
+                    stamp: Time { sec: 3, nanosec: 4 },
+                    frame_id: "odom".into(),
+                },
+                child_frame_id: "b".into(),
+                rotation: Quat::from_yaw(1.0),
+                ..Default::default()
+            }],
+        };
+        let mut m = TfMessage::default();
+        m.decode_into(&long.encode()).unwrap();
+        assert_eq!(m, long);
+        m.decode_into(&short.encode()).unwrap();
+        assert_eq!(m, short);
+        let scan = LaserScanMsg {
+            header: Header {
+                stamp: Time { sec: 1, nanosec: 2 },
+                frame_id: "laser".into(),
+            },
+            ranges: vec![1.0, 2.0],
+            ..Default::default()
+        };
+        let mut s = LaserScanMsg {
+            intensities: vec![5.0; 9],
+            ..Default::default()
+        };
+        s.decode_into(&scan.encode()).unwrap();
+        assert_eq!(s, scan);
+        // Every cut of an odometry message fails as plain decoding does.
+        let odom = OdometryMsg {
+            child_frame_id: "base_link".into(),
+            ..Default::default()
+        }
+        .encode();
+        let mut o = OdometryMsg::default();
+        for cut in 0..odom.len() - 3 {
+            let fresh = OdometryMsg::decode(&odom[..cut]).unwrap_err();
+            assert_eq!(o.decode_into(&odom[..cut]).unwrap_err(), fresh, "cut {cut}");
+        }
     }
 
     #[test]

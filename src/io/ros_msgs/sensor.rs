@@ -49,6 +49,23 @@ impl RosMsg for LaserScanMsg {
         Ok(m)
     }
 
+    fn read_into(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
+        self.header.read_into(r)?;
+        for v in [
+            &mut self.angle_min,
+            &mut self.angle_max,
+            &mut self.angle_increment,
+            &mut self.time_increment,
+            &mut self.scan_time,
+            &mut self.range_min,
+            &mut self.range_max,
+        ] {
+            *v = r.f32()?;
+        }
+        r.f32_seq_into(&mut self.ranges)?;
+        r.f32_seq_into(&mut self.intensities)
+    }
+
     fn write(&self, w: &mut CdrWriter) {
         self.header.write(w);
         for v in [
