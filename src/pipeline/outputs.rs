@@ -224,11 +224,19 @@ pub struct CalibFiles {
     /// Names what changed at each firing of the change detector (when
     /// naming is on).
     watch: Option<super::changes::ChangeWatch>,
-    /// History rows from the first firing not yet named on, and whether the
-    /// detector fired at each: a row is written once its name is known.
-    held: std::collections::VecDeque<(crate::io::csv::HistoryFields, bool)>,
-    /// Names of firings not yet written into the history.
+    /// History rows not yet written: (time (s), fields, whether the filter's
+    /// detector fired there). A row is written once its `change` cell is
+    /// known: its filter firing named, and every laser-mounting firing that
+    /// can still be dated at or before it named.
+    held: std::collections::VecDeque<(f64, crate::io::csv::HistoryFields, bool)>,
+    /// Names of filter firings not yet written into the history.
     names: std::collections::VecDeque<String>,
+    /// Laser-mounting firings named but not yet written: (time (s), name),
+    /// in time order.
+    mount_names: std::collections::VecDeque<(f64, String)>,
+    /// Laser-mounting names whose row is passed, waiting for the next row
+    /// without a name of its own.
+    carried: std::collections::VecDeque<String>,
     /// Every firing named so far, in order.
     changes: Vec<crate::diagnose::onset::NamedChange>,
 }
@@ -253,6 +261,8 @@ impl CalibFiles {
             watch: None,
             held: Default::default(),
             names: Default::default(),
+            mount_names: Default::default(),
+            carried: Default::default(),
             changes: Vec::new(),
         })
     }
@@ -282,9 +292,11 @@ impl CalibFiles {
     /// Records newly named firings and writes the rows they complete.
     fn take_names(&mut self, named: Vec<crate::diagnose::onset::NamedChange>) {
         for c in named {
-            // The history's rows hold the filter's firings only.
             if c.detector == crate::diagnose::onset::FILTER {
                 self.names.push_back(c.effect.clone());
+            } else {
+                let at = self.mount_names.partition_point(|m| m.0 <= c.time_s);
+                self.mount_names.insert(at, (c.time_s, c.effect.clone()));
             }
             // A firing on a change already reported is reported once, there.
             let first = c
@@ -298,17 +310,33 @@ impl CalibFiles {
         self.flush(false);
     }
 
-    /// Writes the held rows whose `change` cell is known (all at the end).
+    /// Writes the held rows whose `change` cell is known (all at the end):
+    /// a filter firing's name at its own row; a mounting firing's at the
+    /// first row at or after its time that carries no filter name.
     fn flush(&mut self, end: bool) {
         let naming = self.watch.is_some();
-        while let Some((_, fired)) = self.held.front() {
-            let name = match (*fired && naming, self.names.front()) {
-                (false, _) => String::new(),
-                (true, Some(_)) => self.names.pop_front().unwrap_or_default(),
-                (true, None) if end => String::new(),
+        let mount_before = self.watch.as_ref().map_or(
+            f64::INFINITY,
+            super::changes::ChangeWatch::mount_named_before,
+        );
+        while let Some(&(t, _, fired)) = self.held.front() {
+            if !end && t >= mount_before {
+                break;
+            }
+            let name = match (fired && naming, self.names.front()) {
+                (false, _) => None,
+                (true, Some(_)) => self.names.pop_front(),
+                (true, None) if end => None,
                 (true, None) => break,
             };
-            let (row, _) = self.held.pop_front().expect("front checked");
+            while self.mount_names.front().is_some_and(|m| m.0 <= t) {
+                let (_, m) = self.mount_names.pop_front().expect("front checked");
+                self.carried.push_back(m);
+            }
+            let name = name
+                .or_else(|| self.carried.pop_front())
+                .unwrap_or_default();
+            let (_, row, _) = self.held.pop_front().expect("front checked");
             self.history
                 .row(|w| crate::io::csv::write_history_row(w, &row, &name));
         }
@@ -340,7 +368,7 @@ impl RunObserver for CalibFiles {
     }
 
     fn step(&mut self, e: &Estimate, _cloud: Option<CloudView<'_>>) {
-        self.held.push_back((e.history_row(), e.changed));
+        self.held.push_back((e.t, e.history_row(), e.changed));
         let named = self.watch.as_mut().map(|w| w.step(e)).unwrap_or_default();
         self.take_names(named);
     }

@@ -152,6 +152,11 @@ pub struct StreamRecorder<'a> {
     last_wheel: Option<WheelSample>,
     /// Where the change detector fired, for [`Self::changes`].
     fired: Vec<Stamp>,
+    /// Every filter step's sensor time (s) and scan index, for
+    /// [`Self::changes_at`]: 16 bytes a step (1.2 MB for 2 h at 10 Hz),
+    /// while a laser-mounting firing is named only after the run has passed
+    /// its window and reaches the recording at its end.
+    step_stamps: Vec<(f64, i64)>,
     calibrated: Polyline,
     pts: Vec<Point2<f64>>,
     /// Scan-match covariances (2×2, m²) waiting for their matched pose:
@@ -199,6 +204,7 @@ impl<'a> StreamRecorder<'a> {
             raw_pose: Pose2::identity(),
             last_wheel: None,
             fired: Vec::new(),
+            step_stamps: Vec::new(),
             calibrated: Polyline::new(opts.max_polyline),
             pts: Vec::new(),
             covariances: VecDeque::new(),
@@ -320,6 +326,19 @@ impl<'a> StreamRecorder<'a> {
     pub fn changes(&mut self, texts: &[String]) {
         for (at, text) in self.fired.clone().into_iter().zip(texts) {
             let r = self.logger.change(at, text);
+            self.keep(r);
+        }
+    }
+
+    /// Logs `texts` at their times (s): each at the first filter step at or
+    /// after it (none after the last step).
+    pub fn changes_at(&mut self, texts: &[(f64, String)]) {
+        for (t, text) in texts {
+            let i = self.step_stamps.partition_point(|s| s.0 < *t);
+            let Some(&(ts, scan)) = self.step_stamps.get(i) else {
+                continue;
+            };
+            let r = self.logger.change(Stamp::new(scan, self.time(ts)), text);
             self.keep(r);
         }
     }
@@ -483,6 +502,7 @@ impl RunObserver for StreamRecorder<'_> {
         if e.changed {
             self.fired.push(at);
         }
+        self.step_stamps.push((e.t, self.passed));
         self.steps += 1;
     }
 
