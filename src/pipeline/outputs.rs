@@ -229,14 +229,8 @@ pub struct CalibFiles {
     /// known: its filter firing named, and every laser-mounting firing that
     /// can still be dated at or before it named.
     held: std::collections::VecDeque<(f64, crate::io::csv::HistoryFields, bool)>,
-    /// Names of filter firings not yet written into the history.
-    names: std::collections::VecDeque<String>,
-    /// Laser-mounting firings named but not yet written: (time (s), name),
-    /// in time order.
-    mount_names: std::collections::VecDeque<(f64, String)>,
-    /// Laser-mounting names whose row is passed, waiting for the next row
-    /// without a name of its own.
-    carried: std::collections::VecDeque<String>,
+    /// Names of firings not yet written into the history.
+    names: RowNames,
     /// Every firing named so far, in order.
     changes: Vec<crate::diagnose::onset::NamedChange>,
 }
@@ -260,9 +254,7 @@ impl CalibFiles {
             trajectory: TumFile::create(&trajectory)?,
             watch: None,
             held: Default::default(),
-            names: Default::default(),
-            mount_names: Default::default(),
-            carried: Default::default(),
+            names: RowNames::default(),
             changes: Vec::new(),
         })
     }
@@ -292,12 +284,7 @@ impl CalibFiles {
     /// Records newly named firings and writes the rows they complete.
     fn take_names(&mut self, named: Vec<crate::diagnose::onset::NamedChange>) {
         for c in named {
-            if c.detector == crate::diagnose::onset::FILTER {
-                self.names.push_back(c.effect.clone());
-            } else {
-                let at = self.mount_names.partition_point(|m| m.0 <= c.time_s);
-                self.mount_names.insert(at, (c.time_s, c.effect.clone()));
-            }
+            self.names.named(&c);
             // A firing on a change already reported is reported once, there.
             let first = c
                 .continues
@@ -323,19 +310,9 @@ impl CalibFiles {
             if !end && t >= mount_before {
                 break;
             }
-            let name = match (fired && naming, self.names.front()) {
-                (false, _) => None,
-                (true, Some(_)) => self.names.pop_front(),
-                (true, None) if end => None,
-                (true, None) => break,
+            let Some(name) = self.names.row(t, fired && naming, end) else {
+                break;
             };
-            while self.mount_names.front().is_some_and(|m| m.0 <= t) {
-                let (_, m) = self.mount_names.pop_front().expect("front checked");
-                self.carried.push_back(m);
-            }
-            let name = name
-                .or_else(|| self.carried.pop_front())
-                .unwrap_or_default();
             let (_, row, _) = self.held.pop_front().expect("front checked");
             self.history
                 .row(|w| crate::io::csv::write_history_row(w, &row, &name));
@@ -375,6 +352,51 @@ impl RunObserver for CalibFiles {
 
     fn calibrated_pose(&mut self, t: f64, pose: &Pose2) {
         self.trajectory.pose(t, pose);
+    }
+}
+
+/// The names of firings not yet written into the history, and the rule
+/// that puts them on its rows: a filter firing's at its own row, a
+/// laser-mounting firing's at the first row at or after its time that
+/// carries no filter name (one name a row).
+#[derive(Debug, Default)]
+struct RowNames {
+    /// Filter firings' names, in firing order.
+    filter: std::collections::VecDeque<String>,
+    /// Laser-mounting firings' (time (s), name), in time order.
+    mount: std::collections::VecDeque<(f64, String)>,
+    /// Laser-mounting names whose row is passed, waiting for the next row
+    /// without a name of its own.
+    carried: std::collections::VecDeque<String>,
+}
+
+impl RowNames {
+    /// Takes a newly named firing.
+    fn named(&mut self, c: &crate::diagnose::onset::NamedChange) {
+        if c.detector == crate::diagnose::onset::FILTER {
+            self.filter.push_back(c.effect.clone());
+        } else {
+            let at = self.mount.partition_point(|m| m.0 <= c.time_s);
+            self.mount.insert(at, (c.time_s, c.effect.clone()));
+        }
+    }
+
+    /// The `change` cell of the next row, at `t` (s), where the filter
+    /// `fired` or not; `None` while its filter firing is not named yet (at
+    /// the `end`, empty). The caller passes a row only once every
+    /// mounting firing at or before it is named.
+    fn row(&mut self, t: f64, fired: bool, end: bool) -> Option<String> {
+        let own = match (fired, self.filter.front()) {
+            (false, _) => None,
+            (true, Some(_)) => self.filter.pop_front(),
+            (true, None) if end => Some(String::new()),
+            (true, None) => return None,
+        };
+        while self.mount.front().is_some_and(|m| m.0 <= t) {
+            let (_, m) = self.mount.pop_front().expect("front checked");
+            self.carried.push_back(m);
+        }
+        Some(own.or_else(|| self.carried.pop_front()).unwrap_or_default())
     }
 }
 
@@ -449,5 +471,36 @@ impl RunObserver for Collect {
 
     fn calibrated_pose(&mut self, t: f64, pose: &Pose2) {
         self.calibrated.push(t, *pose);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::onset::{NamedChange, FILTER, MOUNT};
+
+    fn firing(t: f64, detector: &'static str, effect: &str) -> NamedChange {
+        NamedChange {
+            detector,
+            effect: effect.into(),
+            ..NamedChange::undetermined(t)
+        }
+    }
+
+    #[test]
+    fn a_mounting_firing_goes_to_the_next_row_without_a_filter_name() {
+        let mut n = RowNames::default();
+        n.named(&firing(2.0, FILTER, "radius_step"));
+        n.named(&firing(1.5, MOUNT, "laser_offset"));
+        n.named(&firing(3.2, MOUNT, "laser_offset_2"));
+        let rows: Vec<Option<String>> = [(1.0, false), (2.0, true), (3.0, false), (4.0, false)]
+            .into_iter()
+            .map(|(t, fired)| n.row(t, fired, false))
+            .collect();
+        let want = ["", "radius_step", "laser_offset", "laser_offset_2"];
+        assert_eq!(rows, want.map(|w| Some(w.to_string())));
+        // A filter firing not named yet holds its row, unless at the end.
+        assert_eq!(n.row(5.0, true, false), None);
+        assert_eq!(n.row(5.0, true, true), Some(String::new()));
     }
 }
