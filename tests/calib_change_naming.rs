@@ -269,19 +269,11 @@ fn recorded(
     )
     .unwrap();
     let changes = files.changes();
-    let filter = odocal::diagnose::onset::FILTER;
-    let (by_filter, by_mount): (Vec<_>, Vec<_>) =
-        changes.iter().partition(|c| c.detector == filter);
-    let texts: Vec<String> = by_filter
-        .into_iter()
-        .map(odocal::pipeline::changes::describe)
-        .collect();
-    recorder.changes(&texts);
-    let at: Vec<(f64, String)> = by_mount
-        .into_iter()
+    let at: Vec<(f64, String)> = changes
+        .iter()
         .map(|c| (c.time_s, odocal::pipeline::changes::describe(c)))
         .collect();
-    recorder.changes_at(&at);
+    recorder.changes(&at);
     recorder.finish().unwrap();
     (changes, notes)
 }

@@ -185,35 +185,25 @@ pub fn run(
 }
 
 /// The Rerun recording's last entries (what changed at each firing, a
-/// firing on a change already named saying so: the filter's at the steps
-/// where it fired, the laser-mounting watch's at the first step at or after
-/// its time), then its end; returns what it left out.
+/// firing on a change already named saying so, at the first step at or
+/// after its time: the step that fired for the filter's detector), then its
+/// end; returns what it left out.
 fn finish_recording(
     mut r: StreamRecorder,
     summary: &CalibSummary,
 ) -> Result<Vec<String>, PipelineError> {
-    let filter = crate::diagnose::onset::FILTER;
     let mut at: Vec<(f64, String)> = Vec::new();
-    let mut mount: Vec<(f64, String)> = Vec::new();
     for c in &summary.changes {
-        let to = if c.detector == filter {
-            &mut at
-        } else {
-            &mut mount
-        };
-        to.push((c.time_s, super::changes::describe(c)));
+        at.push((c.time_s, super::changes::describe(c)));
         for t in &c.refired_s {
             let again = format!(
                 "change at {t:.2} s: {} again, the change named at {:.2} s continuing",
                 c.effect, c.time_s
             );
-            to.push((*t, again));
+            at.push((*t, again));
         }
     }
-    at.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let texts: Vec<String> = at.into_iter().map(|(_, s)| s).collect();
-    r.changes(&texts);
-    r.changes_at(&mount);
+    r.changes(&at);
     r.finish().map_err(super::viewer::viz_error)
 }
 

@@ -150,12 +150,10 @@ pub struct StreamRecorder<'a> {
     raw: Polyline,
     raw_pose: Pose2,
     last_wheel: Option<WheelSample>,
-    /// Where the change detector fired, for [`Self::changes`].
-    fired: Vec<Stamp>,
     /// Every filter step's sensor time (s) and scan index, for
-    /// [`Self::changes_at`]: 16 bytes a step (1.2 MB for 2 h at 10 Hz),
-    /// while a laser-mounting firing is named only after the run has passed
-    /// its window and reaches the recording at its end.
+    /// [`Self::changes`]: 16 bytes a step (1.2 MB for 2 h at 10 Hz); the
+    /// firings are named after the run has passed their windows, the
+    /// mounting watch's dated back, and reach the recording at its end.
     step_stamps: Vec<(f64, i64)>,
     calibrated: Polyline,
     pts: Vec<Point2<f64>>,
@@ -203,7 +201,6 @@ impl<'a> StreamRecorder<'a> {
             raw: Polyline::new(opts.max_polyline),
             raw_pose: Pose2::identity(),
             last_wheel: None,
-            fired: Vec::new(),
             step_stamps: Vec::new(),
             calibrated: Polyline::new(opts.max_polyline),
             pts: Vec::new(),
@@ -321,18 +318,10 @@ impl<'a> StreamRecorder<'a> {
         traj.stamps.iter().map(|&t| self.time(t)).collect()
     }
 
-    /// Logs `texts` (what changed, in firing order) at the steps where the
-    /// change detector fired.
-    pub fn changes(&mut self, texts: &[String]) {
-        for (at, text) in self.fired.clone().into_iter().zip(texts) {
-            let r = self.logger.change(at, text);
-            self.keep(r);
-        }
-    }
-
-    /// Logs `texts` at their times (s): each at the first filter step at or
-    /// after it (none after the last step).
-    pub fn changes_at(&mut self, texts: &[(f64, String)]) {
+    /// Logs `texts` (what changed) at their firings' times (s): each at the
+    /// first filter step at or after it, the step that fired for the
+    /// filter's detector (none after the last step).
+    pub fn changes(&mut self, texts: &[(f64, String)]) {
         for (t, text) in texts {
             let i = self.step_stamps.partition_point(|s| s.0 < *t);
             let Some(&(ts, scan)) = self.step_stamps.get(i) else {
@@ -499,9 +488,6 @@ impl RunObserver for StreamRecorder<'_> {
         };
         let r = self.logger.estimate(at, &est);
         self.keep(r);
-        if e.changed {
-            self.fired.push(at);
-        }
         self.step_stamps.push((e.t, self.passed));
         self.steps += 1;
     }
