@@ -139,8 +139,17 @@ fn a_knocked_laser_is_named_a_mounting_change_with_its_turn() {
     }
     let onset = c["onset_s"].as_f64().unwrap();
     assert!((onset - 30.0).abs() < 1.0, "onset {onset} s");
-    // The filter's detector did not fire: the history names nothing.
-    assert!(named_rows(&csv).is_empty());
+    // The filter's detector did not fire: the history names the mounting
+    // change once, at the first row at or after the firing.
+    let t = c["time_s"].as_f64().unwrap();
+    let rows = named_rows(&csv);
+    assert_eq!(rows.len(), 1, "{rows:?}");
+    assert_eq!(rows[0].1, "laser_offset");
+    assert!(
+        rows[0].0 >= t && rows[0].0 < t + 1.0,
+        "row {} vs {t} s",
+        rows[0].0
+    );
 }
 
 #[test]
@@ -212,25 +221,35 @@ impl odocal::viz::Logger for Notes {
     }
 }
 
-#[test]
-fn the_recording_carries_what_changed_at_the_firing() {
-    use odocal::pipeline::changes::describe;
+/// Simulates 60 s with `effect` (seed `seed`) and calibrates it, the
+/// history's firings named and the run recorded into a [`Notes`]; returns
+/// the changes named and what the recording logged.
+fn recorded(
+    effect: &str,
+    seed: u64,
+    dir: &str,
+) -> (Vec<odocal::diagnose::onset::NamedChange>, Notes) {
     use odocal::pipeline::observe::Observers;
     use odocal::pipeline::outputs::CalibFiles;
     use odocal::pipeline::recorder::{RecorderOptions, StreamRecorder};
     let robot = odocal::robot::RobotConfig::default();
     let cfg = odocal::pipeline::Config::load(None).unwrap();
+    // A fault (a knocked laser) or a departure of the model.
+    let fault = odocal::effects::FaultEffect::parse(effect).ok();
     let sim = odocal::sim::SimConfig {
         duration_s: 60.0,
-        seed: 4,
+        seed,
+        faults: fault.into_iter().collect(),
         ..Default::default()
     };
-    let effects =
-        [odocal::effects::Effect::parse("radius_step:time=30,right=0,left=0.005").unwrap()];
+    let effects: Vec<_> = odocal::effects::Effect::parse(effect)
+        .ok()
+        .into_iter()
+        .collect();
     let (rec, _) = odocal::sim::simulate(&sim, &robot, &effects, &mut |_| {}).unwrap();
     let params = odocal::pipeline::calibrate::params_for_robot(&cfg.calib, &robot);
     let mut notes = Notes::default();
-    let mut files = CalibFiles::create(&scratch("change_naming_recorder"))
+    let mut files = CalibFiles::create(&scratch(dir))
         .unwrap()
         .naming_changes(&robot, &params.change.naming);
     let mut recorder = StreamRecorder::new(
@@ -250,12 +269,25 @@ fn the_recording_carries_what_changed_at_the_firing() {
     )
     .unwrap();
     let changes = files.changes();
+    let at: Vec<(f64, String)> = changes
+        .iter()
+        .map(|c| (c.time_s, odocal::pipeline::changes::describe(c)))
+        .collect();
+    recorder.changes(&at);
+    recorder.finish().unwrap();
+    (changes, notes)
+}
+
+#[test]
+fn the_recording_carries_what_changed_at_the_firing() {
+    let (changes, notes) = recorded(
+        "radius_step:time=30,right=0,left=0.005",
+        4,
+        "change_naming_recorder",
+    );
     assert!(!changes.is_empty(), "the detector fired");
     assert_eq!(changes[0].effect, "radius_step");
     assert_eq!(changes[0].parameter, "left");
-    let texts: Vec<String> = changes.iter().map(describe).collect();
-    recorder.changes(&texts);
-    recorder.finish().unwrap();
     assert_eq!(notes.changes.len(), changes.len());
     let (scan, time, text) = &notes.changes[0];
     assert!(text.contains("radius_step left"), "{text}");
@@ -271,5 +303,41 @@ fn the_recording_carries_what_changed_at_the_firing() {
         (time - changes[0].time_s).abs() < 0.5,
         "{time} vs {}",
         changes[0].time_s
+    );
+}
+
+#[test]
+fn the_recording_carries_a_knocked_laser_at_its_firing() {
+    let (changes, notes) = recorded(
+        "laser_knock:time=30,dx=0,dy=0,dyaw=0.035",
+        2,
+        "change_naming_recorder_knock",
+    );
+    let mount: Vec<_> = changes
+        .iter()
+        .filter(|c| c.detector == odocal::diagnose::onset::MOUNT)
+        .collect();
+    assert_eq!(mount.len(), 1, "{changes:?}");
+    let texts: Vec<_> = notes
+        .changes
+        .iter()
+        .filter(|c| c.2.contains("laser-mounting watch"))
+        .collect();
+    assert_eq!(texts.len(), 1, "{:?}", notes.changes);
+    let (scan, time, text) = texts[0];
+    assert!(text.contains("laser_offset yaw"), "{text}");
+    // At the estimate of the first step at or after the firing: the
+    // recording's time starts at its first sample, the firing's is the
+    // sensor's; the simulated run starts at 0 s.
+    let first = notes
+        .estimates
+        .iter()
+        .find(|e| e.1 >= mount[0].time_s - 1e-9)
+        .expect("a step after the firing");
+    assert_eq!((first.0, first.1), (*scan, *time));
+    assert!(
+        (time - mount[0].time_s).abs() < 1.0,
+        "{time} vs {}",
+        mount[0].time_s
     );
 }

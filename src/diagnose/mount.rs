@@ -156,6 +156,13 @@ impl MountWatch {
         2.0 * self.p.block_s
     }
 
+    /// The earliest time (s) a firing confirmed later can be dated at: the
+    /// held suspect block's end, else the current block's start (a block
+    /// that turns suspect ends after it); `None` before the first motion.
+    pub fn earliest_next_s(&self) -> Option<f64> {
+        self.suspect.map(|s| s.0).or(self.block_start)
+    }
+
     /// Takes a motion; returns the time (s) of a confirmed firing.
     pub fn motion(&mut self, m: &Motion) -> Option<f64> {
         let start = *self.block_start.get_or_insert(m.t1);
@@ -248,5 +255,30 @@ mod tests {
         assert!(firings(&motions(|_| 0.0, 60.0)).is_empty());
         // Half a degree, below the floor, does not fire.
         assert!(firings(&motions(|t| if t >= 30.0 { 0.008 } else { 0.0 }, 60.0)).is_empty());
+    }
+
+    /// What a caller holding rows for the watch relies on: no firing is
+    /// dated before the earliest time announced beforehand, and that time
+    /// trails the motions by at most two blocks (knocks every 40 s).
+    #[test]
+    fn no_firing_is_dated_before_the_time_announced() {
+        let ms = motions(|t| 0.035 * ((t / 40.0).floor() % 2.0), 600.0);
+        let mut w = MountWatch::new(&MountParams::default());
+        assert_eq!(w.earliest_next_s(), None);
+        let mut fired = 0;
+        for m in &ms {
+            let before = w.earliest_next_s().unwrap_or(f64::NEG_INFINITY);
+            if let Some(t) = w.motion(m) {
+                assert!(t >= before, "fired at {t} s, announced {before} s");
+                fired += 1;
+            }
+            let next = w.earliest_next_s().unwrap();
+            assert!(
+                next >= m.t1 - w.lag_s() && next <= m.t1,
+                "{next} at {} s",
+                m.t1
+            );
+        }
+        assert!(fired >= 10, "{fired} firings");
     }
 }

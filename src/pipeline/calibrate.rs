@@ -184,17 +184,16 @@ pub fn run(
     })
 }
 
-/// The Rerun recording's last entries (what changed at each firing of the
-/// filter's detector, a firing on a change already named saying so; the
-/// recording marks the filter's firings only), then its end; returns what
-/// it left out.
+/// The Rerun recording's last entries (what changed at each firing, a
+/// firing on a change already named saying so, at the first step at or
+/// after its time: the step that fired for the filter's detector), then its
+/// end; returns what it left out.
 fn finish_recording(
     mut r: StreamRecorder,
     summary: &CalibSummary,
 ) -> Result<Vec<String>, PipelineError> {
     let mut at: Vec<(f64, String)> = Vec::new();
-    let filter = crate::diagnose::onset::FILTER;
-    for c in summary.changes.iter().filter(|c| c.detector == filter) {
+    for c in &summary.changes {
         at.push((c.time_s, super::changes::describe(c)));
         for t in &c.refired_s {
             let again = format!(
@@ -204,9 +203,7 @@ fn finish_recording(
             at.push((*t, again));
         }
     }
-    at.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let texts: Vec<String> = at.into_iter().map(|(_, s)| s).collect();
-    r.changes(&texts);
+    r.changes(&at);
     r.finish().map_err(super::viewer::viz_error)
 }
 

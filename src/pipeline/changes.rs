@@ -3,6 +3,15 @@
 //! the start of the firing's window, as soon as the run has passed the
 //! window: the wheel, gyro and ICP streams and the estimates are kept only
 //! as far back as a window reaches.
+//!
+//! In the history (`calibration.csv`'s `change` column,
+//! [`super::outputs::CalibFiles`]) a filter firing's name goes at the row
+//! of the step that fired; a laser-mounting firing's at the first row at or
+//! after its time that carries no filter name (one name a row). The watch
+//! dates a firing back (at most [`MountWatch::lag_s`]) and names it once its
+//! window has passed, so rows are held until
+//! [`ChangeWatch::mount_named_before`] has passed them: a lag and a window's
+//! worth of rows at most.
 
 use crate::calib::Estimate;
 use crate::diagnose::mount::MountWatch;
@@ -106,6 +115,21 @@ impl ChangeWatch {
         let named = self.name_ready(false);
         self.forget_old();
         named
+    }
+
+    /// The time (s) before which every firing of the laser-mounting watch
+    /// is named: the earliest pending one's, or the earliest a firing still
+    /// to come can be dated at; +∞ when the watch is off or has seen no
+    /// motion (a firing is dated at the end of a block of motions).
+    pub fn mount_named_before(&self) -> f64 {
+        let Some(next) = self.mount.as_ref().map(MountWatch::earliest_next_s) else {
+            return f64::INFINITY;
+        };
+        let pending = self.pending.iter().find(|p| p.1 == MOUNT).map(|p| p.0);
+        pending
+            .into_iter()
+            .chain(next)
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Names the firings still pending at the end of the run.

@@ -224,11 +224,13 @@ pub struct CalibFiles {
     /// Names what changed at each firing of the change detector (when
     /// naming is on).
     watch: Option<super::changes::ChangeWatch>,
-    /// History rows from the first firing not yet named on, and whether the
-    /// detector fired at each: a row is written once its name is known.
-    held: std::collections::VecDeque<(crate::io::csv::HistoryFields, bool)>,
+    /// History rows not yet written: (time (s), fields, whether the filter's
+    /// detector fired there). A row is written once its `change` cell is
+    /// known: its filter firing named, and every laser-mounting firing that
+    /// can still be dated at or before it named.
+    held: std::collections::VecDeque<(f64, crate::io::csv::HistoryFields, bool)>,
     /// Names of firings not yet written into the history.
-    names: std::collections::VecDeque<String>,
+    names: RowNames,
     /// Every firing named so far, in order.
     changes: Vec<crate::diagnose::onset::NamedChange>,
 }
@@ -252,7 +254,7 @@ impl CalibFiles {
             trajectory: TumFile::create(&trajectory)?,
             watch: None,
             held: Default::default(),
-            names: Default::default(),
+            names: RowNames::default(),
             changes: Vec::new(),
         })
     }
@@ -282,10 +284,7 @@ impl CalibFiles {
     /// Records newly named firings and writes the rows they complete.
     fn take_names(&mut self, named: Vec<crate::diagnose::onset::NamedChange>) {
         for c in named {
-            // The history's rows hold the filter's firings only.
-            if c.detector == crate::diagnose::onset::FILTER {
-                self.names.push_back(c.effect.clone());
-            }
+            self.names.named(&c);
             // A firing on a change already reported is reported once, there.
             let first = c
                 .continues
@@ -298,17 +297,23 @@ impl CalibFiles {
         self.flush(false);
     }
 
-    /// Writes the held rows whose `change` cell is known (all at the end).
+    /// Writes the held rows whose `change` cell is known (all at the end):
+    /// a filter firing's name at its own row; a mounting firing's at the
+    /// first row at or after its time that carries no filter name.
     fn flush(&mut self, end: bool) {
         let naming = self.watch.is_some();
-        while let Some((_, fired)) = self.held.front() {
-            let name = match (*fired && naming, self.names.front()) {
-                (false, _) => String::new(),
-                (true, Some(_)) => self.names.pop_front().unwrap_or_default(),
-                (true, None) if end => String::new(),
-                (true, None) => break,
+        let mount_before = self.watch.as_ref().map_or(
+            f64::INFINITY,
+            super::changes::ChangeWatch::mount_named_before,
+        );
+        while let Some(&(t, _, fired)) = self.held.front() {
+            if !end && t >= mount_before {
+                break;
+            }
+            let Some(name) = self.names.row(t, fired && naming, end) else {
+                break;
             };
-            let (row, _) = self.held.pop_front().expect("front checked");
+            let (_, row, _) = self.held.pop_front().expect("front checked");
             self.history
                 .row(|w| crate::io::csv::write_history_row(w, &row, &name));
         }
@@ -340,13 +345,58 @@ impl RunObserver for CalibFiles {
     }
 
     fn step(&mut self, e: &Estimate, _cloud: Option<CloudView<'_>>) {
-        self.held.push_back((e.history_row(), e.changed));
+        self.held.push_back((e.t, e.history_row(), e.changed));
         let named = self.watch.as_mut().map(|w| w.step(e)).unwrap_or_default();
         self.take_names(named);
     }
 
     fn calibrated_pose(&mut self, t: f64, pose: &Pose2) {
         self.trajectory.pose(t, pose);
+    }
+}
+
+/// The names of firings not yet written into the history, and the rule
+/// that puts them on its rows: a filter firing's at its own row, a
+/// laser-mounting firing's at the first row at or after its time that
+/// carries no filter name (one name a row).
+#[derive(Debug, Default)]
+struct RowNames {
+    /// Filter firings' names, in firing order.
+    filter: std::collections::VecDeque<String>,
+    /// Laser-mounting firings' (time (s), name), in time order.
+    mount: std::collections::VecDeque<(f64, String)>,
+    /// Laser-mounting names whose row is passed, waiting for the next row
+    /// without a name of its own.
+    carried: std::collections::VecDeque<String>,
+}
+
+impl RowNames {
+    /// Takes a newly named firing.
+    fn named(&mut self, c: &crate::diagnose::onset::NamedChange) {
+        if c.detector == crate::diagnose::onset::FILTER {
+            self.filter.push_back(c.effect.clone());
+        } else {
+            let at = self.mount.partition_point(|m| m.0 <= c.time_s);
+            self.mount.insert(at, (c.time_s, c.effect.clone()));
+        }
+    }
+
+    /// The `change` cell of the next row, at `t` (s), where the filter
+    /// `fired` or not; `None` while its filter firing is not named yet (at
+    /// the `end`, empty). The caller passes a row only once every
+    /// mounting firing at or before it is named.
+    fn row(&mut self, t: f64, fired: bool, end: bool) -> Option<String> {
+        let own = match (fired, self.filter.front()) {
+            (false, _) => None,
+            (true, Some(_)) => self.filter.pop_front(),
+            (true, None) if end => Some(String::new()),
+            (true, None) => return None,
+        };
+        while self.mount.front().is_some_and(|m| m.0 <= t) {
+            let (_, m) = self.mount.pop_front().expect("front checked");
+            self.carried.push_back(m);
+        }
+        Some(own.or_else(|| self.carried.pop_front()).unwrap_or_default())
     }
 }
 
@@ -421,5 +471,36 @@ impl RunObserver for Collect {
 
     fn calibrated_pose(&mut self, t: f64, pose: &Pose2) {
         self.calibrated.push(t, *pose);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::onset::{NamedChange, FILTER, MOUNT};
+
+    fn firing(t: f64, detector: &'static str, effect: &str) -> NamedChange {
+        NamedChange {
+            detector,
+            effect: effect.into(),
+            ..NamedChange::undetermined(t)
+        }
+    }
+
+    #[test]
+    fn a_mounting_firing_goes_to_the_next_row_without_a_filter_name() {
+        let mut n = RowNames::default();
+        n.named(&firing(2.0, FILTER, "radius_step"));
+        n.named(&firing(1.5, MOUNT, "laser_offset"));
+        n.named(&firing(3.2, MOUNT, "laser_offset_2"));
+        let rows: Vec<Option<String>> = [(1.0, false), (2.0, true), (3.0, false), (4.0, false)]
+            .into_iter()
+            .map(|(t, fired)| n.row(t, fired, false))
+            .collect();
+        let want = ["", "radius_step", "laser_offset", "laser_offset_2"];
+        assert_eq!(rows, want.map(|w| Some(w.to_string())));
+        // A filter firing not named yet holds its row, unless at the end.
+        assert_eq!(n.row(5.0, true, false), None);
+        assert_eq!(n.row(5.0, true, true), Some(String::new()));
     }
 }
