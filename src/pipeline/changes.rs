@@ -282,8 +282,16 @@ pub fn describe(c: &NamedChange) -> String {
         };
         return format!("change at {:.2} s{by}: undetermined ({why})", c.time_s);
     }
+    let unit = crate::effects::EffectKind::from_name(&c.effect)
+        .and_then(|k| k.params().iter().find(|p| p.key == c.parameter))
+        .map_or("", |p| p.unit);
+    // Relative sizes ("1") carry no unit.
+    let unit = match unit {
+        "" | "1" => String::new(),
+        u => format!(" {u}"),
+    };
     let mut line = format!(
-        "change at {:.2} s{by} (onset {:.2} s, between {:.2} and {:.2} s): {} {} = {:.6} ± {:.6}, \
+        "change at {:.2} s{by} (onset {:.2} s, between {:.2} and {:.2} s): {} {} = {:.6} ± {:.6}{unit}, \
          ΔBIC {:.1}",
         c.time_s,
         c.onset_s,

@@ -81,6 +81,10 @@ pub struct DemoSummary {
     pub raw_odometry_eval: Option<TrajectoryMetrics>,
     /// Every calibrator.
     pub methods: Vec<MethodResult>,
+    /// What changed at each firing of the proposed filter's change
+    /// detector (or the laser-mounting watch), named as `calibrate` names it.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub changes: Vec<crate::diagnose::onset::NamedChange>,
     /// Why a trajectory has no figures against the reference (no reference
     /// in the recording, or an evaluation that could not be made).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -350,6 +354,7 @@ pub fn run_on(
         icp_eval: origin_eval("ICP", &icp_out.trajectory, r, &mut notes),
         raw_odometry_eval: origin_eval("raw odometry", &raw, r, &mut notes),
         methods: method_results(input, &runs, r, t_start, &mut notes),
+        changes: runs[0].1.summary.changes.clone(),
         eval_notes: Vec::new(),
         wall_s: 0.0,
     };
@@ -402,12 +407,16 @@ fn calibrate_all(
     let mut collect = Collect::default();
     let mut icp_files = IcpFiles::create(&out.join("icp.tum"), Some(&out.join("motions.csv")))?;
     let first = DEMO_METHODS[0];
+    let first_params = params_for(first);
     let mut files = CalibFiles::create(&out.join(first.as_str()))?;
-    let (icp_done, done) = drive::run_calibration(
+    if first_params.change.naming.enabled {
+        files = files.naming_changes(robot, &first_params.change.naming);
+    }
+    let (icp_done, mut done) = drive::run_calibration(
         &mut RecordingSource::new(rec),
         robot,
         &cfg.icp,
-        &params_for(first),
+        &first_params,
         &cfg.measurements,
         &mut Observers(vec![
             &mut collect,
@@ -416,6 +425,7 @@ fn calibrate_all(
             &mut files,
         ]),
     )?;
+    done.summary.changes = files.changes();
     icp_files.commit()?;
     files.commit(&done.summary)?;
     recorder.finish().map_err(viz_err)?;

@@ -20,6 +20,7 @@ pub(super) fn report(
     r.heading(1, "odocal demo");
     settings(input, s, &mut r);
     calibration(s, &mut r)?;
+    changes(s, &mut r);
     odometry(s, &mut r)?;
     timing(s, &mut r);
     r.write(&out.join("report.md")).map_err(viz_err)
@@ -205,6 +206,33 @@ fn odometry(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
     );
     r.image("errors.png", "Position error over time.");
     Ok(())
+}
+
+/// What changed at each firing of the proposed filter's change detector.
+fn changes(s: &DemoSummary, r: &mut Report) {
+    r.heading(2, "What changed");
+    let Some(first) = s.methods.first() else {
+        return;
+    };
+    if s.changes.is_empty() {
+        r.paragraph(&format!(
+            "The {} filter's change detector did not fire: nothing was named.",
+            first.method
+        ));
+        return;
+    }
+    let lines: Vec<String> = s
+        .changes
+        .iter()
+        .map(|c| format!("- {}", crate::pipeline::changes::describe(c)))
+        .collect();
+    r.paragraph(&format!(
+        "Where the {} filter's change detector fired, the effect that changed, named from \
+         the diagnosis's candidate models on a window around the firing (as `odocal \
+         calibrate` does; `changes` in summary.json):",
+        first.method
+    ));
+    r.paragraph(&lines.join("\n"));
 }
 
 /// ICP's counts and the run's timing.
