@@ -361,6 +361,50 @@ fn cli_demo_on_a_short_recording_writes_report_plots_and_recording() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// The demo's report and summary name what changed where the Adaptive-PF's
+/// change detector fired: a right wheel 4 mm larger from 30 s on, hidden in
+/// the truth file, comes out as a radius step on the right wheel.
+#[test]
+fn cli_demo_names_a_radius_step_in_its_report() {
+    let d = scratch("cli_demo_step");
+    let bag = d.join("run.mcap");
+    json(&odocal(&[
+        "simulate",
+        "--duration",
+        "60",
+        "--seed",
+        "2",
+        "--effect",
+        "radius_step:time=30,right=0.004,left=0",
+        "--out",
+        s(&bag),
+        "--json",
+    ]));
+    let out = d.join("demo");
+    let sum = json(&odocal(&[
+        "demo",
+        "--input",
+        s(&bag),
+        "--out",
+        s(&out),
+        "--json",
+    ]));
+    let changes = sum["changes"].as_array().expect("changes named");
+    let step = changes
+        .iter()
+        .find(|c| c["effect"] == "radius_step")
+        .unwrap_or_else(|| panic!("no radius step named: {changes:?}"));
+    assert_eq!(step["parameter"], "right", "{step}");
+    let size = step["estimate"].as_f64().unwrap();
+    assert!((size - 0.004).abs() < 0.2 * 0.004, "step {size} m");
+    let onset = step["onset_s"].as_f64().unwrap();
+    assert!((onset - 30.0).abs() < 1.0, "onset {onset} s");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("## What changed"), "{report}");
+    assert!(report.contains("radius_step right ="), "{report}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 #[test]
 fn cli_bad_input_exits_2_naming_the_file() {
     let d = scratch("cli_bad");

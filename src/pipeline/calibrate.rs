@@ -192,18 +192,7 @@ fn finish_recording(
     mut r: StreamRecorder,
     summary: &CalibSummary,
 ) -> Result<Vec<String>, PipelineError> {
-    let mut at: Vec<(f64, String)> = Vec::new();
-    for c in &summary.changes {
-        at.push((c.time_s, super::changes::describe(c)));
-        for t in &c.refired_s {
-            let again = format!(
-                "change at {t:.2} s: {} again, the change named at {:.2} s continuing",
-                c.effect, c.time_s
-            );
-            at.push((*t, again));
-        }
-    }
-    r.changes(&at);
+    r.changes(&super::changes::entries(&summary.changes));
     r.finish().map_err(super::viewer::viz_error)
 }
 

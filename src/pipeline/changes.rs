@@ -259,6 +259,23 @@ impl ChangeWatch {
     }
 }
 
+/// The recording's text entries of `changes`: (time (s), text) of every
+/// firing, a firing on a change already named saying so.
+pub fn entries(changes: &[NamedChange]) -> Vec<(f64, String)> {
+    let mut at = Vec::new();
+    for c in changes {
+        at.push((c.time_s, describe(c)));
+        for t in &c.refired_s {
+            let again = format!(
+                "change at {t:.2} s: {} again, the change named at {:.2} s continuing",
+                c.effect, c.time_s
+            );
+            at.push((*t, again));
+        }
+    }
+    at
+}
+
 /// One line per named change for the terminal.
 pub fn describe(c: &NamedChange) -> String {
     let by = if c.detector == MOUNT {

@@ -428,6 +428,7 @@ fn calibrate_all(
     done.summary.changes = files.changes();
     icp_files.commit()?;
     files.commit(&done.summary)?;
+    recorder.changes(&super::changes::entries(&done.summary.changes));
     recorder.finish().map_err(viz_err)?;
     let icp_out = collect.icp(icp_done.stats);
     let mut runs = vec![(first, collect.calibration(done.summary, done.weight_resets))];
