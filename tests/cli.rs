@@ -294,25 +294,28 @@ fn cli_pipeline_chains_and_prints_the_contract_keys() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
-#[test]
-fn cli_demo_on_a_short_recording_writes_report_plots_and_recording() {
-    let d = scratch("cli_demo");
-    let bag = d.join("run.mcap");
-    let truth = d.join("truth.json");
-    json(&odocal(&[
+/// Simulates into `d/run.mcap` and `d/truth.json` with seed 2 and `args`.
+fn simulated(d: &std::path::Path, args: &[&str]) -> (std::path::PathBuf, std::path::PathBuf) {
+    let (bag, truth) = (d.join("run.mcap"), d.join("truth.json"));
+    let mut all = vec![
         "simulate",
-        "--scenario",
-        "figure-eight",
-        "--duration",
-        "12",
         "--seed",
         "2",
         "--out",
         s(&bag),
         "--truth",
         s(&truth),
-        "--json",
-    ]));
+    ];
+    all.extend_from_slice(args);
+    all.push("--json");
+    json(&odocal(&all));
+    (bag, truth)
+}
+
+#[test]
+fn cli_demo_on_a_short_recording_writes_report_plots_and_recording() {
+    let d = scratch("cli_demo");
+    let (bag, truth) = simulated(&d, &["--scenario", "figure-eight", "--duration", "12"]);
     let out = d.join("demo");
     let sum = json(&odocal(&[
         "demo",
@@ -367,19 +370,8 @@ fn cli_demo_on_a_short_recording_writes_report_plots_and_recording() {
 #[test]
 fn cli_demo_names_a_radius_step_in_its_report() {
     let d = scratch("cli_demo_step");
-    let bag = d.join("run.mcap");
-    json(&odocal(&[
-        "simulate",
-        "--duration",
-        "60",
-        "--seed",
-        "2",
-        "--effect",
-        "radius_step:time=30,right=0.004,left=0",
-        "--out",
-        s(&bag),
-        "--json",
-    ]));
+    let step = "radius_step:time=30,right=0.004,left=0";
+    let (bag, _) = simulated(&d, &["--duration", "60", "--effect", step]);
     let out = d.join("demo");
     let sum = json(&odocal(&[
         "demo",
