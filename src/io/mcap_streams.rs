@@ -235,32 +235,7 @@ impl<'a> State<'a> {
                 self.rec.gyro.push(GyroSample { stamp: t, wz });
                 Ok(())
             }
-            Role::Odom | Role::RefOdometry => {
-                decode_into(self.wire, &mut self.bufs.odom, data)?;
-                let m = &self.bufs.odom;
-                let (stamp, posed) = (m.header.stamp, pose_of(&m.pose));
-                let stream = if role == Role::Odom {
-                    "odom"
-                } else {
-                    "reference"
-                };
-                let t = self.stamp(stream, &stamp, log_time)?;
-                let (pose, has_heading) = posed?;
-                let sp = StampedPose {
-                    stamp: t,
-                    pose,
-                    has_heading,
-                };
-                if role == Role::Odom {
-                    if !has_heading {
-                        return Err("odometry with an all-zero orientation quaternion".into());
-                    }
-                    self.rec.odom.push(sp);
-                } else {
-                    self.rec.reference.push(sp);
-                }
-                Ok(())
-            }
+            Role::Odom | Role::RefOdometry => self.odometry(role, data, log_time),
             Role::RefPose => {
                 let m: PoseStampedMsg = self.decode(data)?;
                 let t = self.stamp("reference", &m.header.stamp, log_time)?;
@@ -284,31 +259,64 @@ impl<'a> State<'a> {
                 Ok(())
             }
             Role::Survey => Ok(()),
-            Role::TfStatic | Role::Tf => {
-                decode_into(self.wire, &mut self.bufs.tf, data)?;
-                let map = if role == Role::Tf {
-                    &mut self.tf_dynamic
-                } else {
-                    &mut self.tf
-                };
-                for tr in &self.bufs.tf.transforms {
-                    let yaw = tr.rotation.yaw();
-                    finite("transform", &[tr.translation.x, tr.translation.y, yaw])?;
-                    let child = frame(&tr.child_frame_id);
-                    if role == Role::Tf && map.contains_key(child) {
-                        continue;
-                    }
-                    map.insert(
-                        child.to_string(),
-                        (
-                            frame(&tr.header.frame_id).to_string(),
-                            geom::pose(tr.translation.x, tr.translation.y, yaw),
-                        ),
-                    );
-                }
-                Ok(())
-            }
+            Role::TfStatic | Role::Tf => self.transforms(role, data),
         }
+    }
+
+    /// An Odometry message: the odometry stream (`role` Odom) or the
+    /// reference (RefOdometry).
+    fn odometry(&mut self, role: Role, data: &[u8], log_time: u64) -> Result<(), String> {
+        decode_into(self.wire, &mut self.bufs.odom, data)?;
+        let m = &self.bufs.odom;
+        let (stamp, posed) = (m.header.stamp, pose_of(&m.pose));
+        let stream = if role == Role::Odom {
+            "odom"
+        } else {
+            "reference"
+        };
+        let t = self.stamp(stream, &stamp, log_time)?;
+        let (pose, has_heading) = posed?;
+        let sp = StampedPose {
+            stamp: t,
+            pose,
+            has_heading,
+        };
+        if role == Role::Odom {
+            if !has_heading {
+                return Err("odometry with an all-zero orientation quaternion".into());
+            }
+            self.rec.odom.push(sp);
+        } else {
+            self.rec.reference.push(sp);
+        }
+        Ok(())
+    }
+
+    /// A TFMessage on /tf (`role` Tf: the first transform of each child
+    /// kept) or /tf_static.
+    fn transforms(&mut self, role: Role, data: &[u8]) -> Result<(), String> {
+        decode_into(self.wire, &mut self.bufs.tf, data)?;
+        let map = if role == Role::Tf {
+            &mut self.tf_dynamic
+        } else {
+            &mut self.tf
+        };
+        for tr in &self.bufs.tf.transforms {
+            let yaw = tr.rotation.yaw();
+            finite("transform", &[tr.translation.x, tr.translation.y, yaw])?;
+            let child = frame(&tr.child_frame_id);
+            if role == Role::Tf && map.contains_key(child) {
+                continue;
+            }
+            map.insert(
+                child.to_string(),
+                (
+                    frame(&tr.header.frame_id).to_string(),
+                    geom::pose(tr.translation.x, tr.translation.y, yaw),
+                ),
+            );
+        }
+        Ok(())
     }
 
     fn scan(&mut self, data: &[u8], log_time: u64) -> Result<(), String> {
