@@ -208,6 +208,7 @@ fn cli_pipeline_chains_and_prints_the_contract_keys() {
             &rrd,
             sim["scans"].as_u64().unwrap() as usize,
             csv_rows(&pf_dir.join("calibration.csv")),
+            change_entries(&json_file(&pf_dir.join("summary.json"))),
             false,
         );
     } else {
@@ -358,6 +359,7 @@ fn cli_demo_on_a_short_recording_writes_report_plots_and_recording() {
         &out.join("demo.rrd"),
         sum["scans"].as_u64().unwrap() as usize,
         csv_rows(&out.join("adaptive-pf/calibration.csv")),
+        change_entries(&sum),
         true,
     );
     no_temp_files(&out);
@@ -472,12 +474,30 @@ fn csv_rows(path: &Path) -> usize {
     std::fs::read_to_string(path).unwrap().lines().count() - 1
 }
 
+/// The text entries a run's `changes` (summary JSON) puts in its recording:
+/// one per firing named, one per later firing on the same change.
+#[cfg(feature = "rerun")]
+fn change_entries(summary: &serde_json::Value) -> usize {
+    summary["changes"].as_array().map_or(0, |cs| {
+        cs.iter()
+            .map(|c| 1 + c["refired_s"].as_array().map_or(0, Vec::len))
+            .sum()
+    })
+}
+
+/// A JSON file's content.
+#[cfg(feature = "rerun")]
+fn json_file(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 /// Opens a recording the CLI wrote with the official rerun-sdk
 /// (tools/rrd_check.py) and checks entities, timelines and row counts against
 /// the run's own outputs: one scan row per scan, one ICP row per pair, one
-/// particle cloud and one estimate per filter step.
+/// particle cloud and one estimate per filter step, one text entry per
+/// change named.
 #[cfg(feature = "rerun")]
-fn check_run_rrd(test: &str, rrd: &Path, scans: usize, steps: usize, map: bool) {
+fn check_run_rrd(test: &str, rrd: &Path, scans: usize, steps: usize, changes: usize, map: bool) {
     use odocal::viz::entity;
     use serde_json::json;
     let Some(py) = crate::support::python_with(test, &["rerun", "pyarrow"]) else {
@@ -548,6 +568,11 @@ fn check_run_rrd(test: &str, rrd: &Path, scans: usize, steps: usize, map: bool) 
         entity::PROCESS_SIGMA,
     ] {
         entities.insert(e.into(), json!({ "rows": steps }));
+    }
+    // One text entry per firing named (and per firing on a change named
+    // before it).
+    if changes > 0 {
+        entities.insert(entity::CHANGES.into(), json!({ "rows": changes }));
     }
     let expect = json!({
         "version": "0.36.3",
