@@ -76,7 +76,8 @@ pub struct ScanMatcher {
     /// Start stamp (s) of the current run of pairs whose given prior was
     /// replaced by the constant-velocity guess.
     substituted_since: Option<f64>,
-    /// The local map's keyframes: pose and the scan's points and lines.
+    /// The local map's keyframes: pose, and the scan's points and lines
+    /// placed in the map frame by it.
     keyframes: VecDeque<(Pose2, Reference)>,
     cur: ScanPoints,
     src: Vec<[f64; 2]>,
@@ -738,10 +739,10 @@ impl ScanMatcher {
             if self.keyframes.len() >= self.params.keyframes {
                 self.keyframes.pop_front();
             }
-            self.keyframes
-                .push_back((ref_from_cur, self.own.lines_only()));
+            let key = self.own.placed(&ref_from_cur);
+            self.keyframes.push_back((ref_from_cur, key));
             self.reference
-                .set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
+                .set_many(self.keyframes.iter().map(|(_, s)| s));
         }
     }
 
@@ -767,10 +768,10 @@ impl ScanMatcher {
         }
         if self.params.local_map {
             self.keyframes.clear();
-            self.keyframes
-                .push_back((ref_from_cur, self.own.lines_only()));
+            let key = self.own.placed(&ref_from_cur);
+            self.keyframes.push_back((ref_from_cur, key));
             self.reference
-                .set_many(self.keyframes.iter().map(|(p, s)| (p, s)));
+                .set_many(self.keyframes.iter().map(|(_, s)| s));
             self.ref_from_last = ref_from_cur;
         } else {
             // The current scan's lines and tree are already built: swap them in.

@@ -169,32 +169,21 @@ impl Reference {
     }
 
     /// Replaces the content with several references whose lines are
-    /// fitted (a local map's keyframes, each from [`set_lines`](Self::set_lines)),
-    /// each mapped by a pose `frame_from_set` first; links never cross from
-    /// one set to the next. The lines are moved rather than fitted again (a
-    /// fit is invariant under the move), and the scatter limit is applied
-    /// over all of them, as a fit of the whole would.
-    pub fn set_many<'a>(
-        &mut self,
-        sets: impl Iterator<Item = (&'a crate::geom::Pose2, &'a Reference)>,
-    ) {
+    /// fitted and placed in one frame (a local map's keyframes, each from
+    /// [`placed`](Self::placed)); links never cross from one set to the
+    /// next. The scatter limit is applied over all of them, as a fit of the
+    /// whole would.
+    pub fn set_many<'a>(&mut self, sets: impl Iterator<Item = &'a Reference>) {
         self.pts.clear();
         self.link.clear();
         self.lines.clear();
-        for (pose, r) in sets {
-            let (c, sn) = (pose.rotation.cos_angle(), pose.rotation.sin_angle());
-            let t = pose.translation.vector;
-            self.pts.extend(
-                r.pts
-                    .iter()
-                    .map(|p| [c * p[0] - sn * p[1] + t.x, sn * p[0] + c * p[1] + t.y]),
-            );
+        for r in sets {
+            self.pts.extend_from_slice(&r.pts);
             self.link.extend_from_slice(&r.link);
             if let Some(l) = self.link.last_mut() {
                 *l = false;
             }
-            self.lines
-                .extend(r.lines.iter().map(|l| l.moved(c, sn, [t.x, t.y])));
+            self.lines.extend_from_slice(&r.lines);
         }
         self.scatter.clear();
         let scored = self.lines.iter().filter(|l| l.scored).map(|l| l.score);
@@ -204,12 +193,26 @@ impl Reference {
     }
 
     /// A copy of the points, links and lines only (no search index, no
-    /// scratch): a keyframe for [`set_many`](Self::set_many).
-    pub fn lines_only(&self) -> Self {
+    /// scratch), mapped by the pose `frame_from_set`: a keyframe for
+    /// [`set_many`](Self::set_many). The lines are moved rather than fitted
+    /// again (a fit is invariant under the move), once per keyframe rather
+    /// than at every map it is part of.
+    pub fn placed(&self, frame_from_set: &crate::geom::Pose2) -> Self {
+        let pose = frame_from_set;
+        let (c, sn) = (pose.rotation.cos_angle(), pose.rotation.sin_angle());
+        let t = pose.translation.vector;
         Self {
-            pts: self.pts.clone(),
+            pts: self
+                .pts
+                .iter()
+                .map(|p| [c * p[0] - sn * p[1] + t.x, sn * p[0] + c * p[1] + t.y])
+                .collect(),
             link: self.link.clone(),
-            lines: self.lines.clone(),
+            lines: self
+                .lines
+                .iter()
+                .map(|l| l.moved(c, sn, [t.x, t.y]))
+                .collect(),
             window: self.window,
             length: self.length,
             ..Default::default()
@@ -234,7 +237,7 @@ impl Reference {
         let n = self.pts.len();
         let k = self.window;
         self.lines.clear();
-        self.lines.resize(n, Line::default());
+        self.lines.reserve(n);
         self.scatter.clear();
         let mut start = 0;
         while start < n {
@@ -242,50 +245,69 @@ impl Reference {
             while end + 1 < n && self.link[end] {
                 end += 1;
             }
-            let m = self.window_of(start, end, k);
-            if end > start {
+            if end == start {
+                self.lines.push(Line::default());
+            } else {
+                let m = self.window_of(start, end, k);
                 self.fit_windows(start, end, m);
-            }
-            for j in start..=end {
-                if end == start {
-                    break;
-                }
-                let lo_first = j.saturating_sub(m).max(start);
-                let lo_last = j.min(end - m);
-                if lo_first > lo_last {
-                    continue;
-                }
-                let mut best = lo_first - start;
-                for a in lo_first + 1 - start..=lo_last - start {
-                    if self.windows[a].0 < self.windows[best].0 {
-                        best = a;
-                    }
-                }
-                let (score, f) = self.windows[best];
-                let mut t = f.direction();
-                let (pa, pb) = (self.pts[start], self.pts[end]);
-                if (pb[0] - pa[0]) * t[0] + (pb[1] - pa[1]) * t[1] < 0.0 {
-                    t = [-t[0], -t[1]];
-                }
-                self.lines[j] = Line {
-                    c: f.c,
-                    n: [-t[1], t[0]],
-                    t,
-                    before: j > start,
-                    after: j < end,
-                    ok: true,
-                    fitted: true,
-                    scored: m >= 2,
-                    score,
-                    spread: (f.sxx + f.syy - f.ss).max(0.0),
-                };
-                if m >= 2 {
-                    self.scatter.push(score);
-                }
+                self.surface_lines(start, end, m);
             }
             start = end + 1;
         }
         self.limit_scatter();
+    }
+
+    /// Appends the lines of the surface `start..=end` (at least two points)
+    /// from its window fits (`fit_windows` with `m`): each point's the best
+    /// of the windows containing it, the first of the smallest score. The
+    /// windows containing point `j` start at `max(j − m, start)` ..=
+    /// `min(j, end − m)`, both bounds moving up with `j`: the best is kept
+    /// while it stays in range and compared with each window that enters
+    /// (a sliding minimum), and a line is made once per best window.
+    fn surface_lines(&mut self, start: usize, end: usize, m: usize) {
+        let windows = &self.windows;
+        let (pa, pb) = (self.pts[start], self.pts[end]);
+        let scored = m >= 2;
+        // Scores are never NaN from finite points; if one is, the plain
+        // search below is what a scan of each range would give.
+        let plain = windows.iter().any(|w| w.0.is_nan());
+        let last = end - start - m;
+        let (mut hi, mut best) = (0, 0);
+        let mut line: Option<(usize, Line)> = None;
+        for j in 0..=end - start {
+            let (first, end_first) = (j.saturating_sub(m), j.min(last));
+            if plain || best < first {
+                best = first;
+                for a in first + 1..=end_first {
+                    if windows[a].0 < windows[best].0 {
+                        best = a;
+                    }
+                }
+            } else {
+                for a in hi + 1..=end_first {
+                    if windows[a].0 < windows[best].0 {
+                        best = a;
+                    }
+                }
+            }
+            hi = end_first;
+            let l = match line {
+                Some((b, l)) if b == best => l,
+                _ => {
+                    let l = window_line(&windows[best], pa, pb, scored);
+                    line = Some((best, l));
+                    l
+                }
+            };
+            self.lines.push(Line {
+                before: j > 0,
+                after: j < end - start,
+                ..l
+            });
+            if scored {
+                self.scatter.push(l.score);
+            }
+        }
     }
 
     /// Marks usable the fitted lines whose scatter is within
@@ -507,6 +529,29 @@ impl Fit {
     }
 }
 
+/// The line of a window fit `(score, fit)` on the surface from `pa` to
+/// `pb`, its tangent oriented from `pa` towards `pb` (without its
+/// `before`/`after` links).
+fn window_line(w: &(f64, Fit), pa: [f64; 2], pb: [f64; 2], scored: bool) -> Line {
+    let (score, f) = *w;
+    let mut t = f.direction();
+    if (pb[0] - pa[0]) * t[0] + (pb[1] - pa[1]) * t[1] < 0.0 {
+        t = [-t[0], -t[1]];
+    }
+    Line {
+        c: f.c,
+        n: [-t[1], t[0]],
+        t,
+        before: false,
+        after: false,
+        ok: true,
+        fitted: true,
+        scored,
+        score,
+        spread: (f.sxx + f.syy - f.ss).max(0.0),
+    }
+}
+
 /// Direct two-pass fit: the reference the prefix-sum fits are checked against.
 #[cfg(test)]
 fn fit(pts: &[[f64; 2]]) -> Fit {
@@ -564,6 +609,62 @@ mod tests {
                 g.ss
             );
             assert!((score - g.ss / 3.0).abs() < 1e-11);
+        }
+    }
+
+    #[test]
+    fn each_point_gets_the_first_straightest_window_containing_it() {
+        // Three walls with two corners and a gap, ±5 mm pseudo-random noise:
+        // every point's line must be that of the window a scan over all the
+        // windows containing it picks (direct fits, first of the smallest
+        // scatter), whatever the window size.
+        let mut pts = Vec::new();
+        let mut link = Vec::new();
+        for i in 0..90 {
+            let mut h = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            h = (h ^ (h >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            let e = 0.01 * ((h ^ (h >> 32)) % 10_007) as f64 / 10_007.0 - 0.005;
+            let s = 0.03 * i as f64;
+            let p = match i {
+                0..=29 => [s, 2.0 + e],
+                30..=59 => [0.9 + e, 2.0 - (s - 0.9)],
+                _ => [0.9 + (s - 1.8), 1.1 + e],
+            };
+            pts.push(p);
+            link.push(i + 1 < 90 && i != 44);
+        }
+        let sp = ScanPoints {
+            range: vec![1.0; pts.len()],
+            pts: pts.clone(),
+            link,
+        };
+        for k in [1, 2, 3, 6, 10] {
+            let mut r = Reference::new(k, 0.0);
+            r.set_lines(&sp);
+            for (start, end) in [(0, 44), (45, 89)] {
+                let m = k.min(end - start);
+                for j in start..=end {
+                    let windows = j.saturating_sub(m).max(start)..=j.min(end - m);
+                    let mut best = None;
+                    for a in windows {
+                        // Two-point windows all fit exactly: the first wins.
+                        let score = if m >= 2 { fit(&pts[a..=a + m]).ss } else { 0.0 };
+                        if best.is_none_or(|(_, b)| score < b) {
+                            best = Some((a, score));
+                        }
+                    }
+                    let g = fit(&pts[best.unwrap().0..=best.unwrap().0 + m]);
+                    let l = &r.lines[j];
+                    assert!(l.fitted && l.before == (j > start) && l.after == (j < end));
+                    assert!(
+                        (l.c[0] - g.c[0]).abs() < 1e-9 && (l.c[1] - g.c[1]).abs() < 1e-9,
+                        "k {k} point {j}: {:?} vs {:?}",
+                        l.c,
+                        g.c
+                    );
+                    assert!((l.n[0] * g.direction()[0] + l.n[1] * g.direction()[1]).abs() < 1e-6);
+                }
+            }
         }
     }
 
