@@ -132,6 +132,12 @@ impl Preprocessor {
     ) {
         out.clear();
         kept.clear();
+        if stride <= 1 && voxel <= 0.0 {
+            // Nothing thinned (the default): all of `src`, in one copy.
+            out.extend_from_slice(src);
+            kept.extend(0..src.len());
+            return;
+        }
         self.cells.clear();
         for (i, p) in src.iter().enumerate().step_by(stride.max(1)) {
             if voxel > 0.0 {
@@ -251,5 +257,9 @@ mod tests {
         pre.downsample(&src, 3, 0.0, &mut out, &mut kept);
         assert_eq!(out.len(), 34);
         assert_eq!(kept[1], 3);
+        // no thinning at all: every point, each at its own index
+        pre.downsample(&src, 1, 0.0, &mut out, &mut kept);
+        assert_eq!(out, src);
+        assert!(kept.iter().enumerate().all(|(i, &k)| i == k) && kept.len() == 100);
     }
 }

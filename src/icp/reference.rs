@@ -278,13 +278,13 @@ impl Reference {
             let (first, end_first) = (j.saturating_sub(m), j.min(last));
             if plain || best < first {
                 best = first;
-                for a in first + 1..=end_first {
+                for a in first + 1..end_first + 1 {
                     if windows[a].0 < windows[best].0 {
                         best = a;
                     }
                 }
             } else {
-                for a in hi + 1..=end_first {
+                for a in hi + 1..end_first + 1 {
                     if windows[a].0 < windows[best].0 {
                         best = a;
                     }
@@ -362,7 +362,7 @@ impl Reference {
         self.prefix.clear();
         let mut acc = [0.0; 5];
         self.prefix.push(acc);
-        for p in &self.pts[start..=end] {
+        self.prefix.extend(self.pts[start..=end].iter().map(|p| {
             let (x, y) = (p[0] - o[0], p[1] - o[1]);
             acc = [
                 acc[0] + x,
@@ -371,12 +371,13 @@ impl Reference {
                 acc[3] + x * y,
                 acc[4] + y * y,
             ];
-            self.prefix.push(acc);
-        }
+            acc
+        }));
         self.windows.clear();
         let n = (m + 1) as f64;
-        for a in 0..=(end - start - m) {
-            let (lo, hi) = (self.prefix[a], self.prefix[a + m + 1]);
+        // Window `a` is the difference of prefix sums `a + m + 1` and `a`.
+        let ends = self.prefix.iter().zip(&self.prefix[m + 1..]);
+        self.windows.extend(ends.map(|(lo, hi)| {
             let d: [f64; 5] = std::array::from_fn(|i| hi[i] - lo[i]);
             let (cx, cy) = (d[0] / n, d[1] / n);
             let sxx = (d[2] - n * cx * cx).max(0.0);
@@ -391,8 +392,8 @@ impl Reference {
                 ss: ss.max(0.0),
             };
             let score = if m >= 2 { f.ss / (m - 1) as f64 } else { 0.0 };
-            self.windows.push((score, f));
-        }
+            (score, f)
+        }));
     }
 
     /// The closest point to `q` on the reference surface: the nearest
