@@ -105,11 +105,9 @@ pub struct Closest {
     pub residual: f64,
     /// Distance (m) from the query to the nearest reference point.
     pub vertex_dist: f64,
-    /// Index of the nearest reference point.
+    /// Index of the nearest reference point (whose line this is; its
+    /// direction's variance is [`Reference::tilt_variance`]).
     pub index: usize,
-    /// Variance (rad²) of the fitted line's direction from the scatter of
-    /// its points (see [`Reference::tilt_variance`]).
-    pub tilt_var: f64,
 }
 
 impl Reference {
@@ -453,7 +451,6 @@ impl Reference {
             residual: e,
             vertex_dist: d2.sqrt(),
             index: j,
-            tilt_var: self.tilt_variance(l),
         })
     }
 
@@ -463,8 +460,13 @@ impl Reference {
     /// along it, as for the slope of a least-squares line. Range noise alone
     /// tilts a line fitted over a few centimetres of wall by tenths of a
     /// radian: information along a wall that is only this noise is not
-    /// measured (see `covariance`). At most 1 rad².
-    fn tilt_variance(&self, l: &Line) -> f64 {
+    /// measured (see `covariance`). At most 1 rad². Asked for by index
+    /// (a [`Closest::index`]) and only where needed: the registration's
+    /// iterations use none of it, only the covariance at the end.
+    pub fn tilt_variance(&self, j: usize) -> f64 {
+        let Some(l) = self.lines.get(j) else {
+            return 1.0;
+        };
         let across = l.score.max(self.typical);
         if l.spread > 0.0 {
             (across / l.spread).min(1.0)
