@@ -83,8 +83,9 @@ pub struct Reference {
     window: usize,
     /// Surface length (m) a line fit should span; 0 = always `window`.
     length: f64,
-    /// Mean squared fit distances of the lines (scratch for the median).
-    scatter: Vec<f64>,
+    /// Mean squared fit distances of the lines as [`total_key`]s (scratch
+    /// for the median: integer comparisons).
+    scatter: Vec<i64>,
     /// Their median (m²), at least `MIN_SCATTER²`: the typical scatter of a
     /// point across its surface.
     typical: f64,
@@ -195,7 +196,8 @@ impl Reference {
                 .extend(r.lines.iter().map(|l| l.moved(c, sn, [t.x, t.y])));
         }
         self.scatter.clear();
-        let scored = self.lines.iter().filter(|l| l.scored).map(|l| l.score);
+        let scored = self.lines.iter().filter(|l| l.scored);
+        let scored = scored.map(|l| total_key(l.score));
         self.scatter.extend(scored);
         self.limit_scatter();
         self.rebuild_index();
@@ -244,6 +246,9 @@ impl Reference {
             if end > start {
                 self.fit_windows(start, end, m);
             }
+            // The direction of the last window used: neighbouring points
+            // mostly share their straightest window.
+            let mut last: Option<(usize, [f64; 2])> = None;
             for j in start..=end {
                 if end == start {
                     break;
@@ -260,11 +265,18 @@ impl Reference {
                     }
                 }
                 let (score, f) = self.windows[best];
-                let mut t = f.direction();
-                let (pa, pb) = (self.pts[start], self.pts[end]);
-                if (pb[0] - pa[0]) * t[0] + (pb[1] - pa[1]) * t[1] < 0.0 {
-                    t = [-t[0], -t[1]];
-                }
+                let t = match last {
+                    Some((a, t)) if a == best => t,
+                    _ => {
+                        let mut t = f.direction();
+                        let (pa, pb) = (self.pts[start], self.pts[end]);
+                        if (pb[0] - pa[0]) * t[0] + (pb[1] - pa[1]) * t[1] < 0.0 {
+                            t = [-t[0], -t[1]];
+                        }
+                        last = Some((best, t));
+                        t
+                    }
+                };
                 self.lines[j] = Line {
                     c: f.c,
                     n: [-t[1], t[0]],
@@ -278,7 +290,7 @@ impl Reference {
                     spread: (f.sxx + f.syy - f.ss).max(0.0),
                 };
                 if m >= 2 {
-                    self.scatter.push(score);
+                    self.scatter.push(total_key(score));
                 }
             }
             start = end + 1;
@@ -298,7 +310,7 @@ impl Reference {
             return;
         }
         let mid = self.scatter.len() / 2;
-        let typical = *self.scatter.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let typical = from_total_key(*self.scatter.select_nth_unstable(mid).1);
         self.typical = typical.max(self.typical);
         let limit = SCATTER_LIMIT * self.typical;
         for l in &mut self.lines {
@@ -476,6 +488,18 @@ impl Reference {
     }
 }
 
+/// `x` as an integer ordered as `f64::total_cmp` orders floats (the same
+/// bit flip it applies to both sides of each comparison, done once).
+fn total_key(x: f64) -> i64 {
+    let b = x.to_bits() as i64;
+    b ^ ((((b >> 63) as u64) >> 1) as i64)
+}
+
+/// The float of a [`total_key`] (the flip is its own inverse).
+fn from_total_key(k: i64) -> f64 {
+    f64::from_bits(total_key(f64::from_bits(k as u64)) as u64)
+}
+
 /// A total-least-squares line through some points.
 #[derive(Debug, Clone, Copy, Default)]
 struct Fit {
@@ -566,6 +590,31 @@ mod tests {
                 g.ss
             );
             assert!((score - g.ss / 3.0).abs() < 1e-11);
+        }
+    }
+
+    #[test]
+    fn total_keys_order_as_total_cmp_and_map_back() {
+        let xs = [
+            f64::NAN,
+            -f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            0.0,
+            -0.0,
+            1e-300,
+            -1e-300,
+            f64::MIN_POSITIVE / 2.0,
+            2.5e-5,
+            3.0,
+            -3.0,
+            f64::MAX,
+        ];
+        for a in xs {
+            assert_eq!(from_total_key(total_key(a)).to_bits(), a.to_bits());
+            for b in xs {
+                assert_eq!(total_key(a).cmp(&total_key(b)), a.total_cmp(&b), "{a} {b}");
+            }
         }
     }
 
