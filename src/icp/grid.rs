@@ -361,6 +361,29 @@ mod tests {
     }
 
     #[test]
+    fn of_equal_points_the_first_is_found() {
+        // The same point three times (in one cell whatever the grid), among
+        // others, queried from all sides and from inside its cell.
+        let mut pts: Vec<[f64; 2]> = (0..40).map(|i| [0.05 * i as f64, 0.3]).collect();
+        pts.insert(7, [0.61, 0.52]);
+        pts.push([0.61, 0.52]);
+        pts.insert(20, [0.61, 0.52]);
+        let mut g = PointGrid::default();
+        for cell in [0.05, 0.2, 1.0] {
+            g.build(&pts, cell);
+            for q in [
+                [0.61, 0.55],
+                [0.58, 0.52],
+                [0.65, 0.6],
+                [0.6, 0.5],
+                [0.62, 0.53],
+            ] {
+                assert_eq!(g.nearest(q, 1.0).map(|n| n.0), Some(7), "{q:?} {cell}");
+            }
+        }
+    }
+
+    #[test]
     fn empty_and_non_finite_find_nothing() {
         let mut g = PointGrid::default();
         g.build(&[], 0.1);

@@ -413,14 +413,22 @@ impl Reference {
         let d2 = |j: usize| (self.pts[j][0] - q[0]).powi(2) + (self.pts[j][1] - q[1]).powi(2);
         let (mut j, mut best) = (hint, d2(hint));
         loop {
-            if j > 0 && self.link[j - 1] && d2(j - 1) < best {
-                j -= 1;
-            } else if j + 1 < self.pts.len() && self.link[j] && d2(j + 1) < best {
-                j += 1;
-            } else {
-                return Some((j, best));
+            // Each distance once: the one compared is the next `best`.
+            if j > 0 && self.link[j - 1] {
+                let d = d2(j - 1);
+                if d < best {
+                    (j, best) = (j - 1, d);
+                    continue;
+                }
             }
-            best = d2(j);
+            if j + 1 < self.pts.len() && self.link[j] {
+                let d = d2(j + 1);
+                if d < best {
+                    (j, best) = (j + 1, d);
+                    continue;
+                }
+            }
+            return Some((j, best));
         }
     }
 
