@@ -83,8 +83,9 @@ pub struct Reference {
     window: usize,
     /// Surface length (m) a line fit should span; 0 = always `window`.
     length: f64,
-    /// Mean squared fit distances of the lines (scratch for the median).
-    scatter: Vec<f64>,
+    /// Mean squared fit distances of the lines as [`total_key`]s (scratch
+    /// for the median: integer comparisons).
+    scatter: Vec<i64>,
     /// Their median (m²), at least `MIN_SCATTER²`: the typical scatter of a
     /// point across its surface.
     typical: f64,
@@ -105,11 +106,9 @@ pub struct Closest {
     pub residual: f64,
     /// Distance (m) from the query to the nearest reference point.
     pub vertex_dist: f64,
-    /// Index of the nearest reference point.
+    /// Index of the nearest reference point (whose line this is; its
+    /// direction's variance is [`Reference::tilt_variance`]).
     pub index: usize,
-    /// Variance (rad²) of the fitted line's direction from the scatter of
-    /// its points (see [`Reference::tilt_variance`]).
-    pub tilt_var: f64,
 }
 
 impl Reference {
@@ -186,7 +185,8 @@ impl Reference {
             self.lines.extend_from_slice(&r.lines);
         }
         self.scatter.clear();
-        let scored = self.lines.iter().filter(|l| l.scored).map(|l| l.score);
+        let scored = self.lines.iter().filter(|l| l.scored);
+        let scored = scored.map(|l| total_key(l.score));
         self.scatter.extend(scored);
         self.limit_scatter();
         self.rebuild_index();
@@ -305,7 +305,7 @@ impl Reference {
                 ..l
             });
             if scored {
-                self.scatter.push(l.score);
+                self.scatter.push(total_key(l.score));
             }
         }
     }
@@ -322,7 +322,7 @@ impl Reference {
             return;
         }
         let mid = self.scatter.len() / 2;
-        let typical = *self.scatter.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let typical = from_total_key(*self.scatter.select_nth_unstable(mid).1);
         self.typical = typical.max(self.typical);
         let limit = SCATTER_LIMIT * self.typical;
         for l in &mut self.lines {
@@ -426,14 +426,22 @@ impl Reference {
         let d2 = |j: usize| (self.pts[j][0] - q[0]).powi(2) + (self.pts[j][1] - q[1]).powi(2);
         let (mut j, mut best) = (hint, d2(hint));
         loop {
-            if j > 0 && self.link[j - 1] && d2(j - 1) < best {
-                j -= 1;
-            } else if j + 1 < self.pts.len() && self.link[j] && d2(j + 1) < best {
-                j += 1;
-            } else {
-                return Some((j, best));
+            // Each distance once: the one compared is the next `best`.
+            if j > 0 && self.link[j - 1] {
+                let d = d2(j - 1);
+                if d < best {
+                    (j, best) = (j - 1, d);
+                    continue;
+                }
             }
-            best = d2(j);
+            if j + 1 < self.pts.len() && self.link[j] {
+                let d = d2(j + 1);
+                if d < best {
+                    (j, best) = (j + 1, d);
+                    continue;
+                }
+            }
+            return Some((j, best));
         }
     }
 
@@ -476,7 +484,6 @@ impl Reference {
             residual: e,
             vertex_dist: d2.sqrt(),
             index: j,
-            tilt_var: self.tilt_variance(l),
         })
     }
 
@@ -486,8 +493,13 @@ impl Reference {
     /// along it, as for the slope of a least-squares line. Range noise alone
     /// tilts a line fitted over a few centimetres of wall by tenths of a
     /// radian: information along a wall that is only this noise is not
-    /// measured (see `covariance`). At most 1 rad².
-    fn tilt_variance(&self, l: &Line) -> f64 {
+    /// measured (see `covariance`). At most 1 rad². Asked for by index
+    /// (a [`Closest::index`]) and only where needed: the registration's
+    /// iterations use none of it, only the covariance at the end.
+    pub fn tilt_variance(&self, j: usize) -> f64 {
+        let Some(l) = self.lines.get(j) else {
+            return 1.0;
+        };
         let across = l.score.max(self.typical);
         if l.spread > 0.0 {
             (across / l.spread).min(1.0)
@@ -495,6 +507,18 @@ impl Reference {
             1.0
         }
     }
+}
+
+/// `x` as an integer ordered as `f64::total_cmp` orders floats (the same
+/// bit flip it applies to both sides of each comparison, done once).
+fn total_key(x: f64) -> i64 {
+    let b = x.to_bits() as i64;
+    b ^ ((((b >> 63) as u64) >> 1) as i64)
+}
+
+/// The float of a [`total_key`] (the flip is its own inverse).
+fn from_total_key(k: i64) -> f64 {
+    f64::from_bits(total_key(f64::from_bits(k as u64)) as u64)
 }
 
 /// A total-least-squares line through some points.
@@ -665,6 +689,31 @@ mod tests {
                     );
                     assert!((l.n[0] * g.direction()[0] + l.n[1] * g.direction()[1]).abs() < 1e-6);
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn total_keys_order_as_total_cmp_and_map_back() {
+        let xs = [
+            f64::NAN,
+            -f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            0.0,
+            -0.0,
+            1e-300,
+            -1e-300,
+            f64::MIN_POSITIVE / 2.0,
+            2.5e-5,
+            3.0,
+            -3.0,
+            f64::MAX,
+        ];
+        for a in xs {
+            assert_eq!(from_total_key(total_key(a)).to_bits(), a.to_bits());
+            for b in xs {
+                assert_eq!(total_key(a).cmp(&total_key(b)), a.total_cmp(&b), "{a} {b}");
             }
         }
     }

@@ -84,7 +84,8 @@ pub struct Registration {
 /// allocates nothing in steady state.
 #[derive(Debug, Default)]
 pub struct Scratch {
-    /// Correspondences of the last iteration.
+    /// Correspondences of the last iteration (`tilt_var` filled in once
+    /// `register` gets to the covariance, NaN before).
     pub corrs: Vec<Correspondence>,
     /// Nearest reference point of each source point (search hint).
     hints: Vec<usize>,
@@ -92,6 +93,8 @@ pub struct Scratch {
     lines: Vec<usize>,
     /// Bit patterns of the absolute residuals (scratch of the median).
     abs_res: Vec<u64>,
+    /// Reference line of each correspondence in `corrs`.
+    corr_lines: Vec<usize>,
 }
 
 /// Registers `source` (points in their own frame, with the unit normals of
@@ -140,6 +143,7 @@ pub fn register(
         hints,
         lines,
         abs_res,
+        corr_lines,
     } = scratch;
     hints.clear();
     hints.resize(source.len(), usize::MAX);
@@ -156,7 +160,11 @@ pub fn register(
             lines,
             search,
         };
-        associate(reference, source, normals, &at, set, memory, corrs);
+        let found = Found {
+            corrs,
+            lines: corr_lines,
+        };
+        associate(reference, source, normals, &at, set, memory, found);
         out.inliers = corrs.len();
         if corrs.len() < set.min_correspondences {
             return out;
@@ -182,6 +190,9 @@ pub fn register(
             break;
         }
     }
+    for (k, &j) in corrs.iter_mut().zip(corr_lines.iter()) {
+        k.tilt_var = reference.tilt_variance(j);
+    }
     out.uncertainty = covariance::estimate(corrs, pose, set.cov_inflation);
     out
 }
@@ -193,6 +204,13 @@ struct Search {
     use_hints: bool,
     /// Keep the previous iteration's lines (steps below `FREEZE_STEP`).
     frozen: bool,
+}
+
+/// Where [`associate`] puts the correspondences and, beside them, their
+/// reference lines.
+struct Found<'a> {
+    corrs: &'a mut Vec<Correspondence>,
+    lines: &'a mut Vec<usize>,
 }
 
 /// What an iteration keeps of the previous one's association: per source
@@ -210,7 +228,9 @@ struct Memory<'a> {
 /// reference point's fitted line (or, frozen, on the line it had), with the
 /// point-to-line residual `e = nᵀ (x − c)`. Kept when `|e| ≤ τ` (the
 /// adaptive gate), the nearest point is within `τ + max_gap`, and the
-/// surfaces face the same way, `|(R n_p)ᵀ n| ≥ cos α_max`.
+/// surfaces face the same way, `|(R n_p)ᵀ n| ≥ cos α_max`. Each
+/// correspondence's line goes beside it; its `tilt_var` is left NaN (no
+/// iteration uses it: `register` fills in the last iteration's).
 fn associate(
     reference: &Reference,
     source: &[[f64; 2]],
@@ -218,9 +238,14 @@ fn associate(
     at: &Placement,
     set: &RegisterSettings,
     memory: Memory,
-    corrs: &mut Vec<Correspondence>,
+    found: Found,
 ) {
+    let Found {
+        corrs,
+        lines: corr_lines,
+    } = found;
     corrs.clear();
+    corr_lines.clear();
     let reach = set.threshold + set.max_gap;
     for (((&p, hint), line), &ns) in source
         .iter()
@@ -240,8 +265,9 @@ fn associate(
             normal: Some(cl.normal),
             residual: cl.residual,
             weight: 1.0,
-            tilt_var: cl.tilt_var,
+            tilt_var: f64::NAN,
         });
+        corr_lines.push(cl.index);
     }
 }
 
@@ -334,16 +360,27 @@ fn normal_system(
     frozen: bool,
 ) -> (Matrix3<f64>, Vector3<f64>) {
     let kappa2 = kappa * kappa;
-    let mut h = Matrix3::<f64>::zeros();
-    let mut g = Vector3::<f64>::zeros();
+    // Plain sums (row-major) rather than nalgebra's outer product: the same
+    // products `(ρ'' J_r) J_c` and `(w e) J_r`, summed in the same order,
+    // without the general matrix product's loops.
+    let mut h = [0.0; 9];
+    let mut g = [0.0; 3];
     for k in corrs {
         let (e, w) = (k.residual, k.weight);
         let j = metric::jacobian(at.rotate(k.p), k.normal.unwrap_or_default());
         let curv = curvature(e, w, kappa2, frozen);
-        h += curv * j * j.transpose();
-        g += (w * e) * j;
+        let cj = [curv * j.x, curv * j.y, curv * j.z];
+        for (r, hr) in h.chunks_exact_mut(3).enumerate() {
+            for (c, hrc) in hr.iter_mut().enumerate() {
+                *hrc += cj[r] * j[c];
+            }
+        }
+        let we = w * e;
+        for (gr, jr) in g.iter_mut().zip(j.iter()) {
+            *gr += we * jr;
+        }
     }
-    (h, g)
+    (Matrix3::from_row_slice(&h), Vector3::from(g))
 }
 
 /// The curvature `ρ''` a residual `e` of weight `w` contributes. Once the
