@@ -273,8 +273,10 @@ impl Reference {
         let plain = windows.iter().any(|w| w.0.is_nan());
         let last = end - start - m;
         let (mut hi, mut best) = (0, 0);
-        let mut line: Option<(usize, Line)> = None;
-        for j in 0..=end - start {
+        // The line of window `made` (none yet).
+        let (mut made, mut line) = (usize::MAX, Line::default());
+        let len = end - start;
+        for j in 0..=len {
             let (first, end_first) = (j.saturating_sub(m), j.min(last));
             if plain || best < first {
                 best = first;
@@ -291,21 +293,15 @@ impl Reference {
                 }
             }
             hi = end_first;
-            let l = match line {
-                Some((b, l)) if b == best => l,
-                _ => {
-                    let l = window_line(&windows[best], pa, pb, scored);
-                    line = Some((best, l));
-                    l
-                }
-            };
-            self.lines.push(Line {
-                before: j > 0,
-                after: j < end - start,
-                ..l
-            });
+            if best != made {
+                line = window_line(&windows[best], pa, pb, scored);
+                made = best;
+            }
+            line.before = j > 0;
+            line.after = j < len;
+            self.lines.push(line);
             if scored {
-                self.scatter.push(total_key(l.score));
+                self.scatter.push(total_key(line.score));
             }
         }
     }
