@@ -6,19 +6,11 @@
 //! yields each stream in stamp order, exactly what the in-memory reader's
 //! stable sort produces. Any error is reported as the in-memory reader
 //! reports it.
-//!
-//! The two passes read the same chunks: the first keeps what it
-//! decompressed (up to `CACHE_BYTES`) for the second, which then decompresses
-//! only the chunks beyond that budget. A chunk the first pass opened was
-//! checked whole, so the second pass sees the same records and the same
-//! errors either way.
 
-use std::cell::RefCell;
-use std::collections::{HashMap, VecDeque};
+use std::collections::HashMap;
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
-use std::rc::Rc;
 use std::sync::Arc;
 
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
@@ -37,99 +29,7 @@ pub(crate) struct Messages<'o> {
     /// the offset of the next one.
     chunk: Vec<u8>,
     chunk_pos: usize,
-    /// Chunk records seen so far, and what identifies the one being read.
-    chunks: usize,
-    chunk_key: Option<ChunkKey>,
-    /// Decompressed chunks shared between the two passes, and whether this
-    /// reader fills it (first pass) or takes from it (second pass).
-    cache: Option<(Rc<RefCell<ChunkCache>>, CacheSide)>,
     catalog: Catalog<'o>,
-}
-
-/// Most bytes of decompressed chunks the first pass keeps for the second:
-/// what a whole short recording takes (the bundled one, most of a
-/// benchmark log), while a long one still runs in memory bounded by this
-/// plus its chunk size.
-const CACHE_BYTES: usize = 16 << 20;
-
-/// Which pass a reader sharing a [`ChunkCache`] serves.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum CacheSide {
-    Fill,
-    Take,
-}
-
-/// The first pass's decompressed chunks, in file order, each with its
-/// position among the chunk records and the length and leading bytes
-/// (times, sizes, CRC) of its compressed record: the second pass takes a
-/// chunk only where all of these agree.
-struct ChunkCache {
-    chunks: VecDeque<(ChunkKey, Vec<u8>)>,
-    bytes: usize,
-    /// Most bytes kept (`CACHE_BYTES`).
-    budget: usize,
-    /// Set once a chunk did not fit: later ones are not kept either.
-    full: bool,
-}
-
-impl Default for ChunkCache {
-    fn default() -> Self {
-        Self {
-            chunks: VecDeque::new(),
-            bytes: 0,
-            budget: CACHE_BYTES,
-            full: false,
-        }
-    }
-}
-
-/// What identifies a chunk record between the passes.
-#[derive(PartialEq, Eq)]
-struct ChunkKey {
-    index: usize,
-    len: usize,
-    head: [u8; 28],
-}
-
-impl ChunkKey {
-    fn new(index: usize, record: &[u8]) -> Self {
-        let mut head = [0u8; 28];
-        let n = record.len().min(head.len());
-        head[..n].copy_from_slice(&record[..n]);
-        Self {
-            index,
-            len: record.len(),
-            head,
-        }
-    }
-}
-
-impl ChunkCache {
-    /// Keeps `records` if they fit in the budget.
-    fn offer(&mut self, key: ChunkKey, records: Vec<u8>) {
-        if self.full || self.bytes + records.len() > self.budget {
-            self.full = true;
-            return;
-        }
-        self.bytes += records.len();
-        self.chunks.push_back((key, records));
-    }
-
-    /// The records of the chunk `key`, if the first pass kept them.
-    fn take(&mut self, key: &ChunkKey) -> Option<Vec<u8>> {
-        while self
-            .chunks
-            .front()
-            .is_some_and(|(k, _)| k.index < key.index)
-        {
-            self.chunks.pop_front();
-        }
-        if self.chunks.front().is_some_and(|(k, _)| k == key) {
-            self.chunks.pop_front().map(|(_, r)| r)
-        } else {
-            None
-        }
-    }
 }
 
 /// Schemas and channels seen so far, and what each message is for.
@@ -164,9 +64,6 @@ impl<'o> Messages<'o> {
             ),
             chunk: Vec::new(),
             chunk_pos: 0,
-            chunks: 0,
-            chunk_key: None,
-            cache: None,
             catalog: Catalog {
                 opts,
                 name,
@@ -192,11 +89,7 @@ impl<'o> Messages<'o> {
                 }
             }
             let event = match self.reader.next_event() {
-                None => {
-                    let (key, done) = (self.chunk_key.take(), std::mem::take(&mut self.chunk));
-                    self.keep(key, done);
-                    return Ok(None);
-                }
+                None => return Ok(None),
                 Some(e) => e.map_err(|e| Fail::Format(e.to_string()))?,
             };
             let (opcode, data) = match event {
@@ -212,40 +105,16 @@ impl<'o> Messages<'o> {
                 LinearReadEvent::Record { opcode, data } => (opcode, data),
             };
             if opcode == CHUNK {
-                let key = ChunkKey::new(self.chunks, data);
-                self.chunks += 1;
-                let cached = match &self.cache {
-                    Some((c, CacheSide::Take)) => c.borrow_mut().take(&key),
-                    _ => None,
-                };
-                let records = match cached {
-                    Some(records) => records,
-                    None => super::mcap_guard::open_chunk(data)
-                        .map_err(Fail::Format)?
-                        .ok_or_else(|| {
-                            Fail::Format("chunk with an unsupported compression".into())
-                        })?
-                        .into_owned(),
-                };
-                let done = std::mem::replace(&mut self.chunk, records);
-                let done_key = self.chunk_key.replace(key);
-                self.keep(done_key, done);
+                let inner = super::mcap_guard::open_chunk(data).map_err(Fail::Format)?;
+                let inner = inner
+                    .ok_or_else(|| Fail::Format("chunk with an unsupported compression".into()))?;
+                self.chunk = inner.into_owned();
                 self.chunk_pos = 0;
                 continue;
             }
             if let Some(raw) = self.catalog.handle(opcode, data, false)? {
                 return Ok(Some(raw));
             }
-        }
-    }
-}
-
-impl Messages<'_> {
-    /// Hands the records of a chunk read through to the second pass (first
-    /// pass only).
-    fn keep(&mut self, key: Option<ChunkKey>, records: Vec<u8>) {
-        if let (Some((c, CacheSide::Fill)), Some(key)) = (&self.cache, key) {
-            c.borrow_mut().offer(key, records);
         }
     }
 }
@@ -394,15 +263,9 @@ impl<'o> McapStream<'o> {
     /// Opens `path`: runs the first pass (counts, laser mount), then is ready
     /// to yield items. Errors are those [`read_mcap`](super::read_mcap) gives.
     pub fn open(path: &Path, opts: &'o ReadOptions) -> Result<Self, InputError> {
-        let cache = Rc::new(RefCell::new(ChunkCache::default()));
-        let open = |side| {
-            Messages::open(path, opts).map(|mut m| {
-                m.cache = Some((cache.clone(), side));
-                m
-            })
-        };
-        let stream = open(CacheSide::Fill)
-            .and_then(|first| BagStream::new(first, open(CacheSide::Take)?, opts))
+        let open = || Messages::open(path, opts);
+        let stream = open()
+            .and_then(|first| BagStream::new(first, open()?, opts))
             .map_err(|f| canonical(path, opts, f))?;
         Ok(Self {
             path: path.to_path_buf(),
@@ -442,67 +305,5 @@ impl SampleSource for McapStream<'_> {
 
     fn scan_topic(&self) -> &str {
         &self.opts.topics.scan
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Every raw message of a reader: topic, position, log time, payload.
-    fn all(m: &mut Messages) -> Vec<(String, String, u64, Vec<u8>)> {
-        let mut out = Vec::new();
-        while let Some(r) = m.next().ok().unwrap() {
-            out.push((r.topic, r.at.to_string(), r.log_time, r.data));
-        }
-        out
-    }
-
-    fn open<'o>(
-        path: &Path,
-        opts: &'o ReadOptions,
-        cache: Option<(Rc<RefCell<ChunkCache>>, CacheSide)>,
-    ) -> Messages<'o> {
-        let mut m = Messages::open(path, opts).ok().unwrap();
-        m.cache = cache;
-        m
-    }
-
-    #[test]
-    fn the_second_pass_reads_the_same_messages_from_kept_and_reopened_chunks() {
-        let path = Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/scans/wheelchair-corridor.mcap"
-        ));
-        let opts = ReadOptions::default();
-        let plain = all(&mut open(path, &opts, None));
-        assert!(plain.len() > 1000);
-        let pass = |budget: usize| {
-            let cache = Rc::new(RefCell::new(ChunkCache {
-                budget,
-                ..Default::default()
-            }));
-            let first = all(&mut open(
-                path,
-                &opts,
-                Some((cache.clone(), CacheSide::Fill)),
-            ));
-            assert_eq!(first, plain);
-            let (kept, bytes) = (cache.borrow().chunks.len(), cache.borrow().bytes);
-            let second = all(&mut open(
-                path,
-                &opts,
-                Some((cache.clone(), CacheSide::Take)),
-            ));
-            assert_eq!(second, plain, "budget {budget}");
-            assert!(cache.borrow().chunks.is_empty());
-            (kept, bytes)
-        };
-        // All chunks kept, none, and only the first few (the budget runs out).
-        let (chunks, bytes) = pass(usize::MAX);
-        assert!(chunks >= 3, "{chunks} chunks");
-        assert_eq!(pass(0), (0, 0));
-        let (some, _) = pass(bytes / 2);
-        assert!(some > 0 && some < chunks, "{some} of {chunks}");
     }
 }
