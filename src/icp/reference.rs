@@ -415,6 +415,7 @@ impl Reference {
     /// be near index `hint` (the previous iteration's): walks along the
     /// linked surface to the locally nearest point, no grid search. Only
     /// valid while the query moves little between calls.
+    #[inline]
     pub fn walk(&self, q: [f64; 2], hint: usize) -> Option<(usize, f64)> {
         if hint >= self.pts.len() {
             return self.nearest(q, f64::INFINITY);
