@@ -203,12 +203,12 @@ impl PointGrid {
         if m * m >= best.1 || m > max_dist {
             return false;
         }
-        // As in `search_cell_within`.
-        let gap = |l: f64, v: f64| (l - v).max(v - l - self.cell).max(0.0);
-        let gx: [f64; 3] =
-            std::array::from_fn(|i| gap(self.x0 + (cx - 1 + i as i64) as f64 * self.cell, q[0]));
-        let gy: [f64; 3] =
-            std::array::from_fn(|i| gap(self.y0 + (cy - 1 + i as i64) as f64 * self.cell, q[1]));
+        let gx: [f64; 3] = std::array::from_fn(|i| {
+            self.gap(self.x0 + (cx - 1 + i as i64) as f64 * self.cell, q[0])
+        });
+        let gy: [f64; 3] = std::array::from_fn(|i| {
+            self.gap(self.y0 + (cy - 1 + i as i64) as f64 * self.cell, q[1])
+        });
         let gx2 = gx.map(|g| g * g);
         for (dy, y) in [(gy[0], cy - 1), (gy[2], cy + 1)] {
             if !(0..ny).contains(&y) {
@@ -265,6 +265,13 @@ impl PointGrid {
         }
     }
 
+    /// Distance (m) along one axis from coordinate `v` to the cell span
+    /// `[lo, lo + cell]`; 0 inside it.
+    #[inline]
+    fn gap(&self, lo: f64, v: f64) -> f64 {
+        (lo - v).max(v - lo - self.cell).max(0.0)
+    }
+
     /// [`search_cells`](Self::search_cells) of cell (`x`, `y`) unless every
     /// point of it is at least as far from `q` as `best`.
     #[inline]
@@ -273,8 +280,7 @@ impl PointGrid {
             self.x0 + x as f64 * self.cell,
             self.y0 + y as f64 * self.cell,
         );
-        let dx = (lx - q[0]).max(q[0] - lx - self.cell).max(0.0);
-        let dy = (ly - q[1]).max(q[1] - ly - self.cell).max(0.0);
+        let (dx, dy) = (self.gap(lx, q[0]), self.gap(ly, q[1]));
         if dx * dx + dy * dy < best.1 {
             let c = (y * self.nx as i64 + x) as usize;
             self.search_cells(q, c, c, best);
