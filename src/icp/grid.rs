@@ -54,13 +54,21 @@ impl PointGrid {
         self.start.clear();
         let mut b = [f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY];
         let mut finite = 0usize;
+        // Plain comparisons: the points are finite, so `f64::min`'s NaN
+        // handling is not needed.
         for p in pts.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
-            b = [
-                b[0].min(p[0]),
-                b[1].min(p[1]),
-                b[2].max(p[0]),
-                b[3].max(p[1]),
-            ];
+            if p[0] < b[0] {
+                b[0] = p[0];
+            }
+            if p[1] < b[1] {
+                b[1] = p[1];
+            }
+            if p[0] > b[2] {
+                b[2] = p[0];
+            }
+            if p[1] > b[3] {
+                b[3] = p[1];
+            }
             finite += 1;
         }
         if finite == 0 {
@@ -79,30 +87,38 @@ impl PointGrid {
         self.bin(pts, finite);
     }
 
-    /// The counting sort: cell counts, their prefix sums, then the points.
+    /// The counting sort: each point's cell and the cells' counts in one
+    /// pass, their prefix sums, then the points.
     fn bin(&mut self, pts: &[[f64; 2]], finite: usize) {
         let cells = self.nx * self.ny;
+        self.start.clear();
         self.start.resize(cells + 1, 0);
-        let (x0, y0, inv, nx, ny) = (self.x0, self.y0, self.inv, self.nx, self.ny);
+        let (x0, y0, inv) = (self.x0, self.y0, self.inv);
+        let (nx, ny) = (self.nx as i64, self.ny as i64);
+        // A finite point lies at or beyond (x0, y0): its scaled offsets are
+        // non-negative (`as i64` truncates them as `as usize` would, with
+        // a cheaper conversion); rounding may put the farthest at n.
         let cell_of = |p: &[f64; 2]| {
-            let ix = (((p[0] - x0) * inv) as usize).min(nx - 1);
-            let iy = (((p[1] - y0) * inv) as usize).min(ny - 1);
-            iy * nx + ix
+            let ix = (((p[0] - x0) * inv) as i64).min(nx - 1);
+            let iy = (((p[1] - y0) * inv) as i64).min(ny - 1);
+            (iy * nx + ix) as usize
         };
         // Each point's cell, once (`u32::MAX`: not finite, left out).
         self.cell_of.clear();
-        self.cell_of.extend(pts.iter().map(|p| {
-            if p[0].is_finite() && p[1].is_finite() {
-                cell_of(p) as u32
+        for p in pts {
+            let c = if p[0].is_finite() && p[1].is_finite() {
+                let c = cell_of(p);
+                self.start[c + 1] += 1;
+                c as u32
             } else {
                 u32::MAX
-            }
-        }));
-        for &c in self.cell_of.iter().filter(|&&c| c != u32::MAX) {
-            self.start[c as usize + 1] += 1;
+            };
+            self.cell_of.push(c);
         }
-        for c in 0..cells {
-            self.start[c + 1] += self.start[c];
+        let mut total = 0;
+        for s in &mut self.start {
+            total += *s;
+            *s = total;
         }
         self.xy.resize(finite, [0.0; 2]);
         self.idx.resize(finite, 0);
