@@ -91,7 +91,6 @@ impl PointGrid {
     /// pass, their prefix sums, then the points.
     fn bin(&mut self, pts: &[[f64; 2]], finite: usize) {
         let cells = self.nx * self.ny;
-        self.start.clear();
         self.start.resize(cells + 1, 0);
         let (x0, y0, inv) = (self.x0, self.y0, self.inv);
         let (nx, ny) = (self.nx as i64, self.ny as i64);

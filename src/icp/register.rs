@@ -370,10 +370,10 @@ impl Median {
         let m = found.unwrap_or_else(|| {
             self.keys.clear();
             self.keys.extend(keys);
-            let mid = self.keys.len() / 2;
             if self.keys.is_empty() {
                 return 0;
             }
+            let mid = self.keys.len() / 2;
             *self.keys.select_nth_unstable(mid).1
         });
         self.last = Some(m);
