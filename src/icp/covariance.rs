@@ -149,7 +149,11 @@ fn information(corrs: &[Correspondence], pose: [f64; 3]) -> Information {
 
 /// Information beyond the noise floor counts only from this many times the
 /// floor: fewer than that and the direction is not told apart from the
-/// lines' direction noise (in a featureless corridor the axis shows 1–1.5).
+/// lines' direction noise. The floor is smaller than that noise: along a
+/// simulated featureless corridor (two straight walls 2.5 m apart, 90 s at
+/// the wheelchair's laser) the axis shows 2.4–3.5 times it (10th–97th
+/// percentile of the pairs, median 2.8), so this factor sits just above the
+/// noise and a door lifts a pair over it or not.
 pub const MEASURED_FACTOR: f64 = 4.0;
 
 /// The information `h` (`Σ w J Jᵀ`) less its part that is the reference
