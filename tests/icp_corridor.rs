@@ -7,7 +7,7 @@
 //! the forward speed only at the doors, where the scan measures it, and what
 //! they say is the true distance; the calibration follows them.
 
-use crate::support::scratch;
+use crate::support::{convergence_ensemble, scratch};
 use odocal::calib::{self, CalibParams, Method};
 use odocal::effects::Effect;
 use odocal::icp::IcpParams;
@@ -81,10 +81,30 @@ fn calibrated_mean_radius(rec: &Recording, obs: &[VelocityObs], robot: &RobotCon
     0.5 * (f.r_right + f.r_left)
 }
 
-#[test]
-fn along_a_corridor_the_axis_goes_to_the_prior_and_the_forward_velocity_is_observed_unbiased() {
-    let (rec, robot) = corridor_bag();
-    let out = odocal::pipeline::icp::match_recording(&rec, &robot, &IcpParams::default()).unwrap();
+/// What one scan-matching run of the corridor gives.
+struct CorridorRun {
+    /// Valid motions.
+    valid: usize,
+    /// Median scan share along the corridor (x) and of the turn.
+    along: f64,
+    turn: f64,
+    /// Pairs whose velocity observation carries the forward speed.
+    forward: usize,
+    /// Distance those observations say, and the true one over their
+    /// intervals (m).
+    observed: f64,
+    true_x: f64,
+    /// Matched and true path length (m).
+    matched: f64,
+    path: f64,
+    /// Calibrated mean radius less the true one (m).
+    radius_err: f64,
+}
+
+/// Scan matching of the corridor with `params`, then the Adaptive-PF on its
+/// velocity observations.
+fn corridor_run(rec: &Recording, robot: &RobotConfig, params: &IcpParams) -> CorridorRun {
+    let out = odocal::pipeline::icp::match_recording(rec, robot, params).unwrap();
     let valid: Vec<&Motion> = out.motions.iter().filter(|m| m.is_valid()).collect();
     assert!(valid.len() > 4000, "{} valid motions", valid.len());
     let median_share = |k: usize| {
@@ -95,7 +115,6 @@ fn along_a_corridor_the_axis_goes_to_the_prior_and_the_forward_velocity_is_obser
         s.sort_by(f64::total_cmp);
         s[s.len() / 2]
     };
-    let (along, turn) = (median_share(0), median_share(2));
     let forward = valid
         .iter()
         .filter(|m| m.split.unwrap().scan_share[0] >= MIN_SCAN_SHARE)
@@ -106,12 +125,11 @@ fn along_a_corridor_the_axis_goes_to_the_prior_and_the_forward_velocity_is_obser
         .windows(2)
         .map(|w| (w[1].pose.translation.vector - w[0].pose.translation.vector).norm())
         .sum();
-    let matched: f64 = valid.iter().map(|m| m.dx).sum();
+    let obs = out.observations();
     let truth = robot.r_right * (1.0 + SCALE);
-    let radius = calibrated_mean_radius(&rec, &out.observations(), &robot);
+    let radius = calibrated_mean_radius(rec, &obs, robot);
     // What the velocity observations carrying the forward speed say, against
     // the reference poses (the corridor runs along x).
-    let obs = out.observations();
     let stamps: Vec<f64> = rec.reference.iter().map(|p| p.stamp).collect();
     let xs: Vec<f64> = rec.reference.iter().map(|p| p.pose.translation.x).collect();
     let x_at = |t: f64| {
@@ -122,35 +140,71 @@ fn along_a_corridor_the_axis_goes_to_the_prior_and_the_forward_velocity_is_obser
         xs[i - 1] + f * (xs[i] - xs[i - 1])
     };
     let with_v: Vec<&VelocityObs> = obs.iter().filter(|o| o.sigma_v.is_finite()).collect();
-    let observed: f64 = with_v.iter().map(|o| o.v * (o.t1 - o.t0)).sum();
-    let true_x: f64 = with_v.iter().map(|o| x_at(o.t1) - x_at(o.t0)).sum();
-    eprintln!(
-        "median scan share along {along:.3}, turn {turn:.3}; {forward} of {} pairs observe the \
-         forward velocity ({observed:.3} m against {true_x:.3} m); matched {matched:.2} m of \
-         {path:.2} m; mean radius error {:.3} mm (nominal {:.3} mm)",
-        valid.len(),
-        (radius - truth) * 1e3,
-        (robot.r_right - truth) * 1e3,
-    );
-    // Between doors the walls say nothing along the corridor: the prior has it.
-    assert!(along < 0.05, "along {along}");
-    assert!(turn > 0.9, "turn {turn}");
-    // Pairs that see a door observe the forward velocity, the others not.
-    assert!(forward > 500 && forward < valid.len() / 2, "{forward}");
-    // What those observations say is the true distance.
-    let ratio = observed / true_x;
-    assert!((ratio - 1.0).abs() < 0.015, "observed / true {ratio}");
-    // The matched path is the odometry's (the nominal radii: SCALE short)
-    // where the scan leaves the axis, never shorter: before, noise-tilted
-    // lines made it 9 % short.
-    let ratio = matched / path;
-    assert!(ratio > 0.97 && ratio < 1.01, "matched / true path {ratio}");
+    CorridorRun {
+        valid: valid.len(),
+        along: median_share(0),
+        turn: median_share(2),
+        forward,
+        observed: with_v.iter().map(|o| o.v * (o.t1 - o.t0)).sum(),
+        true_x: with_v.iter().map(|o| x_at(o.t1) - x_at(o.t0)).sum(),
+        matched: valid.iter().map(|m| m.dx).sum(),
+        path,
+        radius_err: radius - truth,
+    }
+}
+
+/// Over the convergence ensemble (`support::convergence_ensemble`): which
+/// pairs see a door well enough to count as measuring the forward motion
+/// is decided at a threshold, and micrometre differences between members
+/// move 1,047–1,219 pairs across it; each member's calibration then differs
+/// by its own noise (radius error −0.05 to −2.83 mm, nominal −6.40 mm).
+/// What every member must show is asserted per member; the calibrated scale
+/// on the ensemble's mean.
+#[test]
+fn along_a_corridor_the_axis_goes_to_the_prior_and_the_forward_velocity_is_observed_unbiased() {
+    let (rec, robot) = corridor_bag();
+    let truth = robot.r_right * (1.0 + SCALE);
+    let mut errs = Vec::new();
+    for params in convergence_ensemble() {
+        let r = corridor_run(&rec, &robot, &params);
+        eprintln!(
+            "convergence {:.1e}: median scan share along {:.3}, turn {:.3}; {} of {} pairs observe \
+             the forward velocity ({:.3} m against {:.3} m); matched {:.2} m of {:.2} m; mean \
+             radius error {:.3} mm (nominal {:.3} mm)",
+            params.convergence,
+            r.along,
+            r.turn,
+            r.forward,
+            r.valid,
+            r.observed,
+            r.true_x,
+            r.matched,
+            r.path,
+            r.radius_err * 1e3,
+            (robot.r_right - truth) * 1e3,
+        );
+        // Between doors the walls say nothing along the corridor: the prior
+        // has it.
+        assert!(r.along < 0.05, "along {}", r.along);
+        assert!(r.turn > 0.9, "turn {}", r.turn);
+        // Pairs that see a door observe the forward velocity, the others not.
+        assert!(r.forward > 500 && r.forward < r.valid / 2, "{}", r.forward);
+        // What those observations say is the true distance.
+        let ratio = r.observed / r.true_x;
+        assert!((ratio - 1.0).abs() < 0.015, "observed / true {ratio}");
+        // The matched path is the odometry's (the nominal radii: SCALE
+        // short) where the scan leaves the axis, never shorter: before,
+        // noise-tilted lines made it 9 % short.
+        let ratio = r.matched / r.path;
+        assert!(ratio > 0.97 && ratio < 1.01, "matched / true path {ratio}");
+        errs.push(r.radius_err);
+    }
     // The calibrated common scale moves from the nominal radii most of the
     // way to the true ones (90 s, no turns: the wheel base is not observed).
-    let err = (radius - truth).abs();
+    let mean = errs.iter().sum::<f64>() / errs.len() as f64;
     assert!(
-        err < 0.35 * SCALE * truth,
-        "radius error {:.3} mm",
-        err * 1e3
+        mean.abs() < 0.35 * SCALE * truth,
+        "mean radius error {:.3} mm",
+        mean * 1e3
     );
 }

@@ -2,6 +2,7 @@
 //! metre, covariance consistency (NEES), unbiased scale and heading, local map
 //! against scan to scan.
 
+use crate::support::convergence_ensemble;
 use nalgebra::{Point2, Vector3};
 use odocal::geom::{self, pose, Pose2};
 use odocal::icp::{integrate, match_recording, IcpParams};
@@ -330,20 +331,33 @@ fn icp_sim_prior_blend_does_not_follow_a_scaled_odometry() {
         let (motions, _) = match_recording(&scans, base_from_laser(), Some(&odom), params).unwrap();
         integrate(&motions).path_length() / truth.path_length() - 1.0
     };
-    let blend = len_err(&IcpParams::default());
-    let fixed = len_err(&IcpParams {
-        prior_blend_rate: 0.0,
-        ..Default::default()
-    });
-    eprintln!(
-        "path length error: blended prior {:+.4} %, odometry prior {:+.4} %",
-        100.0 * blend,
-        100.0 * fixed
-    );
+    // Over the convergence ensemble (`support::convergence_ensemble`): the
+    // path length of one member moves by ±0.03 % with micrometre differences
+    // at the threshold of what counts as measured along the corridor (blend
+    // +0.042 to +0.096 %, odometry-centred +0.028 to +0.092 %), so the
+    // comparison is of the ensemble's means.
+    let (mut blend, mut fixed) = (0.0, 0.0);
+    let members = convergence_ensemble();
+    for params in &members {
+        let b = len_err(params);
+        let f = len_err(&IcpParams {
+            prior_blend_rate: 0.0,
+            ..params.clone()
+        });
+        eprintln!(
+            "convergence {:.1e}: path length error: blended prior {:+.4} %, odometry prior {:+.4} %",
+            params.convergence,
+            100.0 * b,
+            100.0 * f
+        );
+        blend += b / members.len() as f64;
+        fixed += f / members.len() as f64;
+    }
     assert!(blend.abs() < 1e-3, "blended prior: {:.3} %", 100.0 * blend);
     // Both come out within 0.1 % (before the lines' direction noise was
-    // told apart from information: +0.079 % and +0.074 %; after: +0.042 %
-    // and +0.031 %, where the corridor's axis goes to each prior's centre).
+    // told apart from information: +0.079 % and +0.074 % on one member;
+    // after: +0.065 % and +0.065 % over the ensemble, where the corridor's
+    // axis goes to each prior's centre).
     assert!(
         blend <= fixed.max(0.0) + 2e-4,
         "blended {blend} vs odometry-centred {fixed}: pulled towards the long odometry"

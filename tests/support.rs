@@ -65,3 +65,29 @@ pub fn odocal(args: &[&str]) -> std::process::Output {
         .output()
         .expect("run odocal")
 }
+
+/// Factors on the default convergence bound of the scan matcher that make
+/// the ensemble a chaotic figure is judged over (see [`convergence_ensemble`]).
+pub const CONVERGENCE_FACTORS: [f64; 5] = [0.8, 0.9, 1.0, 1.1, 1.2];
+
+/// The default scan-matcher settings with the convergence bound at each of
+/// [`CONVERGENCE_FACTORS`]. A registration stops anywhere below the bound,
+/// so the members' motions differ by micrometres per pair; but a local map
+/// chains them, and at the few hard pairs of a run (a fast turn under a late
+/// odometry, a reversal the odometry missed, a door edge at the threshold of
+/// what counts as measured) such differences decide between two outcomes.
+/// A figure that follows those pairs (long relations, a calibration from
+/// the door pairs of a corridor) then moves by far more than its members'
+/// differences (README, "Run to run"): asserted on one member it asserts
+/// that draw, and any harmless change of the numerics flips it. Over the
+/// ensemble, its median (or mean) is what the method gives.
+pub fn convergence_ensemble() -> Vec<odocal::icp::IcpParams> {
+    let base = odocal::icp::IcpParams::default();
+    CONVERGENCE_FACTORS
+        .iter()
+        .map(|f| odocal::icp::IcpParams {
+            convergence: f * base.convergence,
+            ..base.clone()
+        })
+        .collect()
+}
