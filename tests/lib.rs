@@ -38,6 +38,7 @@ mod icp_odometry_faults;
 mod icp_real;
 mod icp_relations;
 mod icp_sim;
+mod icp_time_offset;
 mod inspect;
 mod io_bad_input;
 mod io_bags;

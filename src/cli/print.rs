@@ -330,4 +330,36 @@ pub fn icp(stats: &IcpStats, path_length: f64, out: &Path) {
         path_length,
         out.display()
     );
+    if let Some(f) = &stats.prior_time_offset {
+        prior_clock(f);
+    }
+}
+
+/// The prior's clock check of `odocal icp`: the offset in use, where the
+/// odometry's turns fit the matched ones best, and what to set when the two
+/// disagree.
+fn prior_clock(f: &odocal::icp::TimeOffsetFit) {
+    eprintln!(
+        "odometry clock: offset {:+.3} s in use (odometry stamp − laser stamp); its turns fit the \
+         matched ones best at {:+.3} s{} (heading increments {:.4} rad RMS per pair there, {:.4} \
+         at the offset in use; {} pairs)",
+        f.used_s,
+        f.best_s,
+        if f.at_edge {
+            ", the edge of the offsets tried"
+        } else {
+            ""
+        },
+        f.rms_best_rad,
+        f.rms_used_rad,
+        f.pairs
+    );
+    if f.contradicts_used() {
+        eprintln!(
+            "  the scans and the odometry disagree in time: set [icp] time_offset = {:.2} in a \
+             --config file to read the prior at that offset (with wheel encoders, calibrate \
+             --method batch estimates it with its std)",
+            f.best_s
+        );
+    }
 }

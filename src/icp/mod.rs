@@ -63,6 +63,7 @@ mod register;
 mod run;
 mod stream;
 mod threshold;
+mod time_offset;
 
 pub use covariance::MIN_RESIDUAL_STD;
 pub use matcher::{MatchInfo, PriorSource, ScanMatcher};
@@ -71,3 +72,4 @@ pub use preprocess::{Preprocessor, ScanPoints};
 pub use run::{integrate, match_recording, summarise, IcpStats, Tally};
 pub use stream::{PoseWindow, Prior, StreamMatcher};
 pub use threshold::AdaptiveThreshold;
+pub use time_offset::{TimeOffsetFit, OFFSET_SPAN_S, OFFSET_STEP_S};

@@ -114,6 +114,13 @@ pub struct IcpParams {
     pub speed_slack: f64,
     /// Slack on `max_turn_rate` × dt beyond 3σ of the match (rad).
     pub turn_slack: f64,
+    /// Offset (s) of the prior's clock: odometry (or wheel) stamp minus laser
+    /// stamp of one instant, as `calibrate --method batch` estimates it
+    /// (`time_offset`). The prior of a pair of scans stamped `t0`, `t1` is the
+    /// odometry's motion over `[t0 + time_offset, t1 + time_offset]`.
+    /// 0 = one clock; `odocal icp` reports the offset at which the
+    /// odometry's turns fit the matched ones best (`prior_time_offset`).
+    pub time_offset: f64,
     /// Match against a local map of recent keyframes instead of the previous
     /// scan (default). Scan-to-scan matching has a small pull towards zero
     /// motion (things that move with the sensor: sampling, occlusion edges,
@@ -168,6 +175,7 @@ impl Default for IcpParams {
             max_angular_accel: 3.0,
             speed_slack: 0.01,
             turn_slack: 0.01,
+            time_offset: 0.0,
             local_map: true,
             keyframes: 5,
             keyframe_dist: 0.3,
@@ -281,6 +289,12 @@ impl IcpParams {
         if self.min_inlier_fraction > 1.0 {
             return invalid("min_inlier_fraction", "must be at most 1");
         }
+        if !(self.time_offset.abs() <= MAX_TIME_OFFSET_S) {
+            return invalid(
+                "time_offset",
+                "must be finite and within 1 s (beyond it the clocks disagree: fix the stamps)",
+            );
+        }
         Ok(())
     }
 
@@ -304,6 +318,11 @@ impl IcpParams {
         Ok(())
     }
 }
+
+/// Largest `time_offset` (s) accepted: a second between the odometry's and
+/// the scans' stamps of one instant is a clock error, not a latency (as the
+/// batch calibration's `max_time_offset_s`).
+pub const MAX_TIME_OFFSET_S: f64 = 1.0;
 
 /// The error for parameter `name`.
 fn invalid(name: &'static str, why: &'static str) -> Result<(), IcpParamsError> {

@@ -8,6 +8,7 @@
 
 use super::params::{IcpParams, IcpParamsError};
 use super::stream::{Prior, StreamMatcher};
+use super::time_offset::TimeOffsetFit;
 use crate::geom::{self, Pose2};
 use crate::motion::Motion;
 use crate::recording::StampedPose;
@@ -31,6 +32,11 @@ pub struct IcpStats {
     pub pairs_per_s: f64,
     /// Failed pairs by reason (`PairFailure::as_str`).
     pub failures: BTreeMap<String, usize>,
+    /// The offset of the prior's clock at which its turns fit the matched
+    /// ones best, beside the one in use (absent without a prior or with too
+    /// few matched pairs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior_time_offset: Option<TimeOffsetFit>,
 }
 
 /// Matches consecutive scans (time order as given). When `odom_prior` covers
@@ -65,7 +71,10 @@ pub fn match_recording(
         matcher.poll(&mut |m| motions.push(m));
     }
     let wall_s = start.elapsed().as_secs_f64();
-    let stats = summarise(&motions, wall_s);
+    let stats = IcpStats {
+        prior_time_offset: matcher.time_offset_fit(),
+        ..summarise(&motions, wall_s)
+    };
     Ok((motions, stats))
 }
 
@@ -169,6 +178,7 @@ impl Tally {
                 0.0
             },
             failures: self.failures.clone(),
+            prior_time_offset: None,
         }
     }
 }

@@ -11,6 +11,7 @@ use std::collections::VecDeque;
 
 use super::matcher::ScanMatcher;
 use super::params::{IcpParams, IcpParamsError};
+use super::time_offset::{offsets, OffsetCheck, TimeOffsetFit, OFFSET_SPAN_S};
 use crate::geom::{self, Pose2};
 use crate::motion::Motion;
 use crate::recording::{StampedPose, WheelSample};
@@ -24,13 +25,23 @@ use crate::traj::Trajectory;
 #[derive(Debug, Default)]
 pub struct PoseWindow {
     traj: Trajectory,
+    /// Heading (rad) of each pose, unwrapped along the window.
+    headings: Vec<f64>,
     ended: bool,
 }
 
 impl PoseWindow {
     /// Appends a pose (non-increasing stamps are dropped, as `Trajectory::push` does).
     pub fn push(&mut self, t: f64, p: Pose2) -> bool {
-        self.traj.push(t, p)
+        let pushed = self.traj.push(t, p);
+        if pushed {
+            let h = geom::heading(&p);
+            self.headings.push(match self.headings.last() {
+                Some(&prev) => prev + geom::wrap_angle(h - prev),
+                None => h,
+            });
+        }
+        pushed
     }
 
     /// No more poses will come.
@@ -48,6 +59,38 @@ impl PoseWindow {
         self.traj.pose_at(t)
     }
 
+    /// The heading (rad, unwrapped along the window) at each of the
+    /// increasing stamps `times`, interpolated as `pose_at` interpolates
+    /// (one search, then a walk); `false` (and `out` incomplete) when one
+    /// lies outside the trajectory.
+    pub fn headings_at(&self, times: impl Iterator<Item = f64>, out: &mut Vec<f64>) -> bool {
+        out.clear();
+        let (stamps, headings) = (&self.traj.stamps, &self.headings);
+        let (Some(&first), Some(&last)) = (stamps.first(), stamps.last()) else {
+            return false;
+        };
+        let mut i = None;
+        for t in times {
+            if !(t >= first && t <= last) {
+                return false;
+            }
+            // First stamp above t (at least 1: t ≥ first).
+            let mut k = *i.get_or_insert_with(|| stamps.partition_point(|&s| s <= t));
+            while k < stamps.len() && stamps[k] <= t {
+                k += 1;
+            }
+            i = Some(k);
+            let h0 = headings[k - 1];
+            if k == stamps.len() {
+                out.push(h0);
+                continue;
+            }
+            let f = (t - stamps[k - 1]) / (stamps[k] - stamps[k - 1]);
+            out.push(h0 + f * (headings[k] - h0));
+        }
+        true
+    }
+
     /// Forgets poses no query at or after `t` needs.
     pub fn forget_before(&mut self, t: f64) {
         let keep = self
@@ -58,6 +101,7 @@ impl PoseWindow {
         if keep > 4096 && keep * 2 > self.traj.stamps.len() {
             self.traj.stamps.drain(..keep);
             self.traj.poses.drain(..keep);
+            self.headings.drain(..keep);
         }
     }
 }
@@ -99,6 +143,12 @@ pub struct StreamMatcher {
     prior: PoseWindow,
     pending: VecDeque<LaserScan>,
     prev: Option<f64>,
+    /// Offset (s) of the prior's clock (`IcpParams::time_offset`).
+    offset: f64,
+    /// How the prior's turns fit the matched ones at other offsets.
+    check: OffsetCheck,
+    /// Scratch: headings at the offsets tried, at a pair's two stamps.
+    headings: [Vec<f64>; 2],
 }
 
 impl StreamMatcher {
@@ -122,7 +172,17 @@ impl StreamMatcher {
             prior: window,
             pending: VecDeque::new(),
             prev: None,
+            offset: params.time_offset,
+            check: OffsetCheck::new(params.time_offset),
+            headings: Default::default(),
         })
+    }
+
+    /// The offset of the prior's clock at which its turns fit the matched
+    /// ones best, beside the one in use (see `time_offset`); `None` without
+    /// a prior or with too few matched pairs.
+    pub fn time_offset_fit(&self) -> Option<TimeOffsetFit> {
+        self.check.result()
     }
 
     /// A wheel sample (stamp order); ignored unless the prior is wheel odometry.
@@ -150,31 +210,90 @@ impl StreamMatcher {
         self.prior.end();
     }
 
-    /// Matches every scan the prior now covers, handing out the motions.
+    /// Matches every scan the prior now covers (on the prior's clock, and
+    /// as far beyond as the clock check reads it), handing out the motions.
+    /// The prior of a pair is the odometry's motion over its stamps plus
+    /// `time_offset`.
     pub fn poll(&mut self, out: &mut dyn FnMut(Motion)) {
         while let Some(scan) = self.pending.front() {
-            if !self.prior.covers(scan.stamp) {
+            if !self.prior.covers(scan.stamp + self.offset + OFFSET_SPAN_S) {
                 break;
             }
             let scan = self.pending.pop_front().expect("front exists");
             let has_prior = self.odom || self.wheels.is_some();
+            let d = self.offset;
             let prior = match self.prev.filter(|_| has_prior) {
                 None => None,
                 Some(t0) => self
                     .prior
-                    .pose_at(t0)
-                    .zip(self.prior.pose_at(scan.stamp))
+                    .pose_at(t0 + d)
+                    .zip(self.prior.pose_at(scan.stamp + d))
                     .map(|(a, b)| geom::between(&a, &b)),
             };
             if let Some(m) = self.matcher.push(&scan, prior) {
+                if has_prior {
+                    self.check_clock(&m);
+                }
                 out(m);
             }
             if self.prev.is_none_or(|t| scan.stamp > t) {
                 self.prev = Some(scan.stamp);
             }
             if let Some(t) = self.prev {
-                self.prior.forget_before(t);
+                self.prior.forget_before(t + d - OFFSET_SPAN_S);
             }
         }
+    }
+
+    /// Adds a matched pair to the clock check: the prior's heading
+    /// increment over the pair at each offset tried against the matched one.
+    fn check_clock(&mut self, m: &Motion) {
+        if !m.is_valid() {
+            return;
+        }
+        let [h0, h1] = &mut self.headings;
+        let at = |t: f64| offsets(self.offset).map(move |d| t + d);
+        if !(self.prior.headings_at(at(m.t0), h0) && self.prior.headings_at(at(m.t1), h1)) {
+            return;
+        }
+        for (a, b) in h0.iter_mut().zip(h1.iter()) {
+            *a = b - *a;
+        }
+        self.check.add(h0, m.dtheta);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// The walked headings are `pose_at`'s (to the wrap), at any increasing
+    /// stamps inside the trajectory, and refused outside it.
+    #[test]
+    fn headings_at_interpolate_as_pose_at() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        let mut w = PoseWindow::default();
+        let (mut t, mut th) = (0.0, 0.0);
+        for _ in 0..200 {
+            t += rng.random_range(0.005..0.05);
+            th += rng.random_range(-0.4..0.4);
+            w.push(t, geom::pose(t, 0.0, th));
+        }
+        let first = w.traj.stamps[0];
+        let times: Vec<f64> = (0..300)
+            .map(|k| first + k as f64 * (t - first) / 299.0)
+            .collect();
+        let mut out = Vec::new();
+        assert!(w.headings_at(times.iter().copied(), &mut out));
+        for (&s, h) in times.iter().zip(&out) {
+            let want = geom::heading(&w.pose_at(s).unwrap());
+            assert!(
+                geom::wrap_angle(h - want).abs() < 1e-9,
+                "{s}: {h} vs {want}"
+            );
+        }
+        assert!(!w.headings_at([first - 0.01, first].into_iter(), &mut out));
+        assert!(!w.headings_at([t, t + 0.01].into_iter(), &mut out));
     }
 }

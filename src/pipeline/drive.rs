@@ -179,7 +179,10 @@ impl IcpStage {
 
     fn summary(&self) -> IcpRunSummary {
         IcpRunSummary {
-            stats: self.tally.stats(self.matching_s),
+            stats: IcpStats {
+                prior_time_offset: self.matcher.time_offset_fit(),
+                ..self.tally.stats(self.matching_s)
+            },
             path_length: self.tally.path_length(),
             mount: self.mount.clone(),
             assumptions: Default::default(),
