@@ -147,8 +147,8 @@ pub struct StreamMatcher {
     offset: f64,
     /// How the prior's turns fit the matched ones at other offsets.
     check: OffsetCheck,
-    /// Scratch: headings at the offsets tried, at a pair's two stamps.
-    headings: [Vec<f64>; 2],
+    /// Scratch of the clock check.
+    headings: Headings,
 }
 
 impl StreamMatcher {
@@ -247,20 +247,44 @@ impl StreamMatcher {
 
     /// Adds a matched pair to the clock check: the prior's heading
     /// increment over the pair at each offset tried against the matched one.
+    /// The headings at a pair's end serve as the next pair's start.
     fn check_clock(&mut self, m: &Motion) {
         if !m.is_valid() {
             return;
         }
-        let [h0, h1] = &mut self.headings;
         let at = |t: f64| offsets(self.offset).map(move |d| t + d);
-        if !(self.prior.headings_at(at(m.t0), h0) && self.prior.headings_at(at(m.t1), h1)) {
+        let Headings {
+            t1,
+            start,
+            end,
+            diff,
+        } = &mut self.headings;
+        let start_ok = if *t1 == Some(m.t0) {
+            std::mem::swap(start, end);
+            true
+        } else {
+            self.prior.headings_at(at(m.t0), start)
+        };
+        let end_ok = self.prior.headings_at(at(m.t1), end);
+        *t1 = end_ok.then_some(m.t1);
+        if !(start_ok && end_ok) {
             return;
         }
-        for (a, b) in h0.iter_mut().zip(h1.iter()) {
-            *a = b - *a;
-        }
-        self.check.add(h0, m.dtheta);
+        diff.clear();
+        diff.extend(end.iter().zip(start.iter()).map(|(b, a)| b - a));
+        self.check.add(diff, m.dtheta);
     }
+}
+
+/// Scratch of the clock check: the prior's headings at the offsets tried
+/// around a pair's start and end stamps, and their differences.
+#[derive(Debug, Default)]
+struct Headings {
+    /// The end stamp `end` was read at (s), if it was read whole.
+    t1: Option<f64>,
+    start: Vec<f64>,
+    end: Vec<f64>,
+    diff: Vec<f64>,
 }
 
 #[cfg(test)]

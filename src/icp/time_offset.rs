@@ -16,17 +16,21 @@
 
 use serde::Serialize;
 
-/// Spacing of the offsets tried (s).
-pub const OFFSET_STEP_S: f64 = 0.02;
+/// Spacing of the offsets tried (s); a parabola through the best and its
+/// neighbours refines the best between them.
+pub const OFFSET_STEP_S: f64 = 0.04;
+/// Number of offsets tried, centred on the one used.
+const OFFSETS: usize = 25;
 /// Offsets are tried up to this far on either side of the one used (s).
-pub const OFFSET_SPAN_S: f64 = 0.5;
-/// Number of offsets tried.
-const OFFSETS: usize = 51;
+pub const OFFSET_SPAN_S: f64 = (OFFSETS / 2) as f64 * OFFSET_STEP_S;
+/// A best offset at least this far (s) from the one used, and fitting 10 %
+/// better, contradicts it.
+const CONTRADICTION_S: f64 = 0.04;
 /// Fewest matched pairs for a result.
 const MIN_PAIRS: usize = 50;
 
-/// The offsets (s) tried around `used`, increasing: `used + (k − 25) ·
-/// OFFSET_STEP_S` for k = 0 ..= 50.
+/// The offsets (s) tried around `used`, increasing: `used + (k − 12) ·
+/// OFFSET_STEP_S` for k = 0 ..= 24.
 pub fn offsets(used: f64) -> impl Iterator<Item = f64> + Clone {
     let half = (OFFSETS / 2) as f64;
     (0..OFFSETS).map(move |k| used + (k as f64 - half) * OFFSET_STEP_S)
@@ -81,14 +85,16 @@ impl OffsetCheck {
             .enumerate()
             .min_by(|a, b| a.1.total_cmp(b.1))?;
         let at = |k: usize| offsets(self.used).nth(k).unwrap_or(self.used);
-        let mut best_s = at(k);
+        let (mut best_s, mut best_sum) = (at(k), best);
         let at_edge = k == 0 || k + 1 == OFFSETS;
         if !at_edge {
-            // Vertex of the parabola through the three sums around k.
+            // Vertex of the parabola through the three sums around k: where
+            // the sum is smallest, and its value there.
             let (a, b, c) = (self.sums[k - 1], best, self.sums[k + 1]);
             let den = a - 2.0 * b + c;
             if den > 0.0 {
                 best_s += 0.5 * OFFSET_STEP_S * (a - c) / den;
+                best_sum = (b - (a - c).powi(2) / (8.0 * den)).max(0.0);
             }
         }
         Some(TimeOffsetFit {
@@ -96,7 +102,7 @@ impl OffsetCheck {
             best_s,
             at_edge,
             rms_used_rad: (self.sums[OFFSETS / 2] / n).sqrt(),
-            rms_best_rad: (best / n).sqrt(),
+            rms_best_rad: (best_sum / n).sqrt(),
             pairs: self.pairs,
         })
     }
@@ -116,7 +122,7 @@ pub struct TimeOffsetFit {
     /// RMS difference of the heading increments (rad per pair) at the offset
     /// used.
     pub rms_used_rad: f64,
-    /// The same at the best offset.
+    /// The same at the best offset (the parabola's value there).
     pub rms_best_rad: f64,
     /// Matched pairs counted.
     pub pairs: usize,
@@ -124,9 +130,9 @@ pub struct TimeOffsetFit {
 
 impl TimeOffsetFit {
     /// Whether the data contradict the offset in use: the best lies at least
-    /// two steps away and fits at least 10 % better.
+    /// `CONTRADICTION_S` away and fits at least 10 % better.
     pub fn contradicts_used(&self) -> bool {
-        (self.best_s - self.used_s).abs() >= 2.0 * OFFSET_STEP_S
+        (self.best_s - self.used_s).abs() >= CONTRADICTION_S
             && self.rms_best_rad <= 0.9 * self.rms_used_rad
     }
 }
