@@ -81,3 +81,43 @@ fn icp_finds_no_offset_where_the_clocks_agree() {
     assert!(f.best_s.abs() < 0.03, "{f:?}");
     assert!(!f.contradicts_used(), "{f:?}");
 }
+
+/// The Mines rover stamps its scans 0.18 s late (the batch calibration's
+/// `time_offset`, a maximum-likelihood fit of the wheel rates to the scans'
+/// speeds): the scan matcher's check, from the turns alone, finds the same
+/// offset, and a calibration that pairs the two streams at equal stamps
+/// says so in its assumptions.
+#[test]
+fn mines_rover_clock_check_agrees_with_the_batch_and_calibrate_states_it() {
+    let Some(data) = crate::support::shared_data("mines_rover_clock_check") else {
+        return;
+    };
+    let bag = data.join("mines-rover/exp2.mcap");
+    let robot = concat!(env!("CARGO_MANIFEST_DIR"), "/scans/robots/mines-rover.toml");
+    let dir = scratch("mines_rover_clock_check");
+    let json = |args: &[&str]| -> serde_json::Value {
+        let out = crate::support::odocal(args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let (bag, out) = (bag.to_str().unwrap(), |name: &str| dir.join(name));
+    let run = |cmd: &str, method: &[&str], to: &std::path::Path| {
+        let to = to.to_str().unwrap();
+        let args = [&[cmd, "--input", bag, "--robot", robot], method].concat();
+        json(&[&args[..], &["--out", to, "--json"]].concat())
+    };
+    let icp = run("icp", &[], &out("exp2.tum"));
+    let best = icp["prior_time_offset"]["best_s"].as_f64().unwrap();
+    let batch = run("calibrate", &["--method", "batch"], &out("batch"));
+    let delta = batch["time_offset"]["value"].as_f64().unwrap();
+    eprintln!("clock check {best:+.4} s, batch {delta:+.4} s");
+    assert!((best - delta).abs() < 0.03, "check {best} vs batch {delta}");
+    let dkf = run("calibrate", &["--method", "dkf"], &out("dkf"));
+    let a = &dkf["assumptions"]["time_offset"];
+    assert_eq!(a["source"], "default", "{a}");
+    assert!(a["note"].as_str().unwrap().contains("--init batch"), "{a}");
+}

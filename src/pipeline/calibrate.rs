@@ -239,7 +239,9 @@ impl Run<'_> {
             &self.cfg.measurements,
             obs,
         )?;
-        Ok((done, self.nominal.assumptions_with(&icp.mount)))
+        let mut a = self.nominal.assumptions_with(&icp.mount);
+        state_clock(&mut a, icp.stats.prior_time_offset.as_ref());
+        Ok((done, a))
     }
 
     /// [`Self::recording`] over the file at `path`, once its wheel stream
@@ -269,6 +271,36 @@ impl Run<'_> {
         let wheels = super::wheels::describe(&read, self.nominal, info.wheels, info.wheel_values);
         Ok((done, a, wheels))
     }
+}
+
+/// States that the filters pair the scans' motions with the wheel rates of
+/// the same stamps (`time_offset` = 0, default), with what the scan
+/// matcher's clock check found; `--init batch` replaces it with its
+/// estimate.
+fn state_clock(a: &mut crate::assumptions::Assumptions, fit: Option<&crate::icp::TimeOffsetFit>) {
+    let note = match fit {
+        None => "wheel and laser stamps of one instant taken as equal (too few matched pairs \
+                 to check)"
+            .to_string(),
+        Some(f) if f.contradicts_used() => format!(
+            "wheel and laser stamps of one instant taken as equal, but the odometry's turns fit \
+             the scans' best at {:+.3} s (heading increments {:.4} rad RMS per pair there, {:.4} \
+             at 0): the filters compare the scans' speeds with wheel rates of another instant; \
+             --init batch estimates the offset and moves the wheel stamps by it",
+            f.best_s, f.rms_best_rad, f.rms_used_rad
+        ),
+        Some(f) => format!(
+            "wheel and laser stamps of one instant taken as equal; the odometry's turns agree \
+             (best fit at {:+.3} s)",
+            f.best_s
+        ),
+    };
+    a.set(
+        "time_offset",
+        0.0,
+        crate::assumptions::Origin::Default,
+        Some(note),
+    );
 }
 
 /// Before a calibration is reported: the encoders' wiring, the parameters'
