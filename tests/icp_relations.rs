@@ -100,7 +100,7 @@ fn icp_relations_mit_csail_beat_csm_on_all_relations_and_rotation() {
     // translation, to < 1 mm, so the odometry cannot simply be dropped).
     // Over the ensemble: local 0.0270–0.0272 m, 0.374–0.411° (median 0.398°),
     // all 0.115–0.252 m (median 0.20 m). Over 25 bounds from 0.7 to
-    // 1.3·10⁻⁵: 21 runs ahead of CSM, four at 0.26–0.58 m (median 0.20,
+    // 1.3·10⁻⁵: 21 runs ahead of CSM, four at 0.48–0.58 m (median 0.20,
     // mean 0.25 m): the long relations follow a fast turn at 999 s under a
     // late odometry, matched or not by a micrometre's difference.
     beats("mit-csail", &s, 0.028, 0.408, 0.26);
