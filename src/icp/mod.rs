@@ -72,4 +72,4 @@ pub use preprocess::{Preprocessor, ScanPoints};
 pub use run::{integrate, match_recording, summarise, IcpStats, Tally};
 pub use stream::{PoseWindow, Prior, StreamMatcher};
 pub use threshold::AdaptiveThreshold;
-pub use time_offset::{TimeOffsetFit, OFFSET_SPAN_S, OFFSET_STEP_S};
+pub use time_offset::TimeOffsetFit;
