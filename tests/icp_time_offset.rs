@@ -120,4 +120,15 @@ fn mines_rover_clock_check_agrees_with_the_batch_and_calibrate_states_it() {
     let a = &dkf["assumptions"]["time_offset"];
     assert_eq!(a["source"], "default", "{a}");
     assert!(a["note"].as_str().unwrap().contains("--init batch"), "{a}");
+    // With the prior read at another offset, the filters still pair equal
+    // stamps: the note names both instead of calling them in agreement.
+    let cfg = out("prior_offset.toml");
+    std::fs::write(&cfg, "[icp]\ntime_offset = -0.17\n").unwrap();
+    let cfg = ["--method", "dkf", "--config", cfg.to_str().unwrap()];
+    let shifted = run("calibrate", &cfg, &out("dkf_shifted"));
+    let a = &shifted["assumptions"]["time_offset"];
+    assert_eq!(a["value"], 0.0, "{a}");
+    let note = a["note"].as_str().unwrap();
+    assert!(note.contains("[icp] time_offset = -0.170 s"), "{a}");
+    assert!(!note.contains("agree"), "{a}");
 }

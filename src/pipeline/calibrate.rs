@@ -282,6 +282,15 @@ fn state_clock(a: &mut crate::assumptions::Assumptions, fit: Option<&crate::icp:
         None => "wheel and laser stamps of one instant taken as equal (too few matched pairs \
                  to check)"
             .to_string(),
+        // The check compares its best with the prior's offset, which is then
+        // not the filters' 0: say both rather than judge against the wrong one.
+        Some(f) if f.used_s != 0.0 => format!(
+            "wheel and laser stamps of one instant taken as equal by the filters; the scan \
+             matcher's prior was read at [icp] time_offset = {:+.3} s, and the odometry's turns \
+             fit the scans' best at {:+.3} s; --init batch estimates the offset and moves the \
+             wheel stamps by it",
+            f.used_s, f.best_s
+        ),
         Some(f) if f.contradicts_used() => format!(
             "wheel and laser stamps of one instant taken as equal, but the odometry's turns fit \
              the scans' best at {:+.3} s (heading increments {:.4} rad RMS per pair there, {:.4} \
