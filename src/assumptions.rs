@@ -17,6 +17,9 @@ pub enum Origin {
     /// The log itself (a CARMEN laser line's laser pose against its odometry
     /// pose).
     Log,
+    /// What streams the recording holds (e.g. which one gives the scan
+    /// matcher its initial guesses).
+    Recording,
     /// The robot file (`--robot`).
     RobotFile,
     /// Estimated from the data by this run.
@@ -32,6 +35,7 @@ impl Origin {
             Origin::TfStatic => "the recording's /tf_static",
             Origin::Tf => "the recording's /tf",
             Origin::Log => "the log's laser pose",
+            Origin::Recording => "the recording's streams",
             Origin::RobotFile => "the robot file",
             Origin::Estimated => "estimated from the data",
             Origin::Default => "default",

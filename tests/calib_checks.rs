@@ -238,6 +238,49 @@ fn calibrate_states_its_assumptions_and_observability() {
     assert_eq!(summary["assumptions"], j["assumptions"]);
 }
 
+/// `icp` states the stream its initial guesses came from, and the wheel
+/// model only when that stream is the wheels: the same recording with its
+/// joint states, with only an odometry stream (its ground truth renamed),
+/// and with neither.
+#[test]
+fn icp_states_its_prior_and_the_wheel_model_only_when_it_used_it() {
+    let d = scratch("checks_prior");
+    let mut rec = read_recording(&bundled(), &ReadOptions::default()).unwrap();
+    let end = rec.scans[0].stamp + 4.0;
+    rec.scans.retain(|s| s.stamp <= end);
+    rec.wheels.retain(|s| s.stamp <= end);
+    rec.reference.retain(|s| s.stamp <= end);
+    rec.gyro.clear();
+    let wheels_only = rec.clone();
+    rec.wheels.clear();
+    rec.odom = std::mem::take(&mut rec.reference);
+    let odom_only = rec.clone();
+    rec.odom.clear();
+    let cases = [
+        ("wheels", wheels_only, true),
+        ("odometry", odom_only, false),
+        ("constant_velocity", rec, false),
+    ];
+    for (want, rec, wheel_model) in cases {
+        let bag = d.join(format!("{want}.mcap"));
+        write_mcap(&bag, &rec, &WriteOptions::default()).unwrap();
+        let j = json(&odocal(&[
+            "icp",
+            "--input",
+            bag.to_str().unwrap(),
+            "--out",
+            d.join(format!("{want}.tum")).to_str().unwrap(),
+            "--json",
+        ]));
+        let a = &j["assumptions"];
+        assert_eq!(a["prior"]["value"], want, "{a}");
+        for k in ["r_right", "r_left", "wheel_base"] {
+            assert_eq!(a.get(k).is_some(), wheel_model, "{want}: {k} in {a}");
+        }
+        assert_eq!(a["laser"]["source"], "tf_static");
+    }
+}
+
 /// A CARMEN log states its mounting in its laser lines (MIT-CSAIL: the laser
 /// pose is the odometry pose), so the log matches as well as its MCAP
 /// conversion with its identity /tf_static (relations, Kümmerle et al. 2009).
@@ -258,6 +301,9 @@ fn a_carmen_log_states_its_own_mounting() {
         "--json",
     ]));
     assert_eq!(j["assumptions"]["laser"]["source"], "log");
+    // Its prior is the log's odometry: no wheel model is assumed.
+    assert_eq!(j["assumptions"]["prior"]["value"], "odometry");
+    assert!(j["assumptions"].get("wheel_base").is_none(), "{j}");
     assert!(j["failed_pairs"].as_u64().unwrap() < 40, "{j}");
     let e = json(&odocal(&[
         "eval",

@@ -46,6 +46,8 @@ pub struct IcpRunSummary {
     pub path_length: f64,
     /// The laser mounting the scans were matched with, and its source.
     pub mount: Mount,
+    /// The stream each pair's initial guess came from.
+    pub prior: Prior,
     /// Where every nominal value came from (filled by the command).
     pub assumptions: crate::assumptions::Assumptions,
 }
@@ -185,6 +187,7 @@ impl IcpStage {
             },
             path_length: self.tally.path_length(),
             mount: self.mount.clone(),
+            prior: self.prior,
             assumptions: Default::default(),
         }
     }

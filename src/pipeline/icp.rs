@@ -57,7 +57,7 @@ pub fn run(job: &IcpJob, watch: &mut dyn RunObserver) -> Result<IcpRunSummary, P
     let read = super::read_options(&cfg, &nominal.robot);
     let mut source = crate::io::open(&job.input, &read)?;
     let mut summary = run_source(source.as_mut(), &nominal.robot, &cfg.icp, job, watch)?;
-    summary.assumptions = nominal.assumptions_with(&summary.mount);
+    summary.assumptions = nominal.icp_assumptions(&summary.mount, &summary.prior);
     Ok(summary)
 }
 

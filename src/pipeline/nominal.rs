@@ -8,9 +8,21 @@ use super::PipelineError;
 use crate::assumptions::{Assumptions, Origin};
 use crate::error::InputError;
 use crate::geom::{self, Pose2};
+use crate::icp::Prior;
 use crate::robot::{LaserMount, RobotConfig};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
+
+/// The assumptions of the wheel model: used by a run only when wheel
+/// odometry enters it.
+const WHEEL_KEYS: [&str; 6] = [
+    "r_right",
+    "r_left",
+    "wheel_base",
+    "ticks_per_rev",
+    "left_joint",
+    "right_joint",
+];
 
 /// The nominal robot, the file it came from and the keys that file gave.
 #[derive(Debug, Clone, PartialEq)]
@@ -62,6 +74,41 @@ impl Nominal {
     pub fn assumptions_with(&self, mount: &Mount) -> Assumptions {
         let mut a = self.assumptions();
         mount.state(&mut a);
+        a
+    }
+
+    /// What `odocal icp` used: the laser mounting `mount`, the scanner
+    /// corrections, the stream each pair's initial guess came from
+    /// (`prior`) and, only when that is the wheels, the wheel model it was
+    /// integrated with. Odometry from the recording or no prior at all uses
+    /// no wheel radius or wheel base, so none is stated.
+    pub fn icp_assumptions(&self, mount: &Mount, prior: &Prior) -> Assumptions {
+        let mut a = self.assumptions_with(mount);
+        if !matches!(prior, Prior::Wheels(_)) {
+            a.0.retain(|k, _| !WHEEL_KEYS.contains(&k.as_str()));
+        }
+        let (value, source, note) = match prior {
+            Prior::Wheels(_) => (
+                "wheels",
+                Origin::Recording,
+                "each pair's initial guess and the prior term's centre are the wheel \
+                 odometry, integrated with r_right, r_left and wheel_base as stated here",
+            ),
+            Prior::Odom => (
+                "odometry",
+                Origin::Recording,
+                "no wheel stream: each pair's initial guess and the prior term's centre are \
+                 the recording's own odometry; no wheel radius or wheel base is used",
+            ),
+            Prior::None => (
+                "constant_velocity",
+                Origin::Default,
+                "neither a wheel stream nor odometry: each pair starts from the previous \
+                 matched pair's velocity (the first from rest); set [topics] in a --config \
+                 file if the recording has them under other names",
+            ),
+        };
+        a.set("prior", value, source, Some(note.into()));
         a
     }
 
@@ -202,13 +249,7 @@ impl Mount {
 
     /// Records the mounting in `a` under `laser`.
     pub fn state(&self, a: &mut Assumptions) {
-        let [x, y, yaw] = geom::xyt(&self.pose);
-        a.set(
-            "laser",
-            LaserMount { x, y, yaw },
-            self.origin,
-            self.note.clone(),
-        );
+        a.set("laser", self.laser(), self.origin, self.note.clone());
     }
 
     /// The mounting as the robot file's table (−0 written as 0).
