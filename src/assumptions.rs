@@ -24,6 +24,8 @@ pub enum Origin {
     RobotFile,
     /// Estimated from the data by this run.
     Estimated,
+    /// The configuration file (`--config`).
+    Config,
     /// A built-in default, not stated by the user or the data.
     Default,
 }
@@ -38,6 +40,7 @@ impl Origin {
             Origin::Recording => "the recording's streams",
             Origin::RobotFile => "the robot file",
             Origin::Estimated => "estimated from the data",
+            Origin::Config => "the --config file",
             Origin::Default => "default",
         }
     }

@@ -241,7 +241,8 @@ fn calibrate_states_its_assumptions_and_observability() {
 /// `icp` states the stream its initial guesses came from, and the wheel
 /// model only when that stream is the wheels: the same recording with its
 /// joint states, with only an odometry stream (its ground truth renamed),
-/// and with neither.
+/// and with neither; a stream named in `[icp] prior` that the recording
+/// lacks is refused.
 #[test]
 fn icp_states_its_prior_and_the_wheel_model_only_when_it_used_it() {
     let d = scratch("checks_prior");
@@ -259,7 +260,7 @@ fn icp_states_its_prior_and_the_wheel_model_only_when_it_used_it() {
     let cases = [
         ("wheels", wheels_only, true),
         ("odometry", odom_only, false),
-        ("constant_velocity", rec, false),
+        ("none", rec, false),
     ];
     for (want, rec, wheel_model) in cases {
         let bag = d.join(format!("{want}.mcap"));
@@ -279,6 +280,65 @@ fn icp_states_its_prior_and_the_wheel_model_only_when_it_used_it() {
         }
         assert_eq!(a["laser"]["source"], "tf_static");
     }
+    let cfg = d.join("wheels.toml");
+    std::fs::write(&cfg, "[icp]\nprior = \"wheels\"\n").unwrap();
+    let bag = d.join("odometry.mcap");
+    let err = refused(&odocal(&[
+        "icp",
+        "--input",
+        bag.to_str().unwrap(),
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        d.join("refused.tum").to_str().unwrap(),
+    ]));
+    assert!(
+        err.contains("odometry.mcap") && err.contains("[icp] prior = \"wheels\""),
+        "{err}"
+    );
+}
+
+/// With both a wheel stream and the robot's own odometry, the prior is the
+/// odometry unless a robot file states the wheels' kinematics. Which stream
+/// was used is told by the data, not by the label: the odometry here is the
+/// ground truth stamped 0.1 s late, and the clock check (the offset at which
+/// the prior's turns fit the matched ones) finds those 0.1 s only when the
+/// odometry was the prior.
+#[test]
+fn without_a_robot_file_the_recordings_own_odometry_is_the_prior() {
+    let d = scratch("checks_prior_both");
+    let mut rec = read_recording(&bundled(), &ReadOptions::default()).unwrap();
+    rec.odom = std::mem::take(&mut rec.reference);
+    for p in &mut rec.odom {
+        p.stamp += 0.1;
+    }
+    let bag = d.join("both.mcap");
+    write_mcap(&bag, &rec, &WriteOptions::default()).unwrap();
+    let run = |robot: Option<&str>| {
+        let tum = d.join("both.tum");
+        let mut args = vec![
+            "icp",
+            "--input",
+            bag.to_str().unwrap(),
+            "--out",
+            tum.to_str().unwrap(),
+            "--json",
+        ];
+        args.extend(robot.iter().flat_map(|r| ["--robot", *r]));
+        json(&odocal(&args))
+    };
+    let odom = run(None);
+    assert_eq!(odom["assumptions"]["prior"]["value"], "odometry");
+    assert_eq!(odom["assumptions"]["prior"]["source"], "recording");
+    assert!(odom["assumptions"].get("wheel_base").is_none());
+    let wheels = run(Some("wheelchair"));
+    assert_eq!(wheels["assumptions"]["prior"]["value"], "wheels");
+    assert_eq!(wheels["assumptions"]["wheel_base"]["source"], "robot_file");
+    // Both fits share the scans' own clock; the odometry's is 0.1 s later.
+    let best = |j: &Value| j["prior_time_offset"]["best_s"].as_f64().unwrap();
+    let (o, w) = (best(&odom), best(&wheels));
+    assert!(w.abs() < 0.05, "wheel prior's offset {w} s");
+    assert!((o - w - 0.1).abs() < 0.03, "odometry {o} s, wheels {w} s");
 }
 
 /// A CARMEN log states its mounting in its laser lines (MIT-CSAIL: the laser

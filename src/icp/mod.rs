@@ -67,7 +67,7 @@ mod time_offset;
 
 pub use covariance::MIN_RESIDUAL_STD;
 pub use matcher::{MatchInfo, PriorSource, ScanMatcher};
-pub use params::{IcpParams, IcpParamsError};
+pub use params::{IcpParams, IcpParamsError, PriorChoice};
 pub use preprocess::{Preprocessor, ScanPoints};
 pub use run::{integrate, match_recording, summarise, IcpStats, Tally};
 pub use stream::{PoseWindow, Prior, StreamMatcher};

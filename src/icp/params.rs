@@ -133,6 +133,40 @@ pub struct IcpParams {
     pub keyframe_dist: f64,
     /// … or this much rotation (rad).
     pub keyframe_angle: f64,
+    /// Which stream gives each pair's initial guess and the prior term's
+    /// centre: `auto` (default; see [`PriorChoice::Auto`]), `wheels`,
+    /// `odometry` (the recording's own) or `none`.
+    pub prior: PriorChoice,
+}
+
+/// The stream the scan matcher's prior comes from (`[icp] prior`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PriorChoice {
+    /// The wheels when the recording has a wheel stream, else its own
+    /// odometry, else none. The commands refine it: without a robot file
+    /// stating the wheels' kinematics, a recording's own odometry is
+    /// preferred to wheels integrated with assumed ones.
+    #[default]
+    Auto,
+    /// Wheel odometry integrated with the nominal robot.
+    Wheels,
+    /// The recording's own odometry.
+    Odometry,
+    /// None: each pair starts from the previous matched pair's velocity.
+    None,
+}
+
+impl PriorChoice {
+    /// The word of the config file (`auto`, `wheels`, `odometry`, `none`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Wheels => "wheels",
+            Self::Odometry => "odometry",
+            Self::None => "none",
+        }
+    }
 }
 
 impl Default for IcpParams {
@@ -180,6 +214,7 @@ impl Default for IcpParams {
             keyframes: 5,
             keyframe_dist: 0.3,
             keyframe_angle: 0.2,
+            prior: PriorChoice::Auto,
         }
     }
 }

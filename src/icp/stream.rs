@@ -10,7 +10,7 @@
 use std::collections::VecDeque;
 
 use super::matcher::ScanMatcher;
-use super::params::{IcpParams, IcpParamsError};
+use super::params::{IcpParams, IcpParamsError, PriorChoice};
 use super::time_offset::{offsets, OffsetCheck, TimeOffsetFit, OFFSET_SPAN_S};
 use crate::geom::{self, Pose2};
 use crate::motion::Motion;
@@ -119,16 +119,32 @@ pub enum Prior {
 }
 
 impl Prior {
-    /// The prior a recording with these many wheel and odometry samples
-    /// gets: wheel odometry with `nominal` from two wheel samples on, else the
-    /// recording's own odometry from two poses on.
-    pub fn choose(wheel_samples: usize, odom_poses: usize, nominal: DiffDrive) -> Self {
-        if wheel_samples >= 2 {
-            Self::Wheels(nominal)
-        } else if odom_poses >= 2 {
-            Self::Odom
-        } else {
-            Self::None
+    /// The prior `choice` gives a recording with these many wheel and
+    /// odometry samples: `auto` takes wheel odometry with `nominal` from two
+    /// wheel samples on, else the recording's own odometry from two poses
+    /// on, else none; a named stream must have two samples, else the error
+    /// says what the recording lacks.
+    pub fn choose(
+        choice: PriorChoice,
+        wheel_samples: usize,
+        odom_poses: usize,
+        nominal: DiffDrive,
+    ) -> Result<Self, String> {
+        let lacks = |what: &str, n: usize| {
+            format!(
+                "[icp] prior = \"{}\" needs {what}, and the recording has {n} sample(s) of it \
+                 (`odocal inspect` lists its streams; \"auto\" takes what there is)",
+                choice.as_str()
+            )
+        };
+        match choice {
+            PriorChoice::Auto if wheel_samples >= 2 => Ok(Self::Wheels(nominal)),
+            PriorChoice::Auto if odom_poses >= 2 => Ok(Self::Odom),
+            PriorChoice::Auto | PriorChoice::None => Ok(Self::None),
+            PriorChoice::Wheels if wheel_samples >= 2 => Ok(Self::Wheels(nominal)),
+            PriorChoice::Wheels => Err(lacks("a wheel stream", wheel_samples)),
+            PriorChoice::Odometry if odom_poses >= 2 => Ok(Self::Odom),
+            PriorChoice::Odometry => Err(lacks("an odometry stream", odom_poses)),
         }
     }
 }

@@ -231,15 +231,21 @@ impl Run<'_> {
         source: &mut dyn crate::io::SampleSource,
         obs: &mut dyn RunObserver,
     ) -> Result<(drive::CalibRunSummary, crate::assumptions::Assumptions), PipelineError> {
+        let info = source.info().clone();
+        let icp_params = crate::icp::IcpParams {
+            prior: self.nominal.prior_choice(self.cfg.icp.prior, &info),
+            ..self.cfg.icp.clone()
+        };
         let (icp, done) = drive::run_calibration(
             source,
             self.robot,
-            &self.cfg.icp,
+            &icp_params,
             self.params,
             &self.cfg.measurements,
             obs,
         )?;
         let mut a = self.nominal.assumptions_with(&icp.mount);
+        super::nominal::state_prior(&mut a, &icp.prior, self.cfg.icp.prior, info.wheels);
         state_clock(&mut a, icp.stats.prior_time_offset.as_ref());
         Ok((done, a))
     }

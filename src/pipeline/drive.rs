@@ -87,7 +87,8 @@ impl IcpStage {
             )
             .into());
         }
-        let prior = Prior::choose(info.wheels, info.odom, robot.diff_drive());
+        let prior = Prior::choose(params.prior, info.wheels, info.odom, robot.diff_drive())
+            .map_err(|e| InputError::new(source, e))?;
         let mount = Mount::resolve(info.into(), robot, source)?;
         let matcher = StreamMatcher::new(params, mount.pose, prior)
             .map_err(|e| PipelineError::BadArgument(e.to_string()))?;

@@ -8,7 +8,8 @@ use super::PipelineError;
 use crate::assumptions::{Assumptions, Origin};
 use crate::error::InputError;
 use crate::geom::{self, Pose2};
-use crate::icp::Prior;
+use crate::icp::{Prior, PriorChoice};
+use crate::io::StreamInfo;
 use crate::robot::{LaserMount, RobotConfig};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -77,41 +78,40 @@ impl Nominal {
         a
     }
 
+    /// The scan matcher's prior for a recording with `info`'s streams:
+    /// `[icp] prior` as `given`, except that `auto` without a robot file
+    /// takes the recording's own odometry when it has one beside its wheels:
+    /// the wheels would be integrated with assumed kinematics (the
+    /// wheelchair's), the odometry needs none.
+    pub fn prior_choice(&self, given: PriorChoice, info: &StreamInfo) -> PriorChoice {
+        match given {
+            PriorChoice::Auto if self.file.is_none() && info.wheels >= 2 && info.odom >= 2 => {
+                PriorChoice::Odometry
+            }
+            c => c,
+        }
+    }
+
     /// What `odocal icp` used: the laser mounting `mount`, the scanner
     /// corrections, the stream each pair's initial guess came from
-    /// (`prior`) and, only when that is the wheels, the wheel model it was
-    /// integrated with. Odometry from the recording or no prior at all uses
-    /// no wheel radius or wheel base, so none is stated.
-    pub fn icp_assumptions(&self, mount: &Mount, prior: &Prior) -> Assumptions {
+    /// (`prior`, chosen from `[icp] prior` = `given` for a recording with
+    /// `wheel_samples`) and, only when that is the wheels, the wheel model it
+    /// was integrated with. Odometry from the recording or no prior at all
+    /// uses no wheel radius or wheel base, so none is stated.
+    pub fn icp_assumptions(
+        &self,
+        mount: &Mount,
+        prior: &Prior,
+        given: PriorChoice,
+        wheel_samples: usize,
+    ) -> Assumptions {
         let mut a = self.assumptions_with(mount);
         if !matches!(prior, Prior::Wheels(_)) {
             a.0.retain(|k, _| !WHEEL_KEYS.contains(&k.as_str()));
         }
-        let (value, source, note) = match prior {
-            Prior::Wheels(_) => (
-                "wheels",
-                Origin::Recording,
-                "each pair's initial guess and the prior term's centre are the wheel \
-                 odometry, integrated with r_right, r_left and wheel_base as stated here",
-            ),
-            Prior::Odom => (
-                "odometry",
-                Origin::Recording,
-                "no wheel stream: each pair's initial guess and the prior term's centre are \
-                 the recording's own odometry; no wheel radius or wheel base is used",
-            ),
-            Prior::None => (
-                "constant_velocity",
-                Origin::Default,
-                "neither a wheel stream nor odometry: each pair starts from the previous \
-                 matched pair's velocity (the first from rest); set [topics] in a --config \
-                 file if the recording has them under other names",
-            ),
-        };
-        a.set("prior", value, source, Some(note.into()));
+        state_prior(&mut a, prior, given, wheel_samples);
         a
     }
-
     /// The robot's values and their sources (the laser mounting is added by
     /// [`Mount::state`] once the recording is known).
     pub fn assumptions(&self) -> Assumptions {
@@ -257,6 +257,55 @@ impl Mount {
         let [x, y, yaw] = geom::xyt(&self.pose).map(|v| v + 0.0);
         LaserMount { x, y, yaw }
     }
+}
+
+/// Records the scan matcher's prior in `a` under `prior`: which stream,
+/// why that one, and what it brings in.
+pub fn state_prior(a: &mut Assumptions, prior: &Prior, given: PriorChoice, wheel_samples: usize) {
+    const GUESS: &str = "each pair's initial guess and the prior term's centre";
+    let (value, note) = match prior {
+        Prior::Wheels(_) => (
+            "wheels",
+            format!(
+                "{GUESS} are the wheel odometry, integrated with r_right, r_left and wheel_base \
+                 as stated"
+            ),
+        ),
+        Prior::Odom if wheel_samples >= 2 && given == PriorChoice::Auto => (
+            "odometry",
+            format!(
+                "{GUESS} are the recording's own odometry, preferred to its wheel stream: no \
+                 robot file states the wheels' kinematics (give --robot ROBOT.toml, or set \
+                 [icp] prior = \"wheels\" to integrate them with the wheelchair's)"
+            ),
+        ),
+        Prior::Odom => (
+            "odometry",
+            format!(
+                "{GUESS} are the recording's own odometry; no wheel radius or wheel base is used"
+            ),
+        ),
+        Prior::None => {
+            let why = if given == PriorChoice::Auto {
+                "neither a wheel stream nor odometry ([topics] in a --config file names them): "
+            } else {
+                ""
+            };
+            (
+                "none",
+                format!(
+                    "{why}each pair starts from the previous matched pair's velocity (the first \
+                     from rest), and no prior term holds the directions the scans leave loose"
+                ),
+            )
+        }
+    };
+    let source = match (given, prior) {
+        (PriorChoice::Auto, Prior::None) => Origin::Default,
+        (PriorChoice::Auto, _) => Origin::Recording,
+        _ => Origin::Config,
+    };
+    a.set("prior", value, source, Some(note));
 }
 
 /// The report's "Assumptions" section: every nominal value, its source and
