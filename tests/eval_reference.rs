@@ -271,6 +271,11 @@ fn lego_demo_report_has_no_rotation_and_no_dead_link() {
     );
     let s: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    // The demo states what it assumed, as `calibrate` does.
+    let a = &s["assumptions"];
+    assert_eq!(a["r_right"]["source"], "robot_file", "{a}");
+    assert_eq!(a["prior"]["value"], "wheels", "{a}");
+    assert!(report.contains("## Assumptions") && report.contains("the robot file"));
     let raw = &s["raw_odometry_eval"];
     assert!(raw["rmse_theta"].is_null() && raw["ape_rot_deg"].is_null());
     assert_eq!(raw["alignment"]["kind"], "origin-heading");
@@ -302,14 +307,15 @@ fn check_report(report: &str, dir: &Path) {
 #[test]
 fn demo_report_without_reference_has_no_empty_table_or_dead_link() {
     use odocal::pipeline::demo::{bundled, run_on, DemoInput};
-    use odocal::pipeline::{read_options, Config};
-    use odocal::robot::RobotConfig;
+    use odocal::pipeline::{read_options, Config, Nominal};
     let dir = support::scratch("demo_without_reference");
-    let (cfg, robot) = (Config::default(), RobotConfig::default());
+    let cfg = Config::default();
+    let nominal = Nominal::load(None).unwrap();
+    let robot = &nominal.robot;
     let mut rec = odocal::io::read_mcap_bytes(
         bundled::RECORDING,
         bundled::RECORDING_NAME,
-        &read_options(&cfg, &robot),
+        &read_options(&cfg, robot),
     )
     .unwrap();
     // The first 20 s, without the reference.
@@ -322,7 +328,7 @@ fn demo_report_without_reference_has_no_empty_table_or_dead_link() {
         recording: &rec,
         name: "no-reference",
         truth: None,
-        robot: &robot,
+        nominal: &nominal,
         config: &cfg,
     };
     let s = run_on(&input, &dir, &mut odocal::viz::NullLogger, &mut |_, _| {}).unwrap();

@@ -207,6 +207,7 @@ fn batch(s: &CalibSummary, b: &odocal::calib::batch::BatchEstimate, out: &Path) 
 
 /// The demo's summary, and where its report and recording are.
 pub fn demo(summary: &DemoSummary, out: &Path, to_file: bool) {
+    assumptions(&summary.assumptions);
     out!(
         "odocal demo on {} ({} scans, {:.0} s) in {:.1} s",
         summary.input,

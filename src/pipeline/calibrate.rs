@@ -283,7 +283,10 @@ impl Run<'_> {
 /// the same stamps (`time_offset` = 0, default), with what the scan
 /// matcher's clock check found; `--init batch` replaces it with its
 /// estimate.
-fn state_clock(a: &mut crate::assumptions::Assumptions, fit: Option<&crate::icp::TimeOffsetFit>) {
+pub(super) fn state_clock(
+    a: &mut crate::assumptions::Assumptions,
+    fit: Option<&crate::icp::TimeOffsetFit>,
+) {
     let note = match fit {
         None => "wheel and laser stamps of one instant taken as equal (too few matched pairs \
                  to check)"

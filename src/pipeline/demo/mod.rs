@@ -6,11 +6,12 @@ pub mod bundled;
 mod figures;
 mod report;
 
+use crate::assumptions::Assumptions;
 use crate::calib::{CalibrationRun, Method};
 use crate::error::InputError;
 use crate::eval::{self, Alignment, EvalOptions, Trajectory3, TrajectoryMetrics};
 use crate::geom::Pose2;
-use crate::io::RecordingSource;
+use crate::io::{RecordingSource, SampleSource};
 use crate::pipeline::calibrate::{self, CalibInput};
 use crate::pipeline::drive;
 use crate::pipeline::icp::IcpOutput;
@@ -18,9 +19,9 @@ use crate::pipeline::observe::Observers;
 use crate::pipeline::outputs::{check_outputs, CalibFiles, Collect, IcpFiles};
 use crate::pipeline::recorder::{RecorderOptions, StreamRecorder};
 use crate::pipeline::viewer::{open_logger, Viewer};
-use crate::pipeline::{Common, Config, PipelineError};
+use crate::pipeline::{Common, Config, Nominal, PipelineError};
 use crate::recording::Recording;
-use crate::robot::{wheel_odometry, RobotConfig};
+use crate::robot::wheel_odometry;
 use crate::sim::Truth;
 use crate::traj::Trajectory;
 use crate::viz::{Logger, NullLogger};
@@ -85,6 +86,9 @@ pub struct DemoSummary {
     /// detector (or the laser-mounting watch), named as `calibrate` names it.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub changes: Vec<crate::diagnose::onset::NamedChange>,
+    /// Where each nominal value came from, the laser mounting and the scan
+    /// matcher's prior among them (as `calibrate` states them).
+    pub assumptions: crate::assumptions::Assumptions,
     /// Why a trajectory has no figures against the reference (no reference
     /// in the recording, or an evaluation that could not be made).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -101,8 +105,8 @@ pub struct DemoInput<'a> {
     pub name: &'a str,
     /// The simulator's truth, when the recording is simulated.
     pub truth: Option<&'a Truth>,
-    /// Nominal robot.
-    pub robot: &'a RobotConfig,
+    /// Nominal robot, with where each value came from.
+    pub nominal: &'a Nominal,
     /// Stage settings.
     pub config: &'a Config,
 }
@@ -237,7 +241,8 @@ pub fn run(
     job: &DemoJob,
     progress: &mut dyn FnMut(&str, f64),
 ) -> Result<DemoSummary, PipelineError> {
-    let (cfg, robot) = job.common.load()?;
+    let (cfg, nominal) = job.common.load_nominal()?;
+    let robot = &nominal.robot;
     let inputs: Vec<&Path> = job
         .input
         .iter()
@@ -258,11 +263,11 @@ pub fn run(
     };
     let (rec, name) = match &job.input {
         Some(p) => (
-            crate::pipeline::read_recording(p, &cfg, &robot)?,
+            crate::pipeline::read_recording(p, &cfg, robot)?,
             p.display().to_string(),
         ),
         None => {
-            let read = crate::pipeline::read_options(&cfg, &robot);
+            let read = crate::pipeline::read_options(&cfg, robot);
             let rec =
                 crate::io::read_mcap_bytes(bundled::RECORDING, bundled::RECORDING_NAME, &read)?;
             (rec, bundled::RECORDING_NAME.to_string())
@@ -281,7 +286,7 @@ pub fn run(
         recording: &rec,
         name: &name,
         truth: truth.as_ref(),
-        robot: &robot,
+        nominal: &nominal,
         config: &cfg,
     };
     run_on(&demo, &job.out, logger.as_mut(), progress)
@@ -331,7 +336,11 @@ pub fn run_on(
     if let Some(t) = input.truth {
         log_walls(&t.walls, logger)?;
     }
-    let (icp_out, runs) = calibrate_all(input, out, logger, progress)?;
+    let Calibrated {
+        icp: icp_out,
+        runs,
+        assumptions,
+    } = calibrate_all(input, out, logger, progress)?;
     progress("report", 1.0);
     let reference = DemoReference::of(rec);
     let mut notes = Vec::new();
@@ -342,7 +351,11 @@ pub fn run_on(
         ));
     }
     let r = reference.as_ref();
-    let raw = wheel_odometry(&input.robot.diff_drive(), &rec.wheels, Pose2::identity());
+    let raw = wheel_odometry(
+        &input.nominal.robot.diff_drive(),
+        &rec.wheels,
+        Pose2::identity(),
+    );
     let raw_path = out.join("raw_odometry.tum");
     crate::io::tum::write_tum_2d(&raw_path, &raw)
         .map_err(|e| PipelineError::write(&raw_path, e))?;
@@ -355,6 +368,7 @@ pub fn run_on(
         raw_odometry_eval: origin_eval("raw odometry", &raw, r, &mut notes),
         methods: method_results(input, &runs, r, t_start, &mut notes),
         changes: runs[0].1.summary.changes.clone(),
+        assumptions,
         eval_notes: Vec::new(),
         wall_s: 0.0,
     };
@@ -378,17 +392,25 @@ fn log_walls(walls: &[[f64; 4]], logger: &mut dyn Logger) -> Result<(), Pipeline
     logger.map(&segs).map_err(viz_err)
 }
 
+/// What [`calibrate_all`] gives: ICP's output, each method's run, and the
+/// run's assumptions.
+struct Calibrated {
+    icp: IcpOutput,
+    runs: Vec<(Method, CalibrationRun)>,
+    assumptions: Assumptions,
+}
+
 /// ICP and the proposed filter in one pass through the driver, recorded for
 /// the viewer (scans, ICP, particle clouds, trajectories), then every other
 /// calibrator on the same observations; each method's files in `OUT/METHOD/`,
-/// ICP's in `OUT/icp.tum` and `OUT/motions.csv`.
+/// ICP's in `OUT/icp.tum` and `OUT/motions.csv`. Also the run's assumptions.
 fn calibrate_all(
     input: &DemoInput<'_>,
     out: &Path,
     logger: &mut dyn Logger,
     progress: &mut dyn FnMut(&str, f64),
-) -> Result<(IcpOutput, Vec<(Method, CalibrationRun)>), PipelineError> {
-    let (rec, robot, cfg) = (input.recording, input.robot, input.config);
+) -> Result<Calibrated, PipelineError> {
+    let (rec, robot, cfg) = (input.recording, &input.nominal.robot, input.config);
     progress("icp", 0.0);
     let params_for = |m: Method| {
         let mut p = cfg.calib.clone();
@@ -412,10 +434,15 @@ fn calibrate_all(
     if first_params.change.naming.enabled {
         files = files.naming_changes(robot, &first_params.change.naming);
     }
+    let mut source = RecordingSource::new(rec);
+    let icp_params = crate::icp::IcpParams {
+        prior: input.nominal.prior_choice(cfg.icp.prior, source.info()),
+        ..cfg.icp.clone()
+    };
     let (icp_done, mut done) = drive::run_calibration(
-        &mut RecordingSource::new(rec),
+        &mut source,
         robot,
-        &cfg.icp,
+        &icp_params,
         &first_params,
         &cfg.measurements,
         &mut Observers(vec![
@@ -430,6 +457,15 @@ fn calibrate_all(
     files.commit(&done.summary)?;
     recorder.changes(&super::changes::entries(&done.summary.changes));
     recorder.finish().map_err(viz_err)?;
+    let mut assumptions = input.nominal.assumptions_with(&icp_done.mount);
+    let wheel_samples = rec.wheels.len();
+    crate::pipeline::nominal::state_prior(
+        &mut assumptions,
+        &icp_done.prior,
+        cfg.icp.prior,
+        wheel_samples,
+    );
+    calibrate::state_clock(&mut assumptions, icp_done.stats.prior_time_offset.as_ref());
     let icp_out = collect.icp(icp_done.stats);
     let mut runs = vec![(first, collect.calibration(done.summary, done.weight_resets))];
     let cal_input = CalibInput {
@@ -450,7 +486,11 @@ fn calibrate_all(
         files.commit(&run.summary)?;
         runs.push((*m, run));
     }
-    Ok((icp_out, runs))
+    Ok(Calibrated {
+        icp: icp_out,
+        runs,
+        assumptions,
+    })
 }
 
 /// Each calibrator's figures: final parameters, errors and convergence

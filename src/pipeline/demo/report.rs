@@ -19,6 +19,7 @@ pub(super) fn report(
     let mut r = Report::new();
     r.heading(1, "odocal demo");
     settings(input, s, &mut r);
+    crate::pipeline::nominal::report_assumptions(&mut r, &s.assumptions)?;
     calibration(s, &mut r)?;
     changes(s, &mut r);
     odometry(s, &mut r)?;
@@ -36,11 +37,11 @@ fn settings(input: &DemoInput<'_>, s: &DemoSummary, r: &mut Report) {
             "nominal robot".into(),
             format!(
                 "{}: R_R {} m, R_L {} m, D {} m, {} ticks/rev",
-                input.robot.name,
-                input.robot.r_right,
-                input.robot.r_left,
-                input.robot.wheel_base,
-                input.robot.ticks_per_rev
+                input.nominal.robot.name,
+                input.nominal.robot.r_right,
+                input.nominal.robot.r_left,
+                input.nominal.robot.wheel_base,
+                input.nominal.robot.ticks_per_rev
             ),
         ),
         (
