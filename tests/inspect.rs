@@ -359,3 +359,46 @@ fn tick_counters_are_proposed_with_their_type_and_what_the_bag_cannot_tell() {
     let s: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(s["wheel_source"]["kind"], "ticks", "{s}");
 }
+
+/// `inspect` says which stream `icp` and `calibrate` will start each scan
+/// pair from, as those runs then state it: with a wheel stream and the
+/// robot's own odometry, the odometry unless a robot file states the
+/// wheels' kinematics; the real CARMEN log, its odometry.
+#[test]
+fn inspect_names_the_scan_matchers_prior_as_the_runs_take_it() {
+    use odocal::io::{read_recording, write_mcap, ReadOptions, WriteOptions};
+    let d = scratch("inspect_prior");
+    let mut rec = read_recording(Path::new(BUNDLED), &ReadOptions::default()).unwrap();
+    let end = rec.scans[0].stamp + 3.0;
+    rec.scans.retain(|s| s.stamp <= end);
+    rec.wheels.retain(|s| s.stamp <= end);
+    rec.reference.retain(|s| s.stamp <= end);
+    rec.odom = std::mem::take(&mut rec.reference);
+    let bag = d.join("both.mcap");
+    write_mcap(&bag, &rec, &WriteOptions::default()).unwrap();
+    for (robot, want) in [(None, "odometry"), (Some("wheelchair"), "wheels")] {
+        let extra: Vec<&str> = robot.iter().flat_map(|r| ["--robot", *r]).collect();
+        let v = inspect(&bag, &extra);
+        assert_eq!(v["prior"]["stream"], want, "{}", v["prior"]);
+        let mut args = vec!["icp", "--input", bag.to_str().unwrap(), "--json", "--out"];
+        let tum = d.join("both.tum");
+        args.push(tum.to_str().unwrap());
+        args.extend(&extra);
+        let out = odocal(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let run: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(run["assumptions"]["prior"]["value"], want);
+    }
+    assert_eq!(
+        inspect(Path::new(BUNDLED), &[])["prior"]["stream"],
+        "wheels"
+    );
+    if let Some(data) = shared_data("inspect_names_the_scan_matchers_prior_as_the_runs_take_it") {
+        let clf = data.join("slam-benchmark/mit-csail.clf");
+        assert_eq!(inspect(&clf, &[])["prior"]["stream"], "odometry");
+    }
+}

@@ -60,6 +60,13 @@ pub fn inspection(i: &Inspection) {
             out!("  {:<10}   set {s}", "");
         }
     }
+    let p = &i.prior;
+    out!(
+        "  {:<10} {}: each scan pair's initial guess in icp and calibrate; {}",
+        "prior",
+        p.stream.unwrap_or("—"),
+        p.why
+    );
     out!("");
     out!("what each command misses:");
     for (cmd, m) in &i.missing {

@@ -10,7 +10,8 @@ mod mount;
 mod propose;
 mod uses;
 
-use super::{Common, PipelineError};
+use super::{Common, Nominal, PipelineError};
+use crate::icp::{Prior, PriorChoice};
 use crate::io::survey::{Survey, TfEdge, TopicSurvey};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -48,6 +49,9 @@ pub struct Inspection {
     /// Per stream (`scans`, `wheels`, `gyro`, `odom`, `reference`): the
     /// topic odocal would read, why, and the key to set.
     pub uses: BTreeMap<&'static str, Use>,
+    /// The scan matcher's prior with the settings given (`[icp] prior`, the
+    /// robot file): `wheels`, `odometry` or `none`, and why.
+    pub prior: PriorFinding,
     /// Per command: what it would miss (empty: it runs).
     pub missing: BTreeMap<&'static str, Vec<String>>,
     /// The proposed robot file (TOML with comments).
@@ -81,6 +85,7 @@ pub fn run(job: &InspectJob) -> Result<Inspection, PipelineError> {
     let uses = choose::uses(&survey, &read, &nominal);
     let laser = mount::find(&survey, &uses, &nominal, &read.topics);
     let missing = choose::missing(&survey, &uses, &laser, &nominal);
+    let prior = prior(&uses, &nominal, cfg.icp.prior);
     let robot_toml = propose::robot_toml(&survey, &uses, &laser, &nominal, &job.input);
     let config_toml = propose::config_toml(&uses);
     let wrote_robot = match &job.write_robot {
@@ -98,6 +103,7 @@ pub fn run(job: &InspectJob) -> Result<Inspection, PipelineError> {
         span_s: span(&survey),
         uses,
         laser,
+        prior,
         missing,
         robot_toml,
         config_toml,
@@ -105,6 +111,65 @@ pub fn run(job: &InspectJob) -> Result<Inspection, PipelineError> {
         topics: survey.topics,
         transforms: survey.transforms,
     })
+}
+
+/// Which stream `icp` and `calibrate` would take as each pair's initial
+/// guess (see [`crate::icp::PriorChoice`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct PriorFinding {
+    /// `wheels`, `odometry` or `none`; absent when the setting names a
+    /// stream the recording lacks (the run would stop).
+    pub stream: Option<&'static str>,
+    /// Why that one, or what is missing.
+    pub why: String,
+}
+
+/// The prior the settings give for the streams `uses` found readable as
+/// configured.
+fn prior(
+    uses: &BTreeMap<&'static str, Use>,
+    nominal: &Nominal,
+    given: PriorChoice,
+) -> PriorFinding {
+    let read = |k: &str| {
+        uses.get(k)
+            .filter(|u| u.topic.is_some() && u.configured)
+            .map_or(0, |u| u.messages)
+    };
+    let info = crate::io::StreamInfo {
+        wheels: read("wheels"),
+        odom: read("odom"),
+        ..Default::default()
+    };
+    if read("scans") == 0 {
+        return PriorFinding {
+            stream: None,
+            why: "no laser scans read: no scan matching".into(),
+        };
+    }
+    let choice = nominal.prior_choice(given, &info);
+    let (stream, why) =
+        match Prior::choose(choice, info.wheels, info.odom, nominal.robot.diff_drive()) {
+            Err(e) => (None, e),
+            Ok(Prior::Wheels(_)) => (
+                Some("wheels"),
+                "wheel odometry, integrated with the nominal r_right, r_left and wheel_base".into(),
+            ),
+            Ok(Prior::Odom) if info.wheels >= 2 && given == PriorChoice::Auto => (
+                Some("odometry"),
+                "the recording's own odometry, preferred to its wheels as no robot file states \
+             their kinematics (--robot ROBOT.toml, or [icp] prior = \"wheels\", takes the wheels)"
+                    .into(),
+            ),
+            Ok(Prior::Odom) => (Some("odometry"), "the recording's own odometry".into()),
+            Ok(Prior::None) => (
+                Some("none"),
+                "each pair starts from the previous one's velocity: no prior term holds what the \
+             scans leave loose"
+                    .into(),
+            ),
+        };
+    PriorFinding { stream, why }
 }
 
 fn span(s: &Survey) -> Option<[f64; 3]> {
