@@ -339,6 +339,31 @@ fn without_a_robot_file_the_recordings_own_odometry_is_the_prior() {
     let (o, w) = (best(&odom), best(&wheels));
     assert!(w.abs() < 0.05, "wheel prior's offset {w} s");
     assert!((o - w - 0.1).abs() < 0.03, "odometry {o} s, wheels {w} s");
+    // calibrate takes the same prior, and then does not pass the
+    // odometry's clock off as the wheels'.
+    let cal = |robot: Option<&str>| {
+        let out = d.join(format!("cal-{}", robot.unwrap_or("none")));
+        let mut args = vec![
+            "calibrate",
+            "--input",
+            bag.to_str().unwrap(),
+            "--method",
+            "dkf",
+            "--out",
+            out.to_str().unwrap(),
+            "--json",
+        ];
+        args.extend(robot.iter().flat_map(|r| ["--robot", *r]));
+        json(&odocal(&args))["assumptions"].clone()
+    };
+    let a = cal(None);
+    assert_eq!(a["prior"]["value"], "odometry", "{a}");
+    let note = a["time_offset"]["note"].as_str().unwrap();
+    assert!(note.contains("not checked"), "{note}");
+    let a = cal(Some("wheelchair"));
+    assert_eq!(a["prior"]["value"], "wheels", "{a}");
+    let note = a["time_offset"]["note"].as_str().unwrap();
+    assert!(note.contains("agree"), "{note}");
 }
 
 /// A CARMEN log states its mounting in its laser lines (MIT-CSAIL: the laser

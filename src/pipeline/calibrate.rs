@@ -246,7 +246,7 @@ impl Run<'_> {
         )?;
         let mut a = self.nominal.assumptions_with(&icp.mount);
         super::nominal::state_prior(&mut a, &icp.prior, self.cfg.icp.prior, info.wheels);
-        state_clock(&mut a, icp.stats.prior_time_offset.as_ref());
+        state_clock(&mut a, icp.stats.prior_time_offset.as_ref(), &icp.prior);
         Ok((done, a))
     }
 
@@ -281,33 +281,39 @@ impl Run<'_> {
 
 /// States that the filters pair the scans' motions with the wheel rates of
 /// the same stamps (`time_offset` = 0, default), with what the scan
-/// matcher's clock check found; `--init batch` replaces it with its
-/// estimate.
+/// matcher's clock check found when it checked the wheels (their odometry
+/// was its prior); `--init batch` replaces it with its estimate.
 pub(super) fn state_clock(
     a: &mut crate::assumptions::Assumptions,
     fit: Option<&crate::icp::TimeOffsetFit>,
+    prior: &crate::icp::Prior,
 ) {
-    let note = match fit {
-        None => "wheel and laser stamps of one instant taken as equal (too few matched pairs \
-                 to check)"
+    let fit = fit.filter(|_| matches!(prior, crate::icp::Prior::Wheels(_)));
+    let note = match (fit, prior) {
+        (None, crate::icp::Prior::Wheels(_)) => "wheel and laser stamps of one instant taken as \
+                 equal (too few matched pairs to check)"
+            .to_string(),
+        (None, _) => "wheel and laser stamps of one instant taken as equal; not checked: the \
+                 scan matcher's prior, whose clock the check compares with the scans', is not \
+                 the wheels (--init batch estimates the offset)"
             .to_string(),
         // The check compares its best with the prior's offset, which is then
         // not the filters' 0: say both rather than judge against the wrong one.
-        Some(f) if f.used_s != 0.0 => format!(
+        (Some(f), _) if f.used_s != 0.0 => format!(
             "wheel and laser stamps of one instant taken as equal by the filters; the scan \
              matcher's prior was read at [icp] time_offset = {:+.3} s, and the odometry's turns \
              fit the scans' best at {:+.3} s; --init batch estimates the offset and moves the \
              wheel stamps by it",
             f.used_s, f.best_s
         ),
-        Some(f) if f.contradicts_used() => format!(
+        (Some(f), _) if f.contradicts_used() => format!(
             "wheel and laser stamps of one instant taken as equal, but the odometry's turns fit \
              the scans' best at {:+.3} s (heading increments {:.4} rad RMS per pair there, {:.4} \
              at 0): the filters compare the scans' speeds with wheel rates of another instant; \
              --init batch estimates the offset and moves the wheel stamps by it",
             f.best_s, f.rms_best_rad, f.rms_used_rad
         ),
-        Some(f) => format!(
+        (Some(f), _) => format!(
             "wheel and laser stamps of one instant taken as equal; the odometry's turns agree \
              (best fit at {:+.3} s)",
             f.best_s

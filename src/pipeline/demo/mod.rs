@@ -465,7 +465,8 @@ fn calibrate_all(
         cfg.icp.prior,
         wheel_samples,
     );
-    calibrate::state_clock(&mut assumptions, icp_done.stats.prior_time_offset.as_ref());
+    let fit = icp_done.stats.prior_time_offset.as_ref();
+    calibrate::state_clock(&mut assumptions, fit, &icp_done.prior);
     let icp_out = collect.icp(icp_done.stats);
     let mut runs = vec![(first, collect.calibration(done.summary, done.weight_resets))];
     let cal_input = CalibInput {
