@@ -418,6 +418,7 @@ fn diagnose_states_its_assumptions_in_json_and_report() {
     ]));
     assert_eq!(j["assumptions"]["laser"]["source"], "tf_static");
     assert_eq!(j["assumptions"]["wheel_base"]["source"], "default");
+    assert_eq!(j["assumptions"]["prior"]["value"], "wheels");
     let md = std::fs::read_to_string(report.join("report.md")).unwrap();
     assert!(md.contains("## Assumptions") && md.contains("the recording's /tf_static"));
 }

@@ -71,8 +71,12 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
         let read = super::read_options(&cfg, robot);
         let rec = crate::io::read_recording(&job.measured, &read)?;
         icp::mount(&rec, robot).and_then(|mount| {
+            let (wheels, odom) = (rec.wheels.len(), rec.odom.len());
+            let prior = crate::icp::Prior::choose(cfg.icp.prior, wheels, odom, robot.diff_drive())
+                .map_err(|e| crate::error::InputError::new(&rec.source, e))?;
             let mut d = run_recording(&rec, robot, &cfg.icp, &cfg.diagnose)?;
             d.assumptions = nominal.assumptions_with(&mount);
+            super::nominal::state_prior(&mut d.assumptions, &prior, cfg.icp.prior, wheels);
             d.wheel_source = (rec.wheels.len() >= 2).then(|| {
                 super::wheels::describe(&read, &nominal, rec.wheels.len(), rec.wheel_values)
             });
