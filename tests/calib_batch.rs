@@ -103,6 +103,7 @@ fn batch_recovers_radii_mounting_and_latency_of_a_simulated_chair() {
     assert!(j["laser"]["yaw"]["std"].as_f64().unwrap() < 0.005);
     assert!(j["time_offset"]["std"].as_f64().unwrap() < 0.004);
     assert_eq!(j["assumptions"]["laser"]["source"], "estimated");
+    assert_eq!(j["assumptions"]["prior"]["value"], "wheels");
     let names = j["correlation"]["names"].as_array().unwrap();
     assert_eq!(names.len(), 7);
     assert_eq!(j["correlation"]["matrix"].as_array().unwrap().len(), 7);

@@ -17,7 +17,7 @@ use crate::error::InputError;
 use crate::geom::Pose2;
 use crate::io::censi::CensiTuple;
 use crate::motion::Motion;
-use crate::recording::WheelSource;
+use crate::recording::{Recording, WheelSource};
 use crate::robot::RobotConfig;
 use crate::robot::{DiffDrive, LaserMount};
 use std::path::Path;
@@ -61,14 +61,18 @@ pub fn run(
     let robot = &nominal.robot;
     let mut params = cfg.calib.clone();
     job.choice.apply(&mut params);
-    let (problem, wheel_source) = if crate::io::sniff(path)? == crate::io::Format::CensiTuples {
-        (tuples_problem(&crate::io::censi::read(path)?), None)
+    let (problem, wheel_source, rec) = if crate::io::sniff(path)? == crate::io::Format::CensiTuples
+    {
+        (tuples_problem(&crate::io::censi::read(path)?), None, None)
     } else {
-        let (_, problem, wheels) = recording_problem(path, &cfg, &nominal, &params.batch)?;
-        (problem, Some(wheels))
+        let (rec, problem, wheels) = recording_problem(path, &cfg, &nominal, &params.batch)?;
+        (problem, Some(wheels), Some(rec))
     };
     let est = solve(path, &problem, robot, &params, wheel_source.as_ref())?;
     let mut assumptions = nominal.assumptions();
+    if let Some(rec) = &rec {
+        state_prior(&mut assumptions, &cfg, &nominal, rec);
+    }
     state_laser(&mut assumptions, &est, robot.laser);
     let mut summary = summary(
         est,
@@ -167,6 +171,31 @@ fn write_summary(dir: &Path, s: &impl serde::Serialize) -> Result<(), PipelineEr
 /// `s = M⁻¹ ⊕ m ⊕ M`, composed into intervals, and the wheel angles as the
 /// track the time offset shifts; with the recording and the wheel source it
 /// was read from.
+/// The scan matcher's prior for the batch's motions: `[icp] prior` as
+/// `calibrate` takes it (see [`super::Nominal::prior_choice`]).
+fn prior_choice(
+    cfg: &Config,
+    nominal: &super::Nominal,
+    rec: &crate::recording::Recording,
+) -> crate::icp::PriorChoice {
+    let info = crate::io::StreamInfo {
+        wheels: rec.wheels.len(),
+        odom: rec.odom.len(),
+        ..Default::default()
+    };
+    nominal.prior_choice(cfg.icp.prior, &info)
+}
+
+/// States in `a` the prior the batch's scan matching took for `rec`.
+fn state_prior(a: &mut Assumptions, cfg: &Config, nominal: &super::Nominal, rec: &Recording) {
+    let choice = prior_choice(cfg, nominal, rec);
+    let (w, o) = (rec.wheels.len(), rec.odom.len());
+    // The matching ran, so the choice was possible.
+    if let Ok(prior) = crate::icp::Prior::choose(choice, w, o, nominal.robot.diff_drive()) {
+        super::nominal::state_prior(a, &prior, cfg.icp.prior, w);
+    }
+}
+
 pub(super) fn recording_problem(
     path: &Path,
     cfg: &Config,
@@ -195,11 +224,11 @@ pub(super) fn recording_problem(
         },
     };
     let mount = super::icp::mount(&rec, &robot_icp)?.pose;
-    let icp = super::icp::match_recording(
-        &rec,
-        &robot_icp,
-        &super::diagnose::icp_for_diagnosis(&cfg.icp),
-    )?;
+    let icp_params = crate::icp::IcpParams {
+        prior: prior_choice(cfg, nominal, &rec),
+        ..super::diagnose::icp_for_diagnosis(&cfg.icp)
+    };
+    let icp = super::icp::match_recording(&rec, &robot_icp, &icp_params)?;
     let motions: Vec<LaserMotion> = icp.motions.iter().map(|m| to_laser(m, &mount)).collect();
     let intervals = batch::aggregate(&motions, p.interval_s, p.interval_rad, 1e-3);
     let track = WheelTrack {
