@@ -165,30 +165,19 @@ fn write_summary(dir: &Path, s: &impl serde::Serialize) -> Result<(), PipelineEr
         .map_err(|e| PipelineError::write(&js, e))
 }
 
-/// The batch problem of a recording: ICP scan to scan with the mounting the
-/// recording or robot file states (else the identity, so the motions are
-/// the laser's own), each motion moved into the laser frame,
-/// `s = M⁻¹ ⊕ m ⊕ M`, composed into intervals, and the wheel angles as the
-/// track the time offset shifts; with the recording and the wheel source it
-/// was read from.
-/// The scan matcher's prior for the batch's motions: `[icp] prior` as
-/// `calibrate` takes it (see [`super::Nominal::prior_choice`]).
-fn prior_choice(
-    cfg: &Config,
-    nominal: &super::Nominal,
-    rec: &crate::recording::Recording,
-) -> crate::icp::PriorChoice {
-    let info = crate::io::StreamInfo {
+/// How many wheel samples and odometry poses `rec` holds, as a stream
+/// would announce them.
+fn streams(rec: &Recording) -> crate::io::StreamInfo {
+    crate::io::StreamInfo {
         wheels: rec.wheels.len(),
         odom: rec.odom.len(),
         ..Default::default()
-    };
-    nominal.prior_choice(cfg.icp.prior, &info)
+    }
 }
 
 /// States in `a` the prior the batch's scan matching took for `rec`.
 fn state_prior(a: &mut Assumptions, cfg: &Config, nominal: &super::Nominal, rec: &Recording) {
-    let choice = prior_choice(cfg, nominal, rec);
+    let choice = nominal.prior_choice(cfg.icp.prior, &streams(rec));
     let (w, o) = (rec.wheels.len(), rec.odom.len());
     // The matching ran, so the choice was possible.
     if let Ok(prior) = crate::icp::Prior::choose(choice, w, o, nominal.robot.diff_drive()) {
@@ -196,6 +185,12 @@ fn state_prior(a: &mut Assumptions, cfg: &Config, nominal: &super::Nominal, rec:
     }
 }
 
+/// The batch problem of a recording: ICP scan to scan with the mounting the
+/// recording or robot file states (else the identity, so the motions are
+/// the laser's own), each motion moved into the laser frame,
+/// `s = M⁻¹ ⊕ m ⊕ M`, composed into intervals, and the wheel angles as the
+/// track the time offset shifts; with the recording and the wheel source it
+/// was read from.
 pub(super) fn recording_problem(
     path: &Path,
     cfg: &Config,
@@ -224,10 +219,8 @@ pub(super) fn recording_problem(
         },
     };
     let mount = super::icp::mount(&rec, &robot_icp)?.pose;
-    let icp_params = crate::icp::IcpParams {
-        prior: prior_choice(cfg, nominal, &rec),
-        ..super::diagnose::icp_for_diagnosis(&cfg.icp)
-    };
+    let icp_params = super::diagnose::icp_for_diagnosis(&cfg.icp);
+    let icp_params = nominal.icp_params(&icp_params, &streams(&rec));
     let icp = super::icp::match_recording(&rec, &robot_icp, &icp_params)?;
     let motions: Vec<LaserMotion> = icp.motions.iter().map(|m| to_laser(m, &mount)).collect();
     let intervals = batch::aggregate(&motions, p.interval_s, p.interval_rad, 1e-3);

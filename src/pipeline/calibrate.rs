@@ -232,21 +232,15 @@ impl Run<'_> {
         obs: &mut dyn RunObserver,
     ) -> Result<(drive::CalibRunSummary, crate::assumptions::Assumptions), PipelineError> {
         let info = source.info().clone();
-        let icp_params = crate::icp::IcpParams {
-            prior: self.nominal.prior_choice(self.cfg.icp.prior, &info),
-            ..self.cfg.icp.clone()
-        };
         let (icp, done) = drive::run_calibration(
             source,
             self.robot,
-            &icp_params,
+            &self.nominal.icp_params(&self.cfg.icp, &info),
             self.params,
             &self.cfg.measurements,
             obs,
         )?;
-        let mut a = self.nominal.assumptions_with(&icp.mount);
-        super::nominal::state_prior(&mut a, &icp.prior, self.cfg.icp.prior, info.wheels);
-        state_clock(&mut a, icp.stats.prior_time_offset.as_ref(), &icp.prior);
+        let a = calibration_assumptions(self.nominal, &icp, self.cfg.icp.prior, info.wheels);
         Ok((done, a))
     }
 
@@ -279,11 +273,27 @@ impl Run<'_> {
     }
 }
 
+/// What a calibration over a recording assumed: the nominal robot, the
+/// laser mounting and prior its scan matching took (`icp`; the prior from
+/// `[icp] prior` = `given` for a recording with `wheel_samples`), and the
+/// wheels' clock.
+pub(super) fn calibration_assumptions(
+    nominal: &super::Nominal,
+    icp: &drive::IcpRunSummary,
+    given: crate::icp::PriorChoice,
+    wheel_samples: usize,
+) -> crate::assumptions::Assumptions {
+    let mut a = nominal.assumptions_with(&icp.mount);
+    super::nominal::state_prior(&mut a, &icp.prior, given, wheel_samples);
+    state_clock(&mut a, icp.stats.prior_time_offset.as_ref(), &icp.prior);
+    a
+}
+
 /// States that the filters pair the scans' motions with the wheel rates of
 /// the same stamps (`time_offset` = 0, default), with what the scan
 /// matcher's clock check found when it checked the wheels (their odometry
 /// was its prior); `--init batch` replaces it with its estimate.
-pub(super) fn state_clock(
+fn state_clock(
     a: &mut crate::assumptions::Assumptions,
     fit: Option<&crate::icp::TimeOffsetFit>,
     prior: &crate::icp::Prior,

@@ -57,10 +57,7 @@ pub fn run(job: &IcpJob, watch: &mut dyn RunObserver) -> Result<IcpRunSummary, P
     let read = super::read_options(&cfg, &nominal.robot);
     let mut source = crate::io::open(&job.input, &read)?;
     let info = source.info().clone();
-    let params = IcpParams {
-        prior: nominal.prior_choice(cfg.icp.prior, &info),
-        ..cfg.icp.clone()
-    };
+    let params = nominal.icp_params(&cfg.icp, &info);
     let mut summary = run_source(source.as_mut(), &nominal.robot, &params, job, watch)?;
     summary.assumptions =
         nominal.icp_assumptions(&summary.mount, &summary.prior, cfg.icp.prior, info.wheels);

@@ -8,7 +8,7 @@ use super::PipelineError;
 use crate::assumptions::{Assumptions, Origin};
 use crate::error::InputError;
 use crate::geom::{self, Pose2};
-use crate::icp::{Prior, PriorChoice};
+use crate::icp::{IcpParams, Prior, PriorChoice};
 use crate::io::StreamInfo;
 use crate::robot::{LaserMount, RobotConfig};
 use std::collections::BTreeSet;
@@ -89,6 +89,15 @@ impl Nominal {
                 PriorChoice::Odometry
             }
             c => c,
+        }
+    }
+
+    /// `params` with its prior resolved for a recording with `info`'s
+    /// streams (see [`Self::prior_choice`]).
+    pub fn icp_params(&self, params: &IcpParams, info: &StreamInfo) -> IcpParams {
+        IcpParams {
+            prior: self.prior_choice(params.prior, info),
+            ..params.clone()
         }
     }
 

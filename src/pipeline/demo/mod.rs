@@ -6,7 +6,6 @@ pub mod bundled;
 mod figures;
 mod report;
 
-use crate::assumptions::Assumptions;
 use crate::calib::{CalibrationRun, Method};
 use crate::error::InputError;
 use crate::eval::{self, Alignment, EvalOptions, Trajectory3, TrajectoryMetrics};
@@ -397,7 +396,7 @@ fn log_walls(walls: &[[f64; 4]], logger: &mut dyn Logger) -> Result<(), Pipeline
 struct Calibrated {
     icp: IcpOutput,
     runs: Vec<(Method, CalibrationRun)>,
-    assumptions: Assumptions,
+    assumptions: crate::assumptions::Assumptions,
 }
 
 /// ICP and the proposed filter in one pass through the driver, recorded for
@@ -435,10 +434,7 @@ fn calibrate_all(
         files = files.naming_changes(robot, &first_params.change.naming);
     }
     let mut source = RecordingSource::new(rec);
-    let icp_params = crate::icp::IcpParams {
-        prior: input.nominal.prior_choice(cfg.icp.prior, source.info()),
-        ..cfg.icp.clone()
-    };
+    let icp_params = input.nominal.icp_params(&cfg.icp, source.info());
     let (icp_done, mut done) = drive::run_calibration(
         &mut source,
         robot,
@@ -457,16 +453,12 @@ fn calibrate_all(
     files.commit(&done.summary)?;
     recorder.changes(&super::changes::entries(&done.summary.changes));
     recorder.finish().map_err(viz_err)?;
-    let mut assumptions = input.nominal.assumptions_with(&icp_done.mount);
-    let wheel_samples = rec.wheels.len();
-    crate::pipeline::nominal::state_prior(
-        &mut assumptions,
-        &icp_done.prior,
+    let assumptions = calibrate::calibration_assumptions(
+        input.nominal,
+        &icp_done,
         cfg.icp.prior,
-        wheel_samples,
+        rec.wheels.len(),
     );
-    let fit = icp_done.stats.prior_time_offset.as_ref();
-    calibrate::state_clock(&mut assumptions, fit, &icp_done.prior);
     let icp_out = collect.icp(icp_done.stats);
     let mut runs = vec![(first, collect.calibration(done.summary, done.weight_resets))];
     let cal_input = CalibInput {
