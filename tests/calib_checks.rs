@@ -366,6 +366,43 @@ fn without_a_robot_file_the_recordings_own_odometry_is_the_prior() {
     assert!(note.contains("agree"), "{note}");
 }
 
+/// Why the prior's kinematics matter, on real data: the Mines rover's
+/// wheels integrated with the wheelchair's radii and wheel base (4 times its
+/// own) fail many more pairs than with its robot file's, and the run says
+/// which kinematics it used.
+#[test]
+fn the_wheel_prior_with_the_robots_own_kinematics_fails_fewer_pairs() {
+    let test = "the_wheel_prior_with_the_robots_own_kinematics_fails_fewer_pairs";
+    let Some(data) = shared_data(test) else {
+        return;
+    };
+    let d = scratch("checks_prior_rover");
+    let bag = data.join("mines-rover/exp1.mcap");
+    let run = |robot: Option<&str>| {
+        let tum = d.join("r.tum");
+        let mut args = vec![
+            "icp",
+            "--input",
+            bag.to_str().unwrap(),
+            "--out",
+            tum.to_str().unwrap(),
+            "--json",
+        ];
+        args.extend(robot.iter().flat_map(|r| ["--robot", *r]));
+        json(&odocal(&args))
+    };
+    let (assumed, own) = (run(None), run(Some("mines-rover")));
+    assert_eq!(assumed["assumptions"]["wheel_base"]["source"], "default");
+    assert_eq!(own["assumptions"]["wheel_base"]["source"], "robot_file");
+    let failed = |j: &Value| j["failed_pairs"].as_u64().unwrap();
+    assert!(
+        failed(&assumed) > 2 * failed(&own),
+        "failed pairs: {} with the wheelchair's kinematics, {} with the rover's",
+        failed(&assumed),
+        failed(&own)
+    );
+}
+
 /// A CARMEN log states its mounting in its laser lines (MIT-CSAIL: the laser
 /// pose is the odometry pose), so the log matches as well as its MCAP
 /// conversion with its identity /tf_static (relations, Kümmerle et al. 2009).

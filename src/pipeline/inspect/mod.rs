@@ -151,9 +151,17 @@ fn prior(
     let (stream, why) =
         match Prior::choose(choice, info.wheels, info.odom, nominal.robot.diff_drive()) {
             Err(e) => (None, e),
+            Ok(Prior::Wheels(_)) if nominal.file.is_none() => (
+                Some("wheels"),
+                "wheel odometry, integrated with the wheelchair's r_right, r_left and wheel_base \
+                 (no robot file states this robot's: the scans correct a guess somewhat off, a \
+                 far-off one fails pairs; --robot ROBOT.toml)"
+                    .into(),
+            ),
             Ok(Prior::Wheels(_)) => (
                 Some("wheels"),
-                "wheel odometry, integrated with the nominal r_right, r_left and wheel_base".into(),
+                "wheel odometry, integrated with the robot file's r_right, r_left and wheel_base"
+                    .into(),
             ),
             Ok(Prior::Odom) if info.wheels >= 2 && given == PriorChoice::Auto => (
                 Some("odometry"),
