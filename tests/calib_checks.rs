@@ -368,8 +368,8 @@ fn without_a_robot_file_the_recordings_own_odometry_is_the_prior() {
 
 /// Why the prior's kinematics matter, on real data: the Mines rover's
 /// wheels integrated with the wheelchair's radii and wheel base (4 times its
-/// own) fail many more pairs than with its robot file's, and the run says
-/// which kinematics it used.
+/// own) fail many more pairs than with its robot file's; the run says which
+/// kinematics it used, and its scale check finds them off.
 #[test]
 fn the_wheel_prior_with_the_robots_own_kinematics_fails_fewer_pairs() {
     let test = "the_wheel_prior_with_the_robots_own_kinematics_fails_fewer_pairs";
@@ -401,6 +401,18 @@ fn the_wheel_prior_with_the_robots_own_kinematics_fails_fewer_pairs() {
         failed(&assumed),
         failed(&own)
     );
+    // The scale check tells the two apart from the data: the wheelchair's
+    // radii are 4.2 times the rover's and their ratio to the wheel base 2.1
+    // times; with the rover's own the prior's scale is the scans'.
+    let ratios = |j: &Value| {
+        let s = &j["prior_scale"];
+        [s["distance_ratio"].as_f64(), s["turn_ratio"].as_f64()].map(Option::unwrap)
+    };
+    let [d, t] = ratios(&assumed);
+    assert!(d > 2.0 && t > 1.3, "wheelchair's kinematics: {d}, {t}");
+    for r in ratios(&own) {
+        assert!((r - 1.0).abs() < 0.1, "rover's kinematics: {:?}", ratios(&own));
+    }
 }
 
 /// A CARMEN log states its mounting in its laser lines (MIT-CSAIL: the laser
@@ -439,6 +451,11 @@ fn a_carmen_log_states_its_own_mounting() {
     ]));
     let local = e["relations"]["local"]["trans_mean"].as_f64().unwrap();
     assert!(local < 0.032, "local relation error {local} m");
+    // The robot's own odometry has the scans' scale.
+    for k in ["distance_ratio", "turn_ratio"] {
+        let r = j["prior_scale"][k].as_f64().unwrap();
+        assert!((0.85..1.15).contains(&r), "{k} {r}");
+    }
 }
 
 #[test]

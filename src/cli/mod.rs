@@ -103,7 +103,7 @@ fn icp(a: IcpArgs) -> anyhow::Result<()> {
         });
     }
     print::assumptions(&run.assumptions);
-    print::icp(&stats, run.path_length, &a.out);
+    print::icp(&stats, run.path_length, &a.out, &run.prior);
     Ok(())
 }
 

@@ -320,7 +320,7 @@ pub fn observability(o: &odocal::calib::Observability) {
 }
 
 /// What `odocal icp` matched and wrote.
-pub fn icp(stats: &IcpStats, path_length: f64, out: &Path) {
+pub fn icp(stats: &IcpStats, path_length: f64, out: &Path, prior: &odocal::icp::Prior) {
     eprintln!(
         "{} pairs ({} failed), {:.1} iterations on average, {:.2} s ({:.0} pairs/s); trajectory {:.1} m -> {}",
         stats.pairs,
@@ -334,6 +334,36 @@ pub fn icp(stats: &IcpStats, path_length: f64, out: &Path) {
     if let Some(f) = &stats.prior_time_offset {
         prior_clock(f);
     }
+    if let Some(s) = &stats.prior_scale {
+        prior_scale(s, prior);
+    }
+}
+
+/// The prior's scale check of `odocal icp`: its distances and turns against
+/// the matched ones, and what a ratio far from 1 means for this prior.
+fn prior_scale(s: &odocal::icp::PriorScale, prior: &odocal::icp::Prior) {
+    let ratio = |r: Option<f64>| r.map_or("not measured".to_string(), |r| format!("{r:.2}×"));
+    eprintln!(
+        "odometry scale: its distances are {} the matched ones, its turns {} ({} pairs the scans \
+         measured: {:.1} m, {:.1} rad)",
+        ratio(s.distance_ratio),
+        ratio(s.turn_ratio),
+        s.pairs,
+        s.distance_m,
+        s.turn_rad
+    );
+    if !s.off() {
+        return;
+    }
+    let why = match prior {
+        odocal::icp::Prior::Wheels(_) => {
+            "the wheel radii and wheel base the prior is integrated with (stated above) are not \
+             this robot's: give --robot ROBOT.toml with its own (calibrate estimates them from there)"
+        }
+        _ => "the recording's odometry and the scans disagree in scale (its own calibration, or \
+              a laser mounting that is not the stated one)",
+    };
+    eprintln!("  the prior's scale is not the scans': {why}");
 }
 
 /// The prior's clock check of `odocal icp`: the offset in use, where the

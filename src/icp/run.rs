@@ -37,6 +37,10 @@ pub struct IcpStats {
     /// few matched pairs).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub prior_time_offset: Option<TimeOffsetFit>,
+    /// The prior's distances and turns over the matched ones (absent
+    /// without a prior or with too little motion the scans measured).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior_scale: Option<super::PriorScale>,
 }
 
 /// Matches consecutive scans (time order as given). When `odom_prior` covers
@@ -73,6 +77,7 @@ pub fn match_recording(
     let wall_s = start.elapsed().as_secs_f64();
     let stats = IcpStats {
         prior_time_offset: matcher.time_offset_fit(),
+        prior_scale: matcher.prior_scale(),
         ..summarise(&motions, wall_s)
     };
     Ok((motions, stats))
@@ -179,6 +184,7 @@ impl Tally {
             },
             failures: self.failures.clone(),
             prior_time_offset: None,
+            prior_scale: None,
         }
     }
 }

@@ -11,6 +11,7 @@ use std::collections::VecDeque;
 
 use super::matcher::ScanMatcher;
 use super::params::{IcpParams, IcpParamsError, PriorChoice};
+use super::prior_scale::{PriorScale, ScaleCheck};
 use super::time_offset::{offsets, OffsetCheck, TimeOffsetFit, OFFSET_SPAN_S};
 use crate::geom::{self, Pose2};
 use crate::motion::Motion;
@@ -165,6 +166,8 @@ pub struct StreamMatcher {
     check: OffsetCheck,
     /// Scratch of the clock check.
     headings: Headings,
+    /// How the prior's distances and turns compare with the matched ones.
+    scale: ScaleCheck,
 }
 
 impl StreamMatcher {
@@ -191,7 +194,14 @@ impl StreamMatcher {
             offset: params.time_offset,
             check: OffsetCheck::new(params.time_offset),
             headings: Default::default(),
+            scale: ScaleCheck::default(),
         })
+    }
+
+    /// The prior's distances and turns against the matched ones (see
+    /// `prior_scale`); `None` without a prior or with too little motion.
+    pub fn prior_scale(&self) -> Option<PriorScale> {
+        self.scale.result()
     }
 
     /// The offset of the prior's clock at which its turns fit the matched
@@ -249,6 +259,7 @@ impl StreamMatcher {
             if let Some(m) = self.matcher.push(&scan, prior) {
                 if has_prior {
                     self.check_clock(&m);
+                    self.check_scale(&m, prior);
                 }
                 out(m);
             }
@@ -258,6 +269,18 @@ impl StreamMatcher {
             if let Some(t) = self.prev {
                 self.prior.forget_before(t + d - OFFSET_SPAN_S);
             }
+        }
+    }
+
+    /// Adds a matched pair whose scans measured it to the scale check,
+    /// against the `prior` increment the pair started from.
+    fn check_scale(&mut self, m: &Motion, prior: Option<Pose2>) {
+        let (Some(p), Some(split)) = (prior, m.split.as_ref()) else {
+            return;
+        };
+        if m.is_valid() {
+            let matched = [m.dx, m.dy, m.dtheta];
+            self.scale.add(geom::xyt(&p), matched, split.scan_share);
         }
     }
 

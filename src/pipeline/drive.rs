@@ -184,6 +184,7 @@ impl IcpStage {
         IcpRunSummary {
             stats: IcpStats {
                 prior_time_offset: self.matcher.time_offset_fit(),
+                prior_scale: self.matcher.prior_scale(),
                 ..self.tally.stats(self.matching_s)
             },
             path_length: self.tally.path_length(),
