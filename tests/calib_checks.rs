@@ -411,7 +411,11 @@ fn the_wheel_prior_with_the_robots_own_kinematics_fails_fewer_pairs() {
     let [d, t] = ratios(&assumed);
     assert!(d > 2.0 && t > 1.3, "wheelchair's kinematics: {d}, {t}");
     for r in ratios(&own) {
-        assert!((r - 1.0).abs() < 0.1, "rover's kinematics: {:?}", ratios(&own));
+        assert!(
+            (r - 1.0).abs() < 0.1,
+            "rover's kinematics: {:?}",
+            ratios(&own)
+        );
     }
 }
 
