@@ -110,7 +110,9 @@ fn an_unstated_laser_mounting_is_never_assumed() {
         std::f64::consts::PI
     );
     assert_eq!(j["assumptions"]["wheel_base"]["source"], "robot_file");
-    assert_eq!(j["assumptions"]["ticks_per_rev"]["source"], "robot_file");
+    // Its wheels are joint positions: no tick count is used, none is stated.
+    assert!(j["assumptions"].get("ticks_per_rev").is_none());
+    assert_eq!(j["assumptions"]["left_joint"]["source"], "robot_file");
 }
 
 #[test]

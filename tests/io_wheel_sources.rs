@@ -232,6 +232,13 @@ fn encoder_ticks_that_wrap_calibrate_as_the_joint_states_do() {
     assert_eq!(ws["topic"], "/wheel_ticks");
     assert_eq!(ws["type"], "std_msgs/msg/Int32MultiArray");
     assert_eq!(ws["values"], "ticks");
+    // Each run states the wheel keys its source uses: the tick counts per
+    // revolution for the counters, the joint names for the JointStates.
+    let (ta, ja) = (&ticks["assumptions"], &joints["assumptions"]);
+    assert_eq!(ta["ticks_per_rev"]["source"], "robot_file", "{ta}");
+    assert!(ta.get("left_joint").is_none(), "{ta}");
+    assert!(ja.get("ticks_per_rev").is_none(), "{ja}");
+    assert_eq!(ja["left_joint"]["value"], "left_wheel", "{ja}");
     for key in ["r_right", "r_left", "wheel_base"] {
         let (a, b) = (num(&ticks["final"][key]), num(&joints["final"][key]));
         assert!((a - b).abs() < 1e-5, "{key}: ticks {a}, JointState {b}");

@@ -75,6 +75,23 @@ pub struct StreamInfo {
     pub wheel_values: Option<crate::recording::WheelValues>,
 }
 
+impl StreamInfo {
+    /// What a recording in memory holds, as a stream announces it.
+    pub fn of(rec: &Recording) -> Self {
+        Self {
+            scans: rec.scans.len(),
+            wheels: rec.wheels.len(),
+            gyro: rec.gyro.len(),
+            odom: rec.odom.len(),
+            reference: rec.reference.len(),
+            base_from_laser: rec.base_from_laser,
+            mount_origin: rec.mount_origin,
+            mount_note: rec.mount_note.clone(),
+            wheel_values: rec.wheel_values,
+        }
+    }
+}
+
 /// A recording as a stream of samples, each stream in stamp order.
 pub trait SampleSource {
     /// Where the samples come from (the file), for messages.
@@ -112,17 +129,7 @@ impl<'r> RecordingSource<'r> {
     }
 
     fn of(rec: Cow<'r, Recording>) -> Self {
-        let info = StreamInfo {
-            scans: rec.scans.len(),
-            wheels: rec.wheels.len(),
-            gyro: rec.gyro.len(),
-            odom: rec.odom.len(),
-            reference: rec.reference.len(),
-            base_from_laser: rec.base_from_laser,
-            mount_origin: rec.mount_origin,
-            mount_note: rec.mount_note.clone(),
-            wheel_values: rec.wheel_values,
-        };
+        let info = StreamInfo::of(&rec);
         Self {
             rec,
             info,

@@ -71,6 +71,7 @@ pub fn run(
     let est = solve(path, &problem, robot, &params, wheel_source.as_ref())?;
     let mut assumptions = nominal.assumptions();
     if let Some(rec) = &rec {
+        nominal.drop_unused_wheel_keys(&mut assumptions, rec.wheel_values);
         state_prior(&mut assumptions, &cfg, &nominal, rec);
     }
     state_laser(&mut assumptions, &est, robot.laser);
@@ -165,19 +166,9 @@ fn write_summary(dir: &Path, s: &impl serde::Serialize) -> Result<(), PipelineEr
         .map_err(|e| PipelineError::write(&js, e))
 }
 
-/// How many wheel samples and odometry poses `rec` holds, as a stream
-/// would announce them.
-fn streams(rec: &Recording) -> crate::io::StreamInfo {
-    crate::io::StreamInfo {
-        wheels: rec.wheels.len(),
-        odom: rec.odom.len(),
-        ..Default::default()
-    }
-}
-
 /// States in `a` the prior the batch's scan matching took for `rec`.
 fn state_prior(a: &mut Assumptions, cfg: &Config, nominal: &super::Nominal, rec: &Recording) {
-    let choice = nominal.prior_choice(cfg.icp.prior, &streams(rec));
+    let choice = nominal.prior_choice(cfg.icp.prior, &crate::io::StreamInfo::of(rec));
     let (w, o) = (rec.wheels.len(), rec.odom.len());
     // The matching ran, so the choice was possible.
     if let Ok(prior) = crate::icp::Prior::choose(choice, w, o, nominal.robot.diff_drive()) {
@@ -220,7 +211,7 @@ pub(super) fn recording_problem(
     };
     let mount = super::icp::mount(&rec, &robot_icp)?.pose;
     let icp_params = super::diagnose::icp_for_diagnosis(&cfg.icp);
-    let icp_params = nominal.icp_params(&icp_params, &streams(&rec));
+    let icp_params = nominal.icp_params(&icp_params, &crate::io::StreamInfo::of(&rec));
     let icp = super::icp::match_recording(&rec, &robot_icp, &icp_params)?;
     let motions: Vec<LaserMotion> = icp.motions.iter().map(|m| to_laser(m, &mount)).collect();
     let intervals = batch::aggregate(&motions, p.interval_s, p.interval_rad, 1e-3);

@@ -240,7 +240,7 @@ impl Run<'_> {
             &self.cfg.measurements,
             obs,
         )?;
-        let a = calibration_assumptions(self.nominal, &icp, self.cfg.icp.prior, info.wheels);
+        let a = calibration_assumptions(self.nominal, &icp, self.cfg.icp.prior, &info);
         Ok((done, a))
     }
 
@@ -273,18 +273,19 @@ impl Run<'_> {
     }
 }
 
-/// What a calibration over a recording assumed: the nominal robot, the
-/// laser mounting and prior its scan matching took (`icp`; the prior from
-/// `[icp] prior` = `given` for a recording with `wheel_samples`), and the
-/// wheels' clock.
+/// What a calibration over a recording with `info`'s streams assumed: the
+/// nominal robot (the wheel keys its wheel samples use), the laser mounting
+/// and prior its scan matching took (`icp`; the prior from `[icp] prior` =
+/// `given`), and the wheels' clock.
 pub(super) fn calibration_assumptions(
     nominal: &super::Nominal,
     icp: &drive::IcpRunSummary,
     given: crate::icp::PriorChoice,
-    wheel_samples: usize,
+    info: &crate::io::StreamInfo,
 ) -> crate::assumptions::Assumptions {
     let mut a = nominal.assumptions_with(&icp.mount);
-    super::nominal::state_prior(&mut a, &icp.prior, given, wheel_samples);
+    nominal.drop_unused_wheel_keys(&mut a, info.wheel_values);
+    super::nominal::state_prior(&mut a, &icp.prior, given, info.wheels);
     state_clock(&mut a, icp.stats.prior_time_offset.as_ref(), &icp.prior);
     a
 }

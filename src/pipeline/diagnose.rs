@@ -76,6 +76,7 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
                 .map_err(|e| crate::error::InputError::new(&rec.source, e))?;
             let mut d = run_recording(&rec, robot, &cfg.icp, &cfg.diagnose)?;
             d.assumptions = nominal.assumptions_with(&mount);
+            nominal.drop_unused_wheel_keys(&mut d.assumptions, rec.wheel_values);
             super::nominal::state_prior(&mut d.assumptions, &prior, cfg.icp.prior, wheels);
             d.wheel_source = (rec.wheels.len() >= 2).then(|| {
                 super::wheels::describe(&read, &nominal, rec.wheels.len(), rec.wheel_values)

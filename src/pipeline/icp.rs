@@ -60,7 +60,7 @@ pub fn run(job: &IcpJob, watch: &mut dyn RunObserver) -> Result<IcpRunSummary, P
     let params = nominal.icp_params(&cfg.icp, &info);
     let mut summary = run_source(source.as_mut(), &nominal.robot, &params, job, watch)?;
     summary.assumptions =
-        nominal.icp_assumptions(&summary.mount, &summary.prior, cfg.icp.prior, info.wheels);
+        nominal.icp_assumptions(&summary.mount, &summary.prior, cfg.icp.prior, &info);
     Ok(summary)
 }
 

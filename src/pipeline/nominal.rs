@@ -10,7 +10,8 @@ use crate::error::InputError;
 use crate::geom::{self, Pose2};
 use crate::icp::{IcpParams, Prior, PriorChoice};
 use crate::io::StreamInfo;
-use crate::robot::{LaserMount, RobotConfig};
+use crate::recording::WheelValues;
+use crate::robot::{LaserMount, RobotConfig, WheelSourceKind};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
@@ -112,15 +113,31 @@ impl Nominal {
         mount: &Mount,
         prior: &Prior,
         given: PriorChoice,
-        wheel_samples: usize,
+        info: &StreamInfo,
     ) -> Assumptions {
         let mut a = self.assumptions_with(mount);
-        if !matches!(prior, Prior::Wheels(_)) {
+        if matches!(prior, Prior::Wheels(_)) {
+            self.drop_unused_wheel_keys(&mut a, info.wheel_values);
+        } else {
             a.0.retain(|k, _| !WHEEL_KEYS.contains(&k.as_str()));
         }
-        state_prior(&mut a, prior, given, wheel_samples);
+        state_prior(&mut a, prior, given, info.wheels);
         a
     }
+
+    /// Removes from `a` the wheel keys that wheel samples read as `values`
+    /// do not use: `ticks_per_rev` unless they are tick counts, the joint
+    /// names unless the wheel source is JointState.
+    pub fn drop_unused_wheel_keys(&self, a: &mut Assumptions, values: Option<WheelValues>) {
+        if values.is_some_and(|v| v != WheelValues::Ticks) {
+            a.0.remove("ticks_per_rev");
+        }
+        if self.robot.wheels.source != WheelSourceKind::JointStates {
+            a.0.remove("left_joint");
+            a.0.remove("right_joint");
+        }
+    }
+
     /// The robot's values and their sources (the laser mounting is added by
     /// [`Mount::state`] once the recording is known).
     pub fn assumptions(&self) -> Assumptions {

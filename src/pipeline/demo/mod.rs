@@ -453,12 +453,9 @@ fn calibrate_all(
     files.commit(&done.summary)?;
     recorder.changes(&super::changes::entries(&done.summary.changes));
     recorder.finish().map_err(viz_err)?;
-    let assumptions = calibrate::calibration_assumptions(
-        input.nominal,
-        &icp_done,
-        cfg.icp.prior,
-        rec.wheels.len(),
-    );
+    let info = crate::io::StreamInfo::of(rec);
+    let assumptions =
+        calibrate::calibration_assumptions(input.nominal, &icp_done, cfg.icp.prior, &info);
     let icp_out = collect.icp(icp_done.stats);
     let mut runs = vec![(first, collect.calibration(done.summary, done.weight_resets))];
     let cal_input = CalibInput {
