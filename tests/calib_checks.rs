@@ -457,6 +457,22 @@ fn a_carmen_log_states_its_own_mounting() {
     ]));
     let local = e["relations"]["local"]["trans_mean"].as_f64().unwrap();
     assert!(local < 0.032, "local relation error {local} m");
+    // Diagnosing the log replays its odometry as virtual wheels: the wheel
+    // model is stated, no tick count or joint name, the prior is the
+    // odometry.
+    let g = json(&odocal(&[
+        "diagnose",
+        "--measured",
+        bench.join("mit-csail.clf").to_str().unwrap(),
+        "--json",
+    ]));
+    let a = &g["assumptions"];
+    assert_eq!(a["prior"]["value"], "odometry", "{a}");
+    assert_eq!(a["wheel_base"]["source"], "default", "{a}");
+    assert!(
+        a.get("ticks_per_rev").is_none() && a.get("left_joint").is_none(),
+        "{a}"
+    );
     // The robot's own odometry has the scans' scale.
     for k in ["distance_ratio", "turn_ratio"] {
         let r = j["prior_scale"][k].as_f64().unwrap();

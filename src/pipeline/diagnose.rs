@@ -76,7 +76,13 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
                 .map_err(|e| crate::error::InputError::new(&rec.source, e))?;
             let mut d = run_recording(&rec, robot, &cfg.icp, &cfg.diagnose)?;
             d.assumptions = nominal.assumptions_with(&mount);
-            nominal.drop_unused_wheel_keys(&mut d.assumptions, rec.wheel_values);
+            // Without wheels, the odometry's motion stands in for them.
+            let values = if wheels >= 2 {
+                rec.wheel_values
+            } else {
+                Some(crate::recording::WheelValues::Twist)
+            };
+            nominal.drop_unused_wheel_keys(&mut d.assumptions, values);
             super::nominal::state_prior(&mut d.assumptions, &prior, cfg.icp.prior, wheels);
             d.wheel_source = (rec.wheels.len() >= 2).then(|| {
                 super::wheels::describe(&read, &nominal, rec.wheels.len(), rec.wheel_values)

@@ -127,12 +127,13 @@ impl Nominal {
 
     /// Removes from `a` the wheel keys that wheel samples read as `values`
     /// do not use: `ticks_per_rev` unless they are tick counts, the joint
-    /// names unless the wheel source is JointState.
+    /// names unless they are JointState's (a twist is an odometry's).
     pub fn drop_unused_wheel_keys(&self, a: &mut Assumptions, values: Option<WheelValues>) {
         if values.is_some_and(|v| v != WheelValues::Ticks) {
             a.0.remove("ticks_per_rev");
         }
-        if self.robot.wheels.source != WheelSourceKind::JointStates {
+        let twist = values == Some(WheelValues::Twist);
+        if twist || self.robot.wheels.source != WheelSourceKind::JointStates {
             a.0.remove("left_joint");
             a.0.remove("right_joint");
         }
@@ -308,7 +309,7 @@ pub fn state_prior(a: &mut Assumptions, prior: &Prior, given: PriorChoice, wheel
         Prior::Odom => (
             "odometry",
             format!(
-                "{GUESS} are the recording's own odometry; no wheel radius or wheel base is used"
+                "{GUESS} are the recording's own odometry, which takes no wheel radius or wheel base"
             ),
         ),
         Prior::None => {
