@@ -44,6 +44,21 @@ fn json(out: &Output) -> Value {
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
+/// `odocal icp --json` over `bag` into `out` (TUM), with `--robot ROBOT`
+/// when given; the JSON of a successful run.
+fn icp_json(bag: &Path, out: &Path, robot: Option<&str>) -> Value {
+    let mut args = vec![
+        "icp",
+        "--input",
+        bag.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ];
+    args.extend(robot.iter().flat_map(|r| ["--robot", *r]));
+    json(&odocal(&args))
+}
+
 /// The bundled recording rewritten without its /tf_static, cut to `seconds`.
 fn without_mount(d: &Path, seconds: f64) -> PathBuf {
     let mut rec = read_recording(&bundled(), &ReadOptions::default()).unwrap();
@@ -267,14 +282,7 @@ fn icp_states_its_prior_and_the_wheel_model_only_when_it_used_it() {
     for (want, rec, wheel_model) in cases {
         let bag = d.join(format!("{want}.mcap"));
         write_mcap(&bag, &rec, &WriteOptions::default()).unwrap();
-        let j = json(&odocal(&[
-            "icp",
-            "--input",
-            bag.to_str().unwrap(),
-            "--out",
-            d.join(format!("{want}.tum")).to_str().unwrap(),
-            "--json",
-        ]));
+        let j = icp_json(&bag, &d.join(format!("{want}.tum")), None);
         let a = &j["assumptions"];
         assert_eq!(a["prior"]["value"], want, "{a}");
         for k in ["r_right", "r_left", "wheel_base"] {
@@ -316,19 +324,7 @@ fn without_a_robot_file_the_recordings_own_odometry_is_the_prior() {
     }
     let bag = d.join("both.mcap");
     write_mcap(&bag, &rec, &WriteOptions::default()).unwrap();
-    let run = |robot: Option<&str>| {
-        let tum = d.join("both.tum");
-        let mut args = vec![
-            "icp",
-            "--input",
-            bag.to_str().unwrap(),
-            "--out",
-            tum.to_str().unwrap(),
-            "--json",
-        ];
-        args.extend(robot.iter().flat_map(|r| ["--robot", *r]));
-        json(&odocal(&args))
-    };
+    let run = |robot: Option<&str>| icp_json(&bag, &d.join("both.tum"), robot);
     let odom = run(None);
     assert_eq!(odom["assumptions"]["prior"]["value"], "odometry");
     assert_eq!(odom["assumptions"]["prior"]["source"], "recording");
@@ -380,19 +376,7 @@ fn the_wheel_prior_with_the_robots_own_kinematics_fails_fewer_pairs() {
     };
     let d = scratch("checks_prior_rover");
     let bag = data.join("mines-rover/exp1.mcap");
-    let run = |robot: Option<&str>| {
-        let tum = d.join("r.tum");
-        let mut args = vec![
-            "icp",
-            "--input",
-            bag.to_str().unwrap(),
-            "--out",
-            tum.to_str().unwrap(),
-            "--json",
-        ];
-        args.extend(robot.iter().flat_map(|r| ["--robot", *r]));
-        json(&odocal(&args))
-    };
+    let run = |robot: Option<&str>| icp_json(&bag, &d.join("r.tum"), robot);
     let (assumed, own) = (run(None), run(Some("mines-rover")));
     assert_eq!(assumed["assumptions"]["wheel_base"]["source"], "default");
     assert_eq!(own["assumptions"]["wheel_base"]["source"], "robot_file");
@@ -432,14 +416,7 @@ fn a_carmen_log_states_its_own_mounting() {
     let d = scratch("checks_carmen");
     let bench = data.join("slam-benchmark");
     let tum = d.join("m.tum");
-    let j = json(&odocal(&[
-        "icp",
-        "--input",
-        bench.join("mit-csail.clf").to_str().unwrap(),
-        "--out",
-        tum.to_str().unwrap(),
-        "--json",
-    ]));
+    let j = icp_json(&bench.join("mit-csail.clf"), &tum, None);
     assert_eq!(j["assumptions"]["laser"]["source"], "log");
     // Its prior is the log's odometry: no wheel model is assumed.
     assert_eq!(j["assumptions"]["prior"]["value"], "odometry");
