@@ -172,7 +172,7 @@ fn state_prior(a: &mut Assumptions, cfg: &Config, nominal: &super::Nominal, rec:
     let (w, o) = (rec.wheels.len(), rec.odom.len());
     // The matching ran, so the choice was possible.
     if let Ok(prior) = crate::icp::Prior::choose(choice, w, o, nominal.robot.diff_drive()) {
-        super::nominal::state_prior(a, &prior, cfg.icp.prior, w);
+        nominal.state_prior(a, &prior, cfg.icp.prior, w);
     }
 }
 

@@ -285,7 +285,7 @@ pub(super) fn calibration_assumptions(
 ) -> crate::assumptions::Assumptions {
     let mut a = nominal.assumptions_with(&icp.mount);
     nominal.drop_unused_wheel_keys(&mut a, info.wheel_values);
-    super::nominal::state_prior(&mut a, &icp.prior, given, info.wheels);
+    nominal.state_prior(&mut a, &icp.prior, given, info.wheels);
     state_clock(&mut a, icp.stats.prior_time_offset.as_ref(), &icp.prior);
     a
 }

@@ -83,7 +83,7 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
                 Some(crate::recording::WheelValues::Twist)
             };
             nominal.drop_unused_wheel_keys(&mut d.assumptions, values);
-            super::nominal::state_prior(&mut d.assumptions, &prior, cfg.icp.prior, wheels);
+            nominal.state_prior(&mut d.assumptions, &prior, cfg.icp.prior, wheels);
             d.wheel_source = (rec.wheels.len() >= 2).then(|| {
                 super::wheels::describe(&read, &nominal, rec.wheels.len(), rec.wheel_values)
             });

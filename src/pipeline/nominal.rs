@@ -121,8 +121,74 @@ impl Nominal {
         } else {
             a.0.retain(|k, _| !WHEEL_KEYS.contains(&k.as_str()));
         }
-        state_prior(&mut a, prior, given, info.wheels);
+        self.state_prior(&mut a, prior, given, info.wheels);
         a
+    }
+
+    /// Records the scan matcher's prior in `a` under `prior` (see
+    /// [`Self::prior_reason`]), its source: the recording's streams, the
+    /// `--config` file's `[icp] prior` (`given`), or the default of none.
+    pub fn state_prior(
+        &self,
+        a: &mut Assumptions,
+        prior: &Prior,
+        given: PriorChoice,
+        wheel_samples: usize,
+    ) {
+        let (value, why) = self.prior_reason(prior, given, wheel_samples);
+        let source = match (given, prior) {
+            (PriorChoice::Auto, Prior::None) => Origin::Default,
+            (PriorChoice::Auto, _) => Origin::Recording,
+            _ => Origin::Config,
+        };
+        let note = format!("each pair's initial guess and the prior term's centre: {why}");
+        a.set("prior", value, source, Some(note));
+    }
+
+    /// The word for the scan matcher's `prior` (`wheels`, `odometry`,
+    /// `none`) and why it is the one and what it brings in, for a recording
+    /// with `wheel_samples` under `[icp] prior` = `given`: what every run
+    /// states and `inspect` foretells.
+    pub fn prior_reason(
+        &self,
+        prior: &Prior,
+        given: PriorChoice,
+        wheel_samples: usize,
+    ) -> (&'static str, String) {
+        let auto = given == PriorChoice::Auto;
+        let why = match prior {
+            Prior::Wheels(_) if self.file.is_none() => {
+                "wheel odometry, integrated with the wheelchair's r_right, r_left and wheel_base \
+                 (no robot file states this robot's: the scans correct a guess somewhat off, a \
+                 far-off one fails pairs; --robot ROBOT.toml)"
+            }
+            Prior::Wheels(_) => {
+                "wheel odometry, integrated with the robot file's r_right, r_left and wheel_base"
+            }
+            Prior::Odom if wheel_samples >= 2 && auto => {
+                "the recording's own odometry, preferred to its wheels as no robot file states \
+                 their kinematics (--robot ROBOT.toml, or [icp] prior = \"wheels\", takes the \
+                 wheels)"
+            }
+            Prior::Odom => {
+                "the recording's own odometry, which takes no wheel radius or wheel base"
+            }
+            Prior::None if auto => {
+                "neither a wheel stream nor odometry ([topics] in a --config file names them): \
+                 each pair starts from the previous one's velocity (the first from rest), and no \
+                 prior term holds what the scans leave loose"
+            }
+            Prior::None => {
+                "each pair starts from the previous one's velocity (the first from rest), and no \
+                 prior term holds what the scans leave loose"
+            }
+        };
+        let value = match prior {
+            Prior::Wheels(_) => "wheels",
+            Prior::Odom => "odometry",
+            Prior::None => "none",
+        };
+        (value, why.to_string())
     }
 
     /// Removes from `a` the wheel keys that wheel samples read as `values`
@@ -284,55 +350,6 @@ impl Mount {
         let [x, y, yaw] = geom::xyt(&self.pose).map(|v| v + 0.0);
         LaserMount { x, y, yaw }
     }
-}
-
-/// Records the scan matcher's prior in `a` under `prior`: which stream,
-/// why that one, and what it brings in.
-pub fn state_prior(a: &mut Assumptions, prior: &Prior, given: PriorChoice, wheel_samples: usize) {
-    const GUESS: &str = "each pair's initial guess and the prior term's centre";
-    let (value, note) = match prior {
-        Prior::Wheels(_) => (
-            "wheels",
-            format!(
-                "{GUESS} are the wheel odometry, integrated with r_right, r_left and wheel_base \
-                 as stated"
-            ),
-        ),
-        Prior::Odom if wheel_samples >= 2 && given == PriorChoice::Auto => (
-            "odometry",
-            format!(
-                "{GUESS} are the recording's own odometry, preferred to its wheel stream: no \
-                 robot file states the wheels' kinematics (give --robot ROBOT.toml, or set \
-                 [icp] prior = \"wheels\" to integrate them with the wheelchair's)"
-            ),
-        ),
-        Prior::Odom => (
-            "odometry",
-            format!(
-                "{GUESS} are the recording's own odometry, which takes no wheel radius or wheel base"
-            ),
-        ),
-        Prior::None => {
-            let why = if given == PriorChoice::Auto {
-                "neither a wheel stream nor odometry ([topics] in a --config file names them): "
-            } else {
-                ""
-            };
-            (
-                "none",
-                format!(
-                    "{why}each pair starts from the previous matched pair's velocity (the first \
-                     from rest), and no prior term holds the directions the scans leave loose"
-                ),
-            )
-        }
-    };
-    let source = match (given, prior) {
-        (PriorChoice::Auto, Prior::None) => Origin::Default,
-        (PriorChoice::Auto, _) => Origin::Recording,
-        _ => Origin::Config,
-    };
-    a.set("prior", value, source, Some(note));
 }
 
 /// The report's "Assumptions" section: every nominal value, its source and

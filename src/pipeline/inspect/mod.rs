@@ -151,31 +151,10 @@ fn prior(
     let (stream, why) =
         match Prior::choose(choice, info.wheels, info.odom, nominal.robot.diff_drive()) {
             Err(e) => (None, e),
-            Ok(Prior::Wheels(_)) if nominal.file.is_none() => (
-                Some("wheels"),
-                "wheel odometry, integrated with the wheelchair's r_right, r_left and wheel_base \
-                 (no robot file states this robot's: the scans correct a guess somewhat off, a \
-                 far-off one fails pairs; --robot ROBOT.toml)"
-                    .into(),
-            ),
-            Ok(Prior::Wheels(_)) => (
-                Some("wheels"),
-                "wheel odometry, integrated with the robot file's r_right, r_left and wheel_base"
-                    .into(),
-            ),
-            Ok(Prior::Odom) if info.wheels >= 2 && given == PriorChoice::Auto => (
-                Some("odometry"),
-                "the recording's own odometry, preferred to its wheels as no robot file states \
-             their kinematics (--robot ROBOT.toml, or [icp] prior = \"wheels\", takes the wheels)"
-                    .into(),
-            ),
-            Ok(Prior::Odom) => (Some("odometry"), "the recording's own odometry".into()),
-            Ok(Prior::None) => (
-                Some("none"),
-                "each pair starts from the previous one's velocity: no prior term holds what the \
-             scans leave loose"
-                    .into(),
-            ),
+            Ok(prior) => {
+                let (value, why) = nominal.prior_reason(&prior, given, info.wheels);
+                (Some(value), why)
+            }
         };
     PriorFinding { stream, why }
 }
