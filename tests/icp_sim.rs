@@ -241,15 +241,7 @@ fn simulated(
     assert!(cfg.laser.sweep_motion);
     let robot = odocal::robot::RobotConfig::default();
     let (rec, truth) = odocal::sim::simulate(&cfg, &robot, effects, &mut |_| {}).unwrap();
-    let truth = Trajectory::from_parts(
-        truth.trajectory.iter().map(|p| p.t).collect(),
-        truth
-            .trajectory
-            .iter()
-            .map(|p| pose(p.x, p.y, p.theta))
-            .collect(),
-    )
-    .unwrap();
+    let truth = truth.trajectory();
     let odom = odocal::robot::wheel_odometry(&robot.diff_drive(), &rec.wheels, Pose2::identity());
     SimulatedRun { rec, truth, odom }
 }
