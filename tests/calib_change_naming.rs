@@ -94,10 +94,15 @@ fn a_radius_step_on_the_right_wheel_is_named_with_its_size() {
     assert!((rows[0].0 - t).abs() < 1e-6 && rows[0].1 == "radius_step");
 }
 
+/// Whether a latency changed at the onset or was there all window long is
+/// told by the window's rows before the onset. The latency appears at 15 s,
+/// the robot turns at 17 s and the detector fires there; its window opens
+/// at 7.8 s, so 7 s of it hold no latency (measured: "changed" beats "there
+/// all along" by a ΔBIC of 97, the margin is 10).
 #[test]
 fn a_latency_change_is_not_named_a_radius_step() {
     let d = scratch("change-naming-latency");
-    let (json, csv) = run(&d, "latency_change:time=30,delay=0.08");
+    let (json, csv) = run(&d, "latency_change:time=15,delay=0.08");
     let changes = json["changes"].as_array().expect("the detector fired");
     for c in changes {
         assert_ne!(c["effect"], "radius_step", "{c}");
@@ -106,14 +111,38 @@ fn a_latency_change_is_not_named_a_radius_step() {
     assert_eq!(first["effect"], "latency", "{first}");
     let est = first["estimate"].as_f64().unwrap();
     assert!((est - 0.08).abs() < 0.2 * 0.08, "latency {est} s vs 0.08 s");
+    let onset = first["onset_s"].as_f64().unwrap();
+    assert!((15.0..18.0).contains(&onset), "onset {onset} s");
     // The filter has no latency and fires again on the same one: reported
-    // once, with the later firing, and both rows of the history name it.
+    // once, with the later firings, and every row of the history names it.
     assert_eq!(changes.len(), 1, "{changes:?}");
     let again = first["refired_s"].as_array().unwrap();
     assert!(!again.is_empty(), "{first}");
     let rows = named_rows(&csv);
     assert_eq!(rows.len(), 1 + again.len());
     assert!(rows.iter().all(|r| r.1 == "latency"), "{rows:?}");
+}
+
+/// The same latency appearing at 25 s, on a straight stretch (the robot
+/// drives straight from 21 to 38 s): the detector fires at the next turn,
+/// at 38.6 s, and its window opens at 29.2 s, after the change, so within
+/// the window the latency was there all along. The answer says so:
+/// undetermined, with the latency standing, never a radius step. (Between
+/// these two cases, changes at 30–32 s leave 1–3 s without the latency in
+/// that window and are named by ΔBICs of 10–30, at the margin.)
+#[test]
+fn a_latency_that_began_on_a_straight_stretch_is_left_undetermined_standing() {
+    let d = scratch("change-naming-latency-straight");
+    let (json, csv) = run(&d, "latency_change:time=25,delay=0.08");
+    let changes = json["changes"].as_array().expect("the detector fired");
+    for c in changes {
+        assert_eq!(c["effect"], "undetermined", "{c}");
+        assert_eq!(c["standing"], "latency", "{c}");
+        let t = c["time_s"].as_f64().unwrap();
+        assert!(t > 25.0, "fired at {t} s");
+    }
+    let rows = named_rows(&csv);
+    assert_eq!(rows.len(), changes.len());
 }
 
 #[test]
