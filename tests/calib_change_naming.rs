@@ -135,6 +135,7 @@ fn a_latency_that_began_on_a_straight_stretch_is_left_undetermined_standing() {
     let d = scratch("change-naming-latency-straight");
     let (json, csv) = run(&d, "latency_change:time=25,delay=0.08");
     let changes = json["changes"].as_array().expect("the detector fired");
+    assert!(!changes.is_empty(), "{json}");
     for c in changes {
         assert_eq!(c["effect"], "undetermined", "{c}");
         assert_eq!(c["standing"], "latency", "{c}");
