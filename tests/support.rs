@@ -50,9 +50,14 @@ pub fn python_with(test: &str, modules: &[&str]) -> Option<String> {
     None
 }
 
-/// A fresh, empty scratch directory for one test.
+/// A fresh, empty scratch directory for one test, inside the target
+/// directory (Cargo's `CARGO_TARGET_TMPDIR`): each run empties and reuses
+/// the one its test had, so runs do not pile up (the suite writes about
+/// 270 MB), and `cargo clean` removes them. Names are the tests' own, one
+/// directory a test; two runs of the suite on one target directory at the
+/// same time would share them.
 pub fn scratch(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("odocal-test-{}-{test}", std::process::id()));
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("odocal-test-{test}"));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
