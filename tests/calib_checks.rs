@@ -4,18 +4,11 @@
 //! estimate far from the nominal robot each end in exit 2 with a message
 //! saying what to fix — never in a number.
 
-use crate::support::{scratch, shared_data};
+use crate::support::{odocal, scratch, shared_data};
 use odocal::io::{read_recording, write_mcap, ReadOptions, WriteOptions};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
-}
 
 fn bundled() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scans/wheelchair-corridor.mcap")
@@ -45,8 +38,8 @@ fn json(out: &Output) -> Value {
 }
 
 /// `odocal icp --json` over `bag` into `out` (TUM), with `--robot ROBOT`
-/// when given; the JSON of a successful run.
-fn icp_json(bag: &Path, out: &Path, robot: Option<&str>) -> Value {
+/// when given; the process's output, success or not.
+fn icp_output(bag: &Path, out: &Path, robot: Option<&str>) -> Output {
     let mut args = vec![
         "icp",
         "--input",
@@ -56,7 +49,12 @@ fn icp_json(bag: &Path, out: &Path, robot: Option<&str>) -> Value {
         "--json",
     ];
     args.extend(robot.iter().flat_map(|r| ["--robot", *r]));
-    json(&odocal(&args))
+    odocal(&args)
+}
+
+/// The JSON of a successful [`icp_output`] run.
+fn icp_json(bag: &Path, out: &Path, robot: Option<&str>) -> Value {
+    json(&icp_output(bag, out, robot))
 }
 
 /// The bundled recording rewritten without its /tf_static, cut to `seconds`.
@@ -79,26 +77,7 @@ fn an_unstated_laser_mounting_is_never_assumed() {
     let d = scratch("checks_mount");
     let bag = without_mount(&d, 20.0);
     let tum = d.join("t.tum");
-    let args = |robot: Option<&Path>| {
-        let mut a = vec![
-            "icp",
-            "--input",
-            bag.to_str().unwrap(),
-            "--out",
-            tum.to_str().unwrap(),
-            "--json",
-        ];
-        if let Some(r) = robot {
-            a.extend(["--robot", r.to_str().unwrap()]);
-        }
-        a.into_iter().map(String::from).collect::<Vec<_>>()
-    };
-    let run = |robot: Option<&Path>| {
-        Command::new(env!("CARGO_BIN_EXE_odocal"))
-            .args(args(robot))
-            .output()
-            .unwrap()
-    };
+    let run = |robot: Option<&Path>| icp_output(&bag, &tum, robot.map(|r| r.to_str().unwrap()));
     // No robot file: the wheelchair's rear-facing mounting is not applied.
     let err = refused(&run(None));
     assert!(
