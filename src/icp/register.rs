@@ -247,6 +247,8 @@ fn associate(
     } = found;
     corrs.clear();
     corr_lines.clear();
+    corrs.reserve(source.len());
+    corr_lines.reserve(source.len());
     let reach = set.threshold + set.max_gap;
     for (((&p, hint), line), &ns) in source
         .iter()
@@ -425,27 +427,36 @@ fn normal_system(
     frozen: bool,
 ) -> (Matrix3<f64>, Vector3<f64>) {
     let kappa2 = kappa * kappa;
-    // Plain sums (row-major) rather than nalgebra's outer product: the same
-    // products `(ρ'' J_r) J_c` and `(w e) J_r`, summed in the same order,
-    // without the general matrix product's loops.
-    let mut h = [0.0; 9];
+    // Plain sums rather than nalgebra's outer product: the same products
+    // `(ρ'' J_r) J_c` and `(w e) J_r`, summed in the same order, without the
+    // general matrix product's loops; of `H` only the lower triangle
+    // (`h[r][c]`, c ≤ r, row by row), all that the Cholesky factorisation of
+    // `damped_step` reads.
+    let mut h = [0.0; 6];
     let mut g = [0.0; 3];
     for k in corrs {
         let (e, w) = (k.residual, k.weight);
         let j = metric::jacobian(at.rotate(k.p), k.normal.unwrap_or_default());
         let curv = curvature(e, w, kappa2, frozen);
         let cj = [curv * j.x, curv * j.y, curv * j.z];
-        for (r, hr) in h.chunks_exact_mut(3).enumerate() {
-            for (c, hrc) in hr.iter_mut().enumerate() {
-                *hrc += cj[r] * j[c];
-            }
-        }
+        h[0] += cj[0] * j.x;
+        h[1] += cj[1] * j.x;
+        h[2] += cj[1] * j.y;
+        h[3] += cj[2] * j.x;
+        h[4] += cj[2] * j.y;
+        h[5] += cj[2] * j.z;
         let we = w * e;
-        for (gr, jr) in g.iter_mut().zip(j.iter()) {
-            *gr += we * jr;
-        }
+        g[0] += we * j.x;
+        g[1] += we * j.y;
+        g[2] += we * j.z;
     }
-    (Matrix3::from_row_slice(&h), Vector3::from(g))
+    #[rustfmt::skip]
+    let h = Matrix3::new(
+        h[0], h[1], h[3],
+        h[1], h[2], h[4],
+        h[3], h[4], h[5],
+    );
+    (h, Vector3::from(g))
 }
 
 /// The curvature `ρ''` a residual `e` of weight `w` contributes. Once the
