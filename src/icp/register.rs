@@ -565,6 +565,51 @@ mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
 
+    /// The normal system is `Σ ρ'' J Jᵀ` and `Σ w e J` (nalgebra's outer
+    /// products here), whole and exactly symmetric although only its lower
+    /// triangle is summed.
+    #[test]
+    fn normal_system_is_the_symmetric_sum_of_outer_products() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let at = Placement::new([0.3, -0.2, 0.7]);
+        let kappa: f64 = 0.02;
+        let corrs: Vec<Correspondence> = (0..50)
+            .map(|_| {
+                let a = rng.random::<f64>() * std::f64::consts::TAU;
+                let e = (rng.random::<f64>() - 0.5) * 0.06;
+                let k2 = kappa * kappa;
+                Correspondence {
+                    p: [
+                        rng.random::<f64>() * 8.0 - 4.0,
+                        rng.random::<f64>() * 8.0 - 4.0,
+                    ],
+                    q: [0.0; 2],
+                    normal: Some([a.cos(), a.sin()]),
+                    residual: e,
+                    weight: (k2 / (k2 + e * e)).powi(2),
+                    tilt_var: f64::NAN,
+                }
+            })
+            .collect();
+        for frozen in [false, true] {
+            let (h, g) = normal_system(&corrs, &at, kappa, frozen);
+            let (mut h_want, mut g_want) = (Matrix3::zeros(), Vector3::zeros());
+            for k in &corrs {
+                let j = metric::jacobian(at.rotate(k.p), k.normal.unwrap());
+                let curv = curvature(k.residual, k.weight, kappa * kappa, frozen);
+                h_want += curv * j * j.transpose();
+                g_want += k.weight * k.residual * j;
+            }
+            assert_eq!(h, h.transpose(), "frozen {frozen}");
+            let scale = h_want.norm();
+            assert!(
+                (h - h_want).norm() <= 1e-12 * scale,
+                "frozen {frozen}: {h} vs {h_want}"
+            );
+            assert!((g - g_want).norm() <= 1e-12 * g_want.norm().max(1e-300));
+        }
+    }
+
     /// The bracketed selection gives the sorted keys' upper median whatever
     /// the previous median: near, far below, far above, zero, and with ties.
     #[test]
