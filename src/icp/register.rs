@@ -247,8 +247,6 @@ fn associate(
     } = found;
     corrs.clear();
     corr_lines.clear();
-    corrs.reserve(source.len());
-    corr_lines.reserve(source.len());
     let reach = set.threshold + set.max_gap;
     for (((&p, hint), line), &ns) in source
         .iter()
