@@ -571,11 +571,10 @@ mod tests {
         let mut rng = rand::rngs::StdRng::seed_from_u64(11);
         let at = Placement::new([0.3, -0.2, 0.7]);
         let kappa: f64 = 0.02;
-        let corrs: Vec<Correspondence> = (0..50)
+        let mut corrs: Vec<Correspondence> = (0..50)
             .map(|_| {
                 let a = rng.random::<f64>() * std::f64::consts::TAU;
                 let e = (rng.random::<f64>() - 0.5) * 0.06;
-                let k2 = kappa * kappa;
                 Correspondence {
                     p: [
                         rng.random::<f64>() * 8.0 - 4.0,
@@ -584,11 +583,12 @@ mod tests {
                     q: [0.0; 2],
                     normal: Some([a.cos(), a.sin()]),
                     residual: e,
-                    weight: (k2 / (k2 + e * e)).powi(2),
+                    weight: 1.0,
                     tilt_var: f64::NAN,
                 }
             })
             .collect();
+        weigh(&mut corrs, kappa);
         for frozen in [false, true] {
             let (h, g) = normal_system(&corrs, &at, kappa, frozen);
             let (mut h_want, mut g_want) = (Matrix3::zeros(), Vector3::zeros());
