@@ -1,0 +1,413 @@
+#!/usr/bin/env python3
+"""README's scan-matching figures, regenerated from odocal's own commands.
+
+Each block of README.md between a line `<!-- figures: NAME -->` and the next
+`<!-- /figures -->` is what this script computes from the release binary, the
+bundled recording, the simulator and the real logs of the shared data folder:
+
+  figures.py --check   exit 1 when a block differs from what the binary gives
+                       (the difference shown); the test command runs this
+  figures.py --write   rewrite the blocks in README.md (atomically)
+  figures.py --print   print the blocks
+
+Blocks:
+  icp-truth    motion sums against the simulator's truth (tools/icp_bias.py)
+  relations    the four benchmark logs' relation errors, odocal and CSM
+  run-to-run   the same over the five convergence bounds 0.8-1.2 x default
+
+CSM's figures are recorded measurements (tools/figures_csm.json: Censi's
+PL-ICP built and run as README's Performance section says); `--csm DIR`
+scores its trajectories DIR/LOG-F.tum (F = each bound's factor) with
+`odocal eval --relations` and records them again. odocal's figures are always
+computed afresh. Blocks that need the shared data (ODOCAL_DATA, default
+../shared/data) say SKIP when it is missing; under CI (`CI` set) that fails.
+
+Options: --odocal BIN (default $ODOCAL_BIN or $CARGO_TARGET_DIR/release/odocal
+or target/release/odocal), --data DIR, --only NAME (repeatable), --jobs N.
+Prose that quotes these figures is not generated: --write says which blocks
+changed, so that the text around them can be read again.
+"""
+import argparse
+import concurrent.futures
+import difflib
+import json
+import os
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+README = os.path.join(ROOT, "README.md")
+CSM_FILE = os.path.join(ROOT, "tools", "figures_csm.json")
+LOGS = ["intel", "mit-csail", "fr079", "aces"]
+# The names the tables give the logs (the last two were never tuned on).
+LOG_LABEL = {
+    "intel": "intel",
+    "mit-csail": "mit-csail",
+    "fr079": "fr079 (not used for tuning)",
+    "aces": "aces (not used for tuning)",
+}
+# Factors of the default convergence bound (tests/support.rs,
+# CONVERGENCE_FACTORS); 1.0 is the default run.
+FACTORS = ["0.8", "0.9", "1.0", "1.1", "1.2"]
+CSM_DEFAULT_EPSILON = 1e-4
+BEGIN = re.compile(r"^<!-- figures: ([a-z0-9-]+) -->$")
+END = "<!-- /figures -->"
+
+
+def default_convergence():
+    """The default `[icp] convergence` (m), read from src/icp/params.rs."""
+    with open(os.path.join(ROOT, "src", "icp", "params.rs")) as f:
+        m = re.search(r"^\s*convergence: ([0-9.eE+-]+),$", f.read(), re.M)
+    if not m:
+        raise SystemExit("src/icp/params.rs: no default `convergence: X,` found")
+    return float(m.group(1))
+
+
+class Skip(Exception):
+    """A block that cannot be computed here (missing data), with the reason."""
+
+
+class Runner:
+    """Runs odocal commands once each, in a scratch folder, `jobs` at a time."""
+
+    def __init__(self, odocal, data, scratch, jobs):
+        self.odocal = odocal
+        self.data = data
+        self.scratch = scratch
+        self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=jobs)
+        self.futures = {}
+
+    def path(self, name):
+        return os.path.join(self.scratch, name)
+
+    def run(self, args, check=True):
+        """Runs odocal with `args`; its stdout, or an error naming the command."""
+        cmd = [self.odocal] + [str(a) for a in args]
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        if check and p.returncode != 0:
+            raise RuntimeError(f"{' '.join(cmd)} failed ({p.returncode}):\n{p.stderr}")
+        return p.stdout
+
+    def once(self, key, fn):
+        """`fn()` started once per key in the pool; its future."""
+        if key not in self.futures:
+            self.futures[key] = self.pool.submit(fn)
+        return self.futures[key]
+
+    def benchmark_log(self, log):
+        path = os.path.join(self.data, "slam-benchmark", f"{log}.mcap")
+        if not os.path.isfile(path):
+            raise Skip(f"{path} missing (set ODOCAL_DATA to the shared data folder)")
+        return path
+
+    def bound_config(self, factor):
+        """`--config` arguments setting the convergence bound to `factor`
+        times its default; none for the default itself."""
+        if factor == "1.0":
+            return []
+        cfg = self.path(f"conv-{factor}.toml")
+        with open(cfg, "w") as f:
+            f.write(f"[icp]\nconvergence = {float(factor) * default_convergence()!r}\n")
+        return ["--config", cfg]
+
+    def relations(self, log, factor):
+        """`odocal eval --relations --json` of the log matched with the
+        convergence bound at `factor` times its default."""
+        bag = self.benchmark_log(log)
+
+        def work():
+            tum = self.path(f"{log}-{factor}.tum")
+            self.run(["icp", "--input", bag, "--out", tum] + self.bound_config(factor))
+            rel = os.path.join(self.data, "slam-benchmark", f"{log}.relations")
+            out = self.run(["eval", "--estimate", tum, "--relations", rel, "--json"])
+            return json.loads(out)["relations"]
+
+        return self.once(("relations", log, factor), work)
+
+
+# --- number formats ----------------------------------------------------------
+
+
+def spread(values, fmt):
+    """(median, range) as text; the range is None when every value prints
+    alike."""
+    lo, hi = fmt(min(values)), fmt(max(values))
+    return fmt(statistics.median(values)), (None if lo == hi else f"{lo}–{hi}")
+
+
+# --- blocks ------------------------------------------------------------------
+
+
+def relations_cells(r):
+    """(local, all) cells of one run's relations: translation mean ± std and
+    the local rotation mean."""
+    loc = r["local"]
+    local = f"{loc['trans_mean']:.3f} ± {loc['trans_std']:.3f} m, {loc['rot_mean_deg']:.2f}°"
+    return local, f"{r['trans_mean']:.2f} ± {r['trans_std']:.2f} m"
+
+
+def block_relations(runner, csm):
+    rows = [
+        "| log | odocal local | odocal all | CSM local | CSM all |",
+        "|---|---|---|---|---|",
+    ]
+    futures = {log: runner.relations(log, "1.0") for log in LOGS}
+    for log in LOGS:
+        ours = relations_cells(futures[log].result())
+        theirs = relations_cells(csm_run(csm, log, "1.0"))
+        rows.append(f"| {LOG_LABEL[log]} | {' | '.join(ours + theirs)} |")
+    return rows
+
+
+def ensemble_cells(runs):
+    """(local, all) cells over the five bounds: median (range)."""
+    f4, f3 = (lambda v: f"{v:.4f}"), (lambda v: f"{v:.3f}")
+    t, t_range = spread([r["local"]["trans_mean"] for r in runs], f4)
+    a, a_range = spread([r["local"]["rot_mean_deg"] for r in runs], f3)
+    if t_range is None and a_range is None:
+        local = f"{t} m, {a}° (every run)"
+    else:
+        local = f"{t} m{f' ({t_range})' if t_range else ''}, {a}°"
+        local += f" ({a_range}°)" if a_range else ""
+    m, m_range = spread([r["trans_mean"] for r in runs], f3)
+    return local, f"{m} m ({m_range})" if m_range else f"{m} m (every run)"
+
+
+def block_run_to_run(runner, csm):
+    rows = [
+        "| log | odocal local | odocal all | CSM local | CSM all |",
+        "|---|---|---|---|---|",
+    ]
+    futures = {(log, f): runner.relations(log, f) for log in LOGS for f in FACTORS}
+    for log in LOGS:
+        ours = ensemble_cells([futures[(log, f)].result() for f in FACTORS])
+        theirs = ensemble_cells([csm_run(csm, log, f) for f in FACTORS])
+        rows.append(f"| {log} | {' | '.join(ours + theirs)} |")
+    return rows
+
+
+# Rows of the truth table: label, how the recording is made (None: the
+# bundled one), and the `[icp]` settings.
+TRUTH_ROWS = [
+    (
+        "bundled `scans/wheelchair-corridor.mcap` (25 Hz, laser on the back, sweeping)",
+        None,
+        "",
+    ),
+    (
+        "`simulate --scenario square --duration 60 --seed 3`",
+        ["--scenario", "square", "--duration", "60", "--seed", "3"],
+        "",
+    ),
+    (
+        "`simulate --scenario corridor-loop --seed 5`",
+        ["--scenario", "corridor-loop", "--seed", "5"],
+        "",
+    ),
+    (
+        "the same scan to scan (`--config C`, `C` = `[icp] local_map = false`, as `diagnose` matches)",
+        ["--scenario", "corridor-loop", "--seed", "5"],
+        "[icp]\nlocal_map = false\n",
+    ),
+]
+
+
+def simulated(runner, sim):
+    """(bag, truth) paths of `odocal simulate` with the arguments `sim`."""
+    key = "-".join(sim)
+    return runner.path(f"{key}.mcap"), runner.path(f"{key}.truth.json")
+
+
+def simulate(runner, sim):
+    bag, truth = simulated(runner, sim)
+    runner.run(["simulate", *sim, "--out", bag, "--truth", truth])
+
+
+def truth_row(runner, k, sim, icp_settings):
+    """One row's cells: Σdx and Σdθ ratios, error per pair, flagged pairs."""
+    if sim is None:
+        bag = os.path.join(ROOT, "scans", "wheelchair-corridor.mcap")
+        truth = os.path.join(ROOT, "scans", "wheelchair-corridor.truth.json")
+    else:
+        bag, truth = simulated(runner, sim)
+    cfg = runner.path(f"truth-{k}.toml")
+    with open(cfg, "w") as f:
+        f.write(icp_settings)
+    tum, motions = runner.path(f"truth-{k}.tum"), runner.path(f"truth-{k}.csv")
+    runner.run(["icp", "--input", bag, "--out", tum, "--motions", motions, "--config", cfg])
+    bias = subprocess.run(
+        [sys.executable, os.path.join(ROOT, "tools", "icp_bias.py"), motions, truth],
+        capture_output=True, text=True, check=True,
+    ).stdout
+    v = dict(line.split(None, 1) for line in bias.splitlines() if line.strip())
+    flagged = int(v["pairs"]) - int(v["valid"])
+    return [
+        f"{float(v['dx_ratio']):.4f}",
+        f"{float(v['dtheta_ratio']):.4f}",
+        f"{float(v['trans_err_mm']):.1f} mm, {float(v['rot_err_deg']):.3f}°",
+        str(flagged),
+    ]
+
+
+def block_icp_truth(runner, csm):
+    rows = [
+        "| recording | Σdx ICP/true | Σdθ ICP/true | error per pair | flagged pairs |",
+        "|---|---|---|---|---|",
+    ]
+    # The simulations first: a row waiting on one from inside the pool could
+    # hold every worker.
+    sims = {tuple(sim) for _, sim, _ in TRUTH_ROWS if sim is not None}
+    for fut in [runner.pool.submit(simulate, runner, list(sim)) for sim in sorted(sims)]:
+        fut.result()
+    futures = [
+        runner.pool.submit(truth_row, runner, k, sim, cfg)
+        for k, (_, sim, cfg) in enumerate(TRUTH_ROWS)
+    ]
+    for (label, _, _), fut in zip(TRUTH_ROWS, futures):
+        rows.append(f"| {label} | {' | '.join(fut.result())} |")
+    return rows
+
+
+BLOCKS = {
+    "icp-truth": block_icp_truth,
+    "relations": block_relations,
+    "run-to-run": block_run_to_run,
+}
+
+
+# --- CSM's recorded figures ----------------------------------------------------
+
+CSM_SOURCE = (
+    "CSM (Censi's PL-ICP, github.com/AndreaCensi/csm at dff2557, CMake Release, "
+    "-O3 -D_GNU_SOURCE, default sm_icp parameters, scan to scan from the odometry, "
+    "the scans' true beam angles; the laser pose -laser_x 0.04 on FR079), epsilon_xy = epsilon_theta = F x 1e-4 for each "
+    "factor F; each run's trajectory scored with `odocal eval --relations --json` "
+    "(README, Performance)"
+)
+
+
+def csm_run(csm, log, factor):
+    try:
+        return csm["runs"][log][factor]
+    except KeyError:
+        raise Skip(f"no CSM run of {log} at {factor}× in {CSM_FILE} (record it with --csm DIR)")
+
+
+def record_csm(runner, folder):
+    """Scores CSM's trajectories DIR/LOG-F.tum and rewrites figures_csm.json."""
+    csm = {"source": CSM_SOURCE}
+    for log in LOGS:
+        for factor in FACTORS:
+            tum = os.path.join(folder, f"{log}-{factor}.tum")
+            rel = os.path.join(runner.data, "slam-benchmark", f"{log}.relations")
+            out = runner.run(["eval", "--estimate", tum, "--relations", rel, "--json"])
+            csm.setdefault("runs", {}).setdefault(log, {})[factor] = json.loads(out)["relations"]
+    write_atomically(CSM_FILE, json.dumps(csm, indent=1) + "\n")
+
+
+# --- README ------------------------------------------------------------------
+
+
+def blocks_of(text):
+    """{name: (first line index inside, end marker's index)} of README's
+    generated blocks; an unterminated or repeated block is an error."""
+    lines, found, i = text.split("\n"), {}, 0
+    while i < len(lines):
+        m = BEGIN.match(lines[i])
+        if m:
+            end = next((j for j in range(i + 1, len(lines)) if lines[j] == END), None)
+            if end is None or m.group(1) in found:
+                raise SystemExit(f"README.md line {i + 1}: block {m.group(1)} unterminated or repeated")
+            found[m.group(1)] = (i + 1, end)
+            i = end
+        i += 1
+    return lines, found
+
+
+def write_atomically(path, text):
+    """`text` into `path` through a renamed temporary file (the file's mode
+    kept; 0644 for a new one)."""
+    mode = os.stat(path).st_mode & 0o777 if os.path.exists(path) else 0o644
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=".figures-")
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    os.chmod(tmp, mode)
+    os.replace(tmp, path)
+
+
+def default_odocal():
+    if os.environ.get("ODOCAL_BIN"):
+        return os.environ["ODOCAL_BIN"]
+    target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
+    return os.path.join(target, "release", "odocal")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    mode = ap.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--check", action="store_true")
+    mode.add_argument("--write", action="store_true")
+    mode.add_argument("--print", action="store_true")
+    mode.add_argument("--csm", metavar="DIR")
+    ap.add_argument("--odocal", default=default_odocal())
+    ap.add_argument("--data", default=os.environ.get(
+        "ODOCAL_DATA", os.path.join(os.path.dirname(ROOT), "shared", "data")))
+    ap.add_argument("--only", action="append", choices=sorted(BLOCKS))
+    ap.add_argument("--jobs", type=int, default=2)
+    a = ap.parse_args()
+    if not os.access(a.odocal, os.X_OK):
+        raise SystemExit(f"{a.odocal}: no odocal binary (build it, or give --odocal BIN)")
+    with tempfile.TemporaryDirectory(prefix="odocal-figures-") as scratch:
+        runner = Runner(a.odocal, a.data, scratch, a.jobs)
+        if a.csm:
+            record_csm(runner, a.csm)
+            return 0
+        return regenerate(runner, a)
+
+
+def regenerate(runner, a):
+    with open(README) as f:
+        text = f.read()
+    lines, found = blocks_of(text)
+    names = a.only or sorted(BLOCKS)
+    missing = [n for n in names if n not in found]
+    if missing:
+        raise SystemExit(f"README.md has no block {', '.join(missing)}")
+    with open(CSM_FILE) as f:
+        csm = json.load(f)
+    changed, skipped = [], []
+    for name in sorted(names, key=lambda n: -found[n][0]):
+        start, end = found[name]
+        try:
+            new = BLOCKS[name](runner, csm)
+        except RuntimeError as e:
+            raise SystemExit(f"figures {name}: {e}")
+        except Skip as s:
+            print(f"SKIP figures {name}: {s}", file=sys.stderr)
+            skipped.append(name)
+            continue
+        old = lines[start:end]
+        if a.print:
+            print(f"<!-- figures: {name} -->\n" + "\n".join(new) + f"\n{END}")
+        if new != old:
+            changed.append(name)
+            sys.stderr.writelines(difflib.unified_diff(
+                [l + "\n" for l in old], [l + "\n" for l in new],
+                f"README.md ({name})", f"odocal ({name})"))
+            lines[start:end] = new
+    if a.write and changed:
+        write_atomically(README, "\n".join(lines))
+    verdict = "differ" if a.check else "changed"
+    print(f"figures: {len(names) - len(skipped)} blocks computed, {len(skipped)} skipped; "
+          f"{verdict}: {', '.join(sorted(changed)) or 'none'}", file=sys.stderr)
+    if skipped and os.environ.get("CI"):
+        print("figures: under CI every block must be computed", file=sys.stderr)
+        return 1
+    return 1 if a.check and changed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
