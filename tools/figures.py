@@ -10,10 +10,11 @@ bundled recording, the simulator and the real logs of the shared data folder:
   figures.py --write   rewrite the blocks in README.md (atomically)
   figures.py --print   print the blocks
 
-Blocks:
+Blocks (about 15 s on 2 cores; the slow one only with --all or --only):
   icp-truth    motion sums against the simulator's truth (tools/icp_bias.py)
   relations    the four benchmark logs' relation errors, odocal and CSM
   run-to-run   the same over the five convergence bounds 0.8-1.2 x default
+  blind-suite  the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
 
 CSM's figures are recorded measurements (tools/figures_csm.json: Censi's
 PL-ICP built and run as README's Performance section says); `--csm DIR`
@@ -271,10 +272,21 @@ def block_icp_truth(runner, csm):
     return rows
 
 
+def block_blind_suite(runner, csm):
+    """The blind diagnosis suite's table, as `odocal experiment diagnose`
+    writes it (125 simulated runs through bag, ICP and diagnosis)."""
+    out = runner.path("blind-suite")
+    runner.run(["experiment", "diagnose", "--runs", "5", "--seed", "200", "--out", out])
+    with open(os.path.join(out, "diagnose.md")) as f:
+        return [line.rstrip("\n") for line in f if line.startswith("|")]
+
+
+# name: (how it is computed, whether it is slow: computed only with --all).
 BLOCKS = {
-    "icp-truth": block_icp_truth,
-    "relations": block_relations,
-    "run-to-run": block_run_to_run,
+    "icp-truth": (block_icp_truth, False),
+    "relations": (block_relations, False),
+    "run-to-run": (block_run_to_run, False),
+    "blind-suite": (block_blind_suite, True),
 }
 
 
@@ -356,6 +368,7 @@ def main():
     ap.add_argument("--data", default=os.environ.get(
         "ODOCAL_DATA", os.path.join(os.path.dirname(ROOT), "shared", "data")))
     ap.add_argument("--only", action="append", choices=sorted(BLOCKS))
+    ap.add_argument("--all", action="store_true", help="the slow blocks too")
     ap.add_argument("--jobs", type=int, default=2)
     a = ap.parse_args()
     if not os.access(a.odocal, os.X_OK):
@@ -372,7 +385,7 @@ def regenerate(runner, a):
     with open(README) as f:
         text = f.read()
     lines, found = blocks_of(text)
-    names = a.only or sorted(BLOCKS)
+    names = a.only or sorted(n for n, (_, slow) in BLOCKS.items() if a.all or not slow)
     missing = [n for n in names if n not in found]
     if missing:
         raise SystemExit(f"README.md has no block {', '.join(missing)}")
@@ -382,7 +395,7 @@ def regenerate(runner, a):
     for name in sorted(names, key=lambda n: -found[n][0]):
         start, end = found[name]
         try:
-            new = BLOCKS[name](runner, csm)
+            new = BLOCKS[name][0](runner, csm)
         except RuntimeError as e:
             raise SystemExit(f"figures {name}: {e}")
         except Skip as s:
