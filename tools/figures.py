@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""README's scan-matching figures, regenerated from odocal's own commands.
+"""README's generated tables, recomputed from odocal's own commands.
 
 Each block of README.md between a line `<!-- figures: NAME -->` and the next
 `<!-- /figures -->` is what this script computes from the release binary, the
@@ -10,16 +10,17 @@ bundled recording, the simulator and the real logs of the shared data folder:
   figures.py --write   rewrite the blocks in README.md (atomically)
   figures.py --print   print the blocks
 
-Blocks (about 15 s on 2 cores; the slow one only with --all or --only):
+Blocks (about 20 s on 2 cores; the slow one only with --all or --only):
   icp-truth    motion sums against the simulator's truth (tools/icp_bias.py)
   relations    the four benchmark logs' relation errors, odocal and CSM
   run-to-run   the same over the five convergence bounds 0.8-1.2 x default
+  real-calibration  the real recordings' batch and filter calibrations
   blind-suite  the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
 
 CSM's figures are recorded measurements (tools/figures_csm.json: Censi's
-PL-ICP built and run as README's Performance section says); `--csm DIR`
-scores its trajectories DIR/LOG-F.tum (F = each bound's factor) with
-`odocal eval --relations` and records them again. odocal's figures are always
+PL-ICP built and run by tools/csm/, as README's Performance section says);
+`--csm DIR` scores its trajectories DIR/LOG-F.tum (F = each bound's factor)
+with `odocal eval --relations` and records them again. odocal's figures are always
 computed afresh. Blocks that need the shared data (ODOCAL_DATA, default
 ../shared/data) say SKIP when it is missing; under CI (`CI` set) that fails.
 
@@ -272,6 +273,99 @@ def block_icp_truth(runner, csm):
     return rows
 
 
+# --- calibrations of the real recordings ----------------------------------------
+
+# (label, bag under the data folder, robot file name)
+REAL_RECORDINGS = [
+    ("mines-rover exp1", "mines-rover/exp1.mcap", "mines-rover"),
+    ("mines-rover exp2", "mines-rover/exp2.mcap", "mines-rover"),
+    ("lego-robot", "lego-robot/lego-robot.mcap", "lego-robot"),
+]
+FILTERS = ["adaptive-pf", "dkf", "akf"]
+PARAMETER_LABEL = {"r_right": "R_R", "r_left": "R_L", "wheel_base": "D"}
+
+
+def num(x, digits):
+    """`x` to `digits` decimals with a typographic minus."""
+    return f"{x:.{digits}f}".replace("-", "−")
+
+
+def calibrate(runner, bag, robot, method, init_batch):
+    """(`--json` output or None, the refusal) of one `odocal calibrate`."""
+    args = ["calibrate", "--input", bag, "--robot", robot, "--method", method, "--json"]
+    args += ["--init", "batch"] if init_batch else []
+    out = runner.path(f"cal-{os.path.basename(bag)}-{method}-{int(init_batch)}")
+    p = subprocess.run([runner.odocal, *args, "--out", out], capture_output=True, text=True)
+    refused = re.search(r"calibration refused: (.*)", p.stderr)
+    if p.returncode == 2 and refused:
+        return None, refused.group(1)
+    if p.returncode != 0:
+        raise RuntimeError(f"odocal {' '.join(args)} failed ({p.returncode}):\n{p.stderr}")
+    return json.loads(p.stdout), None
+
+
+def refusal_cell(reason):
+    """A refusal in a few words: a parameter at its search range's edge named
+    with its value, any other reason as odocal gives it."""
+    m = re.match(r"(\w+) came out ([0-9.]+) m, at the edge of its search range", reason)
+    if m:
+        name = PARAMETER_LABEL.get(m.group(1), m.group(1))
+        return f"refused ({name} {num(float(m.group(2)) * 1000, 1)} mm at the edge of its search range)"
+    return f"refused ({reason.split(':')[0]})"
+
+
+def filter_cell(result):
+    d, refused = result
+    if refused:
+        return refusal_cell(refused)
+    f, sd = d["final"], d["std"]
+    r = [num(f[k] * 1000, 1) for k in ("r_right", "r_left")]
+    cell = (f"R {r[0]} / {r[1]} ± {num(max(sd['r_right'], sd['r_left']) * 1000, 1)}, "
+            f"D {num(f['wheel_base'] * 1000, 0)} ± {num(sd['wheel_base'] * 1000, 0)}")
+    nominal = [num(d["assumptions"][k]["value"] * 1000, 1) for k in ("r_right", "r_left")]
+    nominal_d = num(d["assumptions"]["wheel_base"]["value"] * 1000, 0)
+    if r == nominal and num(f["wheel_base"] * 1000, 0) == nominal_d:
+        cell += " (the nominal values)"
+    return cell
+
+
+def batch_cell(result):
+    d, refused = result
+    if refused:
+        return refusal_cell(refused)
+    mm = lambda v, k: num(v * 1000, k)
+    rr, rl, wb, las, dt = (d[k] for k in ("r_right", "r_left", "wheel_base", "laser", "time_offset"))
+    return (f"R {mm(rr['value'], 1)} / {mm(rl['value'], 1)} ± {mm(max(rr['std'], rl['std']), 1)} mm, "
+            f"D {mm(wb['value'], 0)} ± {mm(wb['std'], 0)} mm, "
+            f"laser {mm(las['x']['value'], 0)} / {mm(las['y']['value'], 0)} "
+            f"± {mm(max(las['x']['std'], las['y']['std']), 0)} mm, "
+            f"δ {num(dt['value'], 3)} ± {num(dt['std'], 3)} s")
+
+
+def block_real_calibration(runner, csm):
+    rows = [
+        "| recording | batch (radii, wheel base, laser x/y, time offset) | "
+        + " | ".join(f"{m} nominal / from batch" for m in FILTERS) + " |",
+        "|---|---|---|---|---|",
+    ]
+    for label, rel, robot in REAL_RECORDINGS:
+        bag = os.path.join(runner.data, rel)
+        if not os.path.isfile(bag):
+            raise Skip(f"{bag} missing (set ODOCAL_DATA to the shared data folder)")
+    futures = {
+        (rel, m, b): runner.pool.submit(calibrate, runner, os.path.join(runner.data, rel), robot, m, b)
+        for _, rel, robot in REAL_RECORDINGS
+        for m, b in [("batch", False)] + [(m, b) for m in FILTERS for b in (False, True)]
+    }
+    for label, rel, _ in REAL_RECORDINGS:
+        cells = [batch_cell(futures[(rel, "batch", False)].result())]
+        for m in FILTERS:
+            pair = [filter_cell(futures[(rel, m, b)].result()) for b in (False, True)]
+            cells.append(" / ".join(pair))
+        rows.append(f"| {label} | {' | '.join(cells)} |")
+    return rows
+
+
 def block_blind_suite(runner, csm):
     """The blind diagnosis suite's table, as `odocal experiment diagnose`
     writes it (125 simulated runs through bag, ICP and diagnosis)."""
@@ -286,6 +380,7 @@ BLOCKS = {
     "icp-truth": (block_icp_truth, False),
     "relations": (block_relations, False),
     "run-to-run": (block_run_to_run, False),
+    "real-calibration": (block_real_calibration, False),
     "blind-suite": (block_blind_suite, True),
 }
 

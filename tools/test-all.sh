@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Every test suite: the Rust tests (`cargo test --release`), README's
-# scan-matching tables recomputed with the release binary just built and
+# Every test suite: the Rust tests (`cargo test --release`), README's generated
+# tables recomputed with the release binary just built and
 # compared (tools/figures.py --check), then the Python package built from
 # python/ and installed into this Python, and its pytest suite (which compares
 # the package with that binary).
@@ -12,7 +12,7 @@ PY="${ODOCAL_PYTHON:-python3}"
 echo "== Rust: cargo test --release $*"
 cargo test --release "$@"
 
-echo "== README's scan-matching tables against this build (tools/figures.py --check)"
+echo "== README's generated tables against this build (tools/figures.py --check)"
 export ODOCAL_BIN="${CARGO_TARGET_DIR:-target}/release/odocal"
 "$PY" tools/figures.py --check --odocal "$ODOCAL_BIN"
 
