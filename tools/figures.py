@@ -10,11 +10,12 @@ bundled recording, the simulator and the real logs of the shared data folder:
   figures.py --write   rewrite the blocks in README.md (atomically)
   figures.py --print   print the blocks
 
-Blocks (about 20 s on 2 cores; the slow one only with --all or --only):
+Blocks (about 40 s on 2 cores; the slow one only with --all or --only):
   icp-truth    motion sums against the simulator's truth (tools/icp_bias.py)
   relations    the four benchmark logs' relation errors, odocal and CSM
   run-to-run   the same over the five convergence bounds 0.8-1.2 x default
   real-calibration  the real recordings' batch and filter calibrations
+  what-changed the changes named at each firing on simulated runs (25 runs)
   blind-suite  the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
 
 CSM's figures are recorded measurements (tools/figures_csm.json: Censi's
@@ -366,6 +367,85 @@ def block_real_calibration(runner, csm):
     return rows
 
 
+# --- what changed, named at each firing ------------------------------------------
+
+# (effect spec, unit, scale to it and decimals of the estimate); seeds 1-5,
+# 60 s of the corridor loop, the change at 30 s.
+CHANGES = [
+    ("radius_step:time=30,right=0.004,left=0", "mm", 1000, 2),
+    ("radius_step:time=30,right=0,left=0.004", "mm", 1000, 2),
+    ("latency_change:time=30,delay=0.08", "s", 1, 4),
+    ("laser_knock:time=30,dx=0,dy=0,dyaw=0.035", "rad", 1, 4),
+    (None, "", 1, 0),
+]
+SEEDS = ["1", "2", "3", "4", "5"]
+
+
+def changes_of(runner, effect, seed):
+    """`changes` of `calibrate --json` on a simulated 60 s run."""
+    name = f"chg-{(effect or 'none').replace(':', '_').replace(',', '_')}-{seed}"
+    bag = runner.path(f"{name}.mcap")
+    sim = ["simulate", "--seed", seed, "--duration", "60", "--out", bag]
+    runner.run(sim + (["--effect", effect] if effect else []))
+    out = runner.run(["calibrate", "--input", bag, "--out", runner.path(name), "--json"])
+    return json.loads(out).get("changes", [])
+
+
+def span(values, digits):
+    """`lo–hi` of `values` at `digits` decimals, one value when they print alike."""
+    lo, hi = num(min(values), digits), num(max(values), digits)
+    return lo if lo == hi else f"{lo}–{hi}"
+
+
+def firing_cells(runs):
+    """(fired at, named): the runs' first firings and later ones, their
+    detector; what was named in how many runs, and the others' verdicts."""
+    first = [r[0]["time_s"] for r in runs]
+    later = [t for r in runs for t in [c["time_s"] for c in r[1:]] + r[0]["refired_s"]]
+    fired = span(first, 2) + (f", again at {span(later, 2)}" if later else "")
+    fired += f" ({'mounting watch' if runs[0][0]['detector'] == 'laser_mount' else runs[0][0]['detector']})"
+    named = [r[0] for r in runs if r[0]["effect"] != "undetermined"]
+    kinds = sorted({(c["effect"], c["parameter"]) for c in named})
+    parts = [f"{e}, {p}, {sum(1 for c in named if (c['effect'], c['parameter']) == (e, p))} of {len(runs)}"
+             for e, p in kinds]
+    if any(c["refired_s"] for c in named):
+        parts[-1] += ", reported once with the later firing"
+    if named and named[0]["effect"] == "laser_offset":
+        off = max(abs(c["parameters"][k]) for c in named for k in ("x", "y")) * 1000
+        parts[-1] += f" (x, y within {off:.0f} mm of 0)"
+    left = [r[0] for r in runs if r[0]["effect"] == "undetermined"]
+    if left:
+        standing = sorted({c["standing"] for c in left if c["standing"]})
+        parts.append(f"{len(left)} `undetermined`" + (f", {', '.join(standing)} standing" if standing else ""))
+    return fired, "; ".join(parts), named
+
+
+def block_what_changed(runner, csm):
+    rows = [
+        "| change at 30 s (truth) | fired at (s) | named | estimate ± stderr | onset (s) [95 % interval] | ΔBIC |",
+        "|---|---|---|---|---|---|",
+    ]
+    futures = {(e, s): runner.pool.submit(changes_of, runner, e, s) for e, *_ in CHANGES for s in SEEDS}
+    for effect, unit, scale, digits in CHANGES:
+        runs = [futures[(effect, s)].result() for s in SEEDS]
+        label = f"`{effect}`" if effect else "none"
+        if not any(runs):
+            rows.append(f"| {label} | never | – | – | – | – |")
+            continue
+        if not all(runs):
+            raise RuntimeError(f"{label}: fired in only {sum(map(bool, runs))} of {len(runs)} runs")
+        fired, named_cell, named = firing_cells(runs)
+        est = span([c["estimate"] * scale for c in named], digits)
+        err = span([c["stderr"] * scale for c in named], digits)
+        onset = span([c["onset_s"] for c in named], 2)
+        lo = min(c["onset_interval_s"][0] for c in named)
+        hi = max(c["onset_interval_s"][1] for c in named)
+        bic = span([c["delta_bic"] for c in named], 0)
+        rows.append(f"| {label} | {fired} | {named_cell} | {est} {unit} ± {err} {unit} | "
+                    f"{onset} [{num(lo, 2)}–{num(hi, 2)}] | {bic} |")
+    return rows
+
+
 def block_blind_suite(runner, csm):
     """The blind diagnosis suite's table, as `odocal experiment diagnose`
     writes it (125 simulated runs through bag, ICP and diagnosis)."""
@@ -381,6 +461,7 @@ BLOCKS = {
     "relations": (block_relations, False),
     "run-to-run": (block_run_to_run, False),
     "real-calibration": (block_real_calibration, False),
+    "what-changed": (block_what_changed, False),
     "blind-suite": (block_blind_suite, True),
 }
 
