@@ -16,6 +16,7 @@ Blocks (about 40 s on 2 cores; the slow one only with --all or --only):
   run-to-run   the same over the five convergence bounds 0.8-1.2 x default
   real-calibration  the real recordings' batch and filter calibrations
   what-changed the changes named at each firing on simulated runs (25 runs)
+  real-firings the firings of the real recordings and the bundled one, named
   blind-suite  the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
 
 CSM's figures are recorded measurements (tools/figures_csm.json: Censi's
@@ -446,6 +447,64 @@ def block_what_changed(runner, csm):
     return rows
 
 
+# (label, bag: under the data folder or, starting with scans/, bundled, robot
+# file, what was named there before the naming rules: a record, not computed).
+FIRING_RECORDINGS = [
+    ("Mines exp1", "mines-rover/exp1.mcap", "mines-rover", "turn_slip at 272.9 s (ΔBIC 12.1)"),
+    ("Mines exp2", "mines-rover/exp2.mcap", "mines-rover",
+     "laser_offset yaw −0.064 rad at 367.8 s, x −81 mm at 386.9 s"),
+    ("LEGO robot", "lego-robot/lego-robot.mcap", "lego-robot",
+     "laser_offset yaw −0.090 rad at 17.6 s, latency −0.435 s at 46.3 s"),
+    ("`scans/wheelchair-corridor.mcap` (step right −5 mm, left +4 mm at 40 s)",
+     "scans/wheelchair-corridor.mcap", None, "the same"),
+]
+
+
+def firings_of(runner, rel, robot):
+    """`changes` of `calibrate --json` (the real recordings from the batch)."""
+    if rel.startswith("scans/"):
+        args = ["--input", os.path.join(ROOT, rel)]
+    else:
+        args = ["--input", os.path.join(runner.data, rel), "--robot", robot, "--init", "batch"]
+    out = runner.path(f"firings-{os.path.basename(rel)}")
+    return json.loads(runner.run(["calibrate", *args, "--out", out, "--json"])).get("changes", [])
+
+
+def named_change(c):
+    """A named change: effect, parameter, size ± stderr, onset [interval]."""
+    scale, unit, digits = {"radius_step": (1000, "mm", 2), "latency": (1, "s", 3)}.get(
+        c["effect"], (1, "", 4))
+    lo, hi = c["onset_interval_s"]
+    return (f"{c['effect']} {c['parameter']} {num(c['estimate'] * scale, digits)} ± "
+            f"{num(c['stderr'] * scale, digits)} {unit}, onset {num(c['onset_s'], 2)} s "
+            f"[{num(lo, 2)}–{num(hi, 2)}]").replace("  ", " ")
+
+
+def block_real_firings(runner, csm):
+    rows = [
+        "| recording | firings | named | named, before these rules |",
+        "|---|---|---|---|",
+    ]
+    for _, rel, _, _ in FIRING_RECORDINGS:
+        if not rel.startswith("scans/") and not os.path.isfile(os.path.join(runner.data, rel)):
+            raise Skip(f"{os.path.join(runner.data, rel)} missing (set ODOCAL_DATA to the shared data folder)")
+    futures = [runner.pool.submit(firings_of, runner, rel, robot) for _, rel, robot, _ in FIRING_RECORDINGS]
+    for (label, _, _, before), fut in zip(FIRING_RECORDINGS, futures):
+        changes = fut.result()
+        detectors = sorted({"mounting watch" if c["detector"] == "laser_mount" else c["detector"]
+                            for c in changes})
+        fired = f"{len(changes)} ({', '.join(detectors)})" if changes else "0"
+        named = [named_change(c) for c in changes if c["effect"] != "undetermined"]
+        standing = [c["standing"] for c in changes if c["effect"] == "undetermined" and c["standing"]]
+        below = sum(1 for c in changes if c["effect"] == "undetermined" and not c["standing"])
+        names = ", ".join(dict.fromkeys(standing))
+        left = ([f"{len(standing)} standing ({names})"] if standing else []) + (
+            [f"{below} below the margin"] if below else [])
+        cell = "; ".join(named) if named else "none" + (f": {', '.join(left)}" if left else "")
+        rows.append(f"| {label} | {fired} | {cell} | {before} |")
+    return rows
+
+
 def block_blind_suite(runner, csm):
     """The blind diagnosis suite's table, as `odocal experiment diagnose`
     writes it (125 simulated runs through bag, ICP and diagnosis)."""
@@ -462,6 +521,7 @@ BLOCKS = {
     "run-to-run": (block_run_to_run, False),
     "real-calibration": (block_real_calibration, False),
     "what-changed": (block_what_changed, False),
+    "real-firings": (block_real_firings, False),
     "blind-suite": (block_blind_suite, True),
 }
 
