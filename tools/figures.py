@@ -17,6 +17,8 @@ Blocks (about 40 s on 2 cores; the slow one only with --all or --only):
   real-calibration  the real recordings' batch and filter calibrations
   what-changed the changes named at each firing on simulated runs (25 runs)
   real-firings the firings of the real recordings and the bundled one, named
+  table-ii-scans  seed 000's Table II on simulated scans through ICP, 30 runs
+               (slow: ~1.5 min; its time per step is not compared)
   blind-suite  the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
 
 CSM's figures are recorded measurements (tools/figures_csm.json: Censi's
@@ -505,6 +507,79 @@ def block_real_firings(runner, csm):
     return rows
 
 
+# --- seed 000's Table II end to end --------------------------------------------
+
+# The columns (the experiment's configurations) and seed 000's own figures
+# (its Table II: a record, not computed).
+TABLE_II = [("Adaptive-PF", "adaptive-pf"), ("DKF", "dkf"), ("AKF", "akf"), ("PF (fixed)", "pf")]
+PAPER = {
+    "final radius error R_R / R_L (mm)": ("1.86 / 1.91", "2.11 / 1.85"),
+    "wheel base error (mm)": ("–", "–"),
+    "convergence (s), runs converged": ("32.55", "60.73"),
+    "RMSE x,y (m), online odometry": ("3.38", "5.44"),
+    "RMSE θ (rad), online odometry": ("0.585", "0.941"),
+    "RMSE x,y (m), final parameters": ("–", "–"),
+    "time per step (ms)": ("0.89", "0.46"),
+}
+
+
+def paired_wins(md):
+    """{configuration: {column: wins}} from the experiment's paired table."""
+    wins, head = {}, None
+    for line in md.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if cells[0] == "against":
+            head = cells[1:]
+        elif head and len(cells) == len(head) + 1 and "/" in cells[1]:
+            wins[cells[0]] = {h: c.split(" / ")[0] for h, c in zip(head, cells[1:])}
+    return wins
+
+
+def table_ii_row(label, rows, wins, cell, column):
+    """One metric over the configurations: `cell(row)` and, against the
+    Adaptive-PF, its paired wins under `column` (None: no paired figure)."""
+    out = []
+    for k, (_, key) in enumerate(TABLE_II):
+        text = cell(rows[key])
+        if k and column:
+            text += f" (wins {wins[key][column]}/{rows[key]['runs_n']})"
+        out.append(text)
+    return f"| {label} | {' | '.join(out + list(PAPER[label]))} |"
+
+
+def block_table_ii_scans(runner, csm):
+    out = runner.path("montecarlo-scans")
+    runner.run(["experiment", "montecarlo-scans", "--runs", "30", "--out", out])
+    with open(os.path.join(out, "montecarlo-scans.json")) as f:
+        d = json.load(f)
+    with open(os.path.join(out, "montecarlo-scans.md")) as f:
+        wins = paired_wins(f.read())
+    rows = {r["label"]: dict(r, runs_n=d["runs"]) for r in d["rows"]}
+    med = lambda r, k: r[k]["median"]
+    mm = lambda v: num(v * 1000, 2 if v < 0.01 else 1)
+    c = lambda r: med(r, "convergence_s_censored")  # a run that never converges counts its length
+    conv = lambda r: (f"{num(c(r), 1 if c(r) < 100 else 0)}, "
+                      f"{r['converged'] * 100:.0f} %")
+    return [
+        "| | " + " | ".join(name for name, _ in TABLE_II) + " | paper: Adaptive-PF | paper: DKF |",
+        "|---|---|---|---|---|---|---|",
+        table_ii_row("final radius error R_R / R_L (mm)", rows, wins,
+                     lambda r: f"{num(med(r, 'err_r_right') * 1000, 2)} / {num(med(r, 'err_r_left') * 1000, 2)}",
+                     "radius error"),
+        table_ii_row("wheel base error (mm)", rows, wins, lambda r: mm(med(r, "err_wheel_base")), None),
+        table_ii_row("convergence (s), runs converged", rows, wins, conv, "convergence"),
+        table_ii_row("RMSE x,y (m), online odometry", rows, wins,
+                     lambda r: num(med(r, "rmse_xy"), 3), "RMSE x,y"),
+        table_ii_row("RMSE θ (rad), online odometry", rows, wins,
+                     lambda r: num(med(r, "rmse_theta"), 4), "RMSE θ"),
+        table_ii_row("RMSE x,y (m), final parameters", rows, wins,
+                     lambda r: num(med(r, "rmse_xy_final"), 3 if med(r, "rmse_xy_final") < 1 else 2),
+                     "RMSE x,y, final parameters"),
+        table_ii_row("time per step (ms)", rows, wins,
+                     lambda r: f"{med(r, 'mean_iteration_ms'):.2g}", None),
+    ]
+
+
 def block_blind_suite(runner, csm):
     """The blind diagnosis suite's table, as `odocal experiment diagnose`
     writes it (125 simulated runs through bag, ICP and diagnosis)."""
@@ -512,6 +587,20 @@ def block_blind_suite(runner, csm):
     runner.run(["experiment", "diagnose", "--runs", "5", "--seed", "200", "--out", out])
     with open(os.path.join(out, "diagnose.md")) as f:
         return [line.rstrip("\n") for line in f if line.startswith("|")]
+
+
+def volatile(row):
+    """Rows of timings: measured on a quiet machine (README says which), so
+    neither compared nor rewritten here."""
+    return row.startswith("| time per step")
+
+
+def merged(old, new):
+    """`new` with each volatile row taken from `old` (matched by its first
+    cell) where it has one."""
+    first = lambda row: row.split("|")[1].strip() if row.count("|") > 1 else row
+    kept = {first(r): r for r in old if volatile(r)}
+    return [kept.get(first(r), r) if volatile(r) else r for r in new]
 
 
 # name: (how it is computed, whether it is slow: computed only with --all).
@@ -522,6 +611,7 @@ BLOCKS = {
     "real-calibration": (block_real_calibration, False),
     "what-changed": (block_what_changed, False),
     "real-firings": (block_real_firings, False),
+    "table-ii-scans": (block_table_ii_scans, True),
     "blind-suite": (block_blind_suite, True),
 }
 
@@ -628,10 +718,13 @@ def regenerate(runner, a):
     with open(CSM_FILE) as f:
         csm = json.load(f)
     changed, skipped = [], []
+    # Every block started at once (each waits on its own runs in the pool).
+    with concurrent.futures.ThreadPoolExecutor(max_workers=len(names)) as blocks:
+        results = {n: blocks.submit(BLOCKS[n][0], runner, csm) for n in names}
     for name in sorted(names, key=lambda n: -found[n][0]):
         start, end = found[name]
         try:
-            new = BLOCKS[name][0](runner, csm)
+            new = results[name].result()
         except RuntimeError as e:
             raise SystemExit(f"figures {name}: {e}")
         except Skip as s:
@@ -639,6 +732,7 @@ def regenerate(runner, a):
             skipped.append(name)
             continue
         old = lines[start:end]
+        new = merged(old, new)
         if a.print:
             print(f"<!-- figures: {name} -->\n" + "\n".join(new) + f"\n{END}")
         if new != old:
