@@ -1,0 +1,1 @@
+"""The blocks of README's generated tables (tools/figures.py)."""

@@ -1,0 +1,205 @@
+"""The calibration blocks: the real recordings' batch and filter
+calibrations, seed 000's Table II on simulated scans, a simulated fleet."""
+import json
+import os
+import re
+import subprocess
+
+from .common import num, pm
+
+# (label, bag under the data folder, robot file name)
+REAL_RECORDINGS = [
+    ("mines-rover exp1", "mines-rover/exp1.mcap", "mines-rover"),
+    ("mines-rover exp2", "mines-rover/exp2.mcap", "mines-rover"),
+    ("lego-robot", "lego-robot/lego-robot.mcap", "lego-robot"),
+]
+
+
+FILTERS = ["adaptive-pf", "dkf", "akf"]
+
+
+PARAMETER_LABEL = {"r_right": "R_R", "r_left": "R_L", "wheel_base": "D"}
+
+
+def calibrate(runner, bag, robot, method, init_batch):
+    """(`--json` output or None, the refusal) of one `odocal calibrate`."""
+    args = ["calibrate", "--input", bag, "--robot", robot, "--method", method, "--json"]
+    args += ["--init", "batch"] if init_batch else []
+    out = runner.path(f"cal-{os.path.basename(bag)}-{method}-{int(init_batch)}")
+    p = subprocess.run([runner.odocal, *args, "--out", out], capture_output=True, text=True)
+    refused = re.search(r"calibration refused: (.*)", p.stderr)
+    if p.returncode == 2 and refused:
+        return None, refused.group(1)
+    if p.returncode != 0:
+        raise RuntimeError(f"odocal {' '.join(args)} failed ({p.returncode}):\n{p.stderr}")
+    return json.loads(p.stdout), None
+
+
+def refusal_cell(reason):
+    """A refusal in a few words: a parameter at its search range's edge named
+    with its value, any other reason as odocal gives it."""
+    m = re.match(r"(\w+) came out ([0-9.]+) m, at the edge of its search range", reason)
+    if m:
+        name = PARAMETER_LABEL.get(m.group(1), m.group(1))
+        return f"refused ({name} {num(float(m.group(2)) * 1000, 1)} mm at the edge of its search range)"
+    return f"refused ({reason.split(':')[0]})"
+
+
+def filter_cell(result):
+    d, refused = result
+    if refused:
+        return refusal_cell(refused)
+    f, sd = d["final"], d["std"]
+    r = [num(f[k] * 1000, 1) for k in ("r_right", "r_left")]
+    cell = (f"R {r[0]} / {r[1]} ± {num(max(sd['r_right'], sd['r_left']) * 1000, 1)}, "
+            f"D {num(f['wheel_base'] * 1000, 0)} ± {num(sd['wheel_base'] * 1000, 0)}")
+    nominal = [num(d["assumptions"][k]["value"] * 1000, 1) for k in ("r_right", "r_left")]
+    nominal_d = num(d["assumptions"]["wheel_base"]["value"] * 1000, 0)
+    if r == nominal and num(f["wheel_base"] * 1000, 0) == nominal_d:
+        cell += " (the nominal values)"
+    return cell
+
+
+def batch_cell(result):
+    d, refused = result
+    if refused:
+        return refusal_cell(refused)
+    mm = lambda v, k: num(v * 1000, k)
+    rr, rl, wb, las, dt = (d[k] for k in ("r_right", "r_left", "wheel_base", "laser", "time_offset"))
+    return (f"R {mm(rr['value'], 1)} / {mm(rl['value'], 1)} ± {mm(max(rr['std'], rl['std']), 1)} mm, "
+            f"D {mm(wb['value'], 0)} ± {mm(wb['std'], 0)} mm, "
+            f"laser {mm(las['x']['value'], 0)} / {mm(las['y']['value'], 0)} "
+            f"± {mm(max(las['x']['std'], las['y']['std']), 0)} mm, "
+            f"δ {num(dt['value'], 3)} ± {num(dt['std'], 3)} s")
+
+
+def block_real_calibration(runner, csm):
+    rows = [
+        "| recording | batch (radii, wheel base, laser x/y, time offset) | "
+        + " | ".join(f"{m} nominal / from batch" for m in FILTERS) + " |",
+        "|---|---|---|---|---|",
+    ]
+    for _, rel, _ in REAL_RECORDINGS:
+        runner.data_file(rel)
+    futures = {
+        (rel, m, b): runner.pool.submit(calibrate, runner, os.path.join(runner.data, rel), robot, m, b)
+        for _, rel, robot in REAL_RECORDINGS
+        for m, b in [("batch", False)] + [(m, b) for m in FILTERS for b in (False, True)]
+    }
+    for label, rel, _ in REAL_RECORDINGS:
+        cells = [batch_cell(futures[(rel, "batch", False)].result())]
+        for m in FILTERS:
+            pair = [filter_cell(futures[(rel, m, b)].result()) for b in (False, True)]
+            cells.append(" / ".join(pair))
+        rows.append(f"| {label} | {' | '.join(cells)} |")
+    return rows
+
+
+# The columns (the experiment's configurations) and seed 000's own figures
+# (its Table II: a record, not computed).
+TABLE_II = [("Adaptive-PF", "adaptive-pf"), ("DKF", "dkf"), ("AKF", "akf"), ("PF (fixed)", "pf")]
+
+
+PAPER = {
+    "final radius error R_R / R_L (mm)": ("1.86 / 1.91", "2.11 / 1.85"),
+    "wheel base error (mm)": ("–", "–"),
+    "convergence (s), runs converged": ("32.55", "60.73"),
+    "RMSE x,y (m), online odometry": ("3.38", "5.44"),
+    "RMSE θ (rad), online odometry": ("0.585", "0.941"),
+    "RMSE x,y (m), final parameters": ("–", "–"),
+    "time per step (ms)": ("0.89", "0.46"),
+}
+
+
+def paired_wins(md):
+    """{configuration: {column: wins}} from the experiment's paired table."""
+    wins, head = {}, None
+    for line in md.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if cells[0] == "against":
+            head = cells[1:]
+        elif head and len(cells) == len(head) + 1 and "/" in cells[1]:
+            wins[cells[0]] = {h: c.split(" / ")[0] for h, c in zip(head, cells[1:])}
+    return wins
+
+
+def table_ii_row(label, rows, wins, cell, column):
+    """One metric over the configurations: `cell(row)` and, against the
+    Adaptive-PF, its paired wins under `column` (None: no paired figure)."""
+    out = []
+    for k, (_, key) in enumerate(TABLE_II):
+        text = cell(rows[key])
+        if k and column:
+            text += f" (wins {wins[key][column]}/{rows[key]['runs_n']})"
+        out.append(text)
+    return f"| {label} | {' | '.join(out + list(PAPER[label]))} |"
+
+
+def block_table_ii_scans(runner, csm):
+    out = runner.path("montecarlo-scans")
+    runner.run(["experiment", "montecarlo-scans", "--runs", "30", "--out", out])
+    with open(os.path.join(out, "montecarlo-scans.json")) as f:
+        d = json.load(f)
+    with open(os.path.join(out, "montecarlo-scans.md")) as f:
+        wins = paired_wins(f.read())
+    rows = {r["label"]: dict(r, runs_n=d["runs"]) for r in d["rows"]}
+    med = lambda r, k: r[k]["median"]
+    mm = lambda v: num(v * 1000, 2 if v < 0.01 else 1)
+    c = lambda r: med(r, "convergence_s_censored")  # a run that never converges counts its length
+    conv = lambda r: (f"{num(c(r), 1 if c(r) < 100 else 0)}, "
+                      f"{r['converged'] * 100:.0f} %")
+    return [
+        "| | " + " | ".join(name for name, _ in TABLE_II) + " | paper: Adaptive-PF | paper: DKF |",
+        "|---|---|---|---|---|---|---|",
+        table_ii_row("final radius error R_R / R_L (mm)", rows, wins,
+                     lambda r: f"{num(med(r, 'err_r_right') * 1000, 2)} / {num(med(r, 'err_r_left') * 1000, 2)}",
+                     "radius error"),
+        table_ii_row("wheel base error (mm)", rows, wins, lambda r: mm(med(r, "err_wheel_base")), None),
+        table_ii_row("convergence (s), runs converged", rows, wins, conv, "convergence"),
+        table_ii_row("RMSE x,y (m), online odometry", rows, wins,
+                     lambda r: num(med(r, "rmse_xy"), 3), "RMSE x,y"),
+        table_ii_row("RMSE θ (rad), online odometry", rows, wins,
+                     lambda r: num(med(r, "rmse_theta"), 4), "RMSE θ"),
+        table_ii_row("RMSE x,y (m), final parameters", rows, wins,
+                     lambda r: num(med(r, "rmse_xy_final"), 3 if med(r, "rmse_xy_final") < 1 else 2),
+                     "RMSE x,y, final parameters"),
+        table_ii_row("time per step (ms)", rows, wins,
+                     lambda r: f"{med(r, 'mean_iteration_ms'):.2g}", None),
+    ]
+
+
+def fleet_alarm_cell(found, alarms):
+    """The experiment's verdict on what was found, with the alarm's size (a
+    step) or how many recordings it spans (a fault)."""
+    for a in alarms:
+        values = a.get("values") or {}
+        side = next((k for k in ("r_left", "r_right") if f"{k}_step_m" in values), None)
+        if a["kind"] == "step" and side:
+            name = {"r_left": "R_L", "r_right": "R_R"}[side]
+            size = pm(values[f"{side}_step_m"], values[f"{side}_step_std_m"], 1000, 2, "mm")
+            return f"{found}: {name} {size}"
+        m = re.match(r"(\d+) consecutive recordings refused", a.get("evidence", ""))
+        if a["kind"] == "fault" and m:
+            return found.replace(")", f", {m.group(1)} recordings)")
+    return found
+
+
+def block_fleet(runner, csm):
+    """`odocal experiment fleet --runs 12 --seed 7` with ten days: each
+    robot's hidden history against what the fleet run found."""
+    out, cfg = runner.path("fleet"), runner.path("fleet.toml")
+    with open(cfg, "w") as f:
+        f.write("[fleet]\ndays = 10\n")
+    runner.run(["experiment", "fleet", "--runs", "12", "--seed", "7", "--settings", cfg, "--out", out])
+    with open(os.path.join(out, "fleet.json")) as f:
+        verdicts = json.load(f)["verdicts"]
+    with open(os.path.join(out, "fleet-run", "fleet.json")) as f:
+        alarms = json.load(f)["alarms"]
+    rows = ["| robot | hidden history | alarms | wear rate est./true | right |", "|---|---|---|---|---|"]
+    for v in verdicts:
+        mine = [a for a in alarms if a["robot"] == v["robot"]]
+        ratio = f"{v['rate_ratio']:.3f}" if v["rate_ratio"] is not None else ""
+        cells = [v["robot"], v["truth"].replace("-", "−"), fleet_alarm_cell(v["found"], mine), ratio,
+                 "yes" if v["correct"] else "no"]
+        rows.append("| " + " | ".join(cells).replace("|  |", "| |") + " |")
+    return rows

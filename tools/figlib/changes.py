@@ -1,0 +1,136 @@
+"""The change-naming blocks: what `calibrate` names at each firing on
+simulated runs with a known change, and on the real recordings."""
+import json
+import os
+
+from .common import ROOT, num, span
+
+# (effect spec, unit, scale to it and decimals of the estimate); seeds 1-5,
+# 60 s of the corridor loop, the change at 30 s.
+CHANGES = [
+    ("radius_step:time=30,right=0.004,left=0", "mm", 1000, 2),
+    ("radius_step:time=30,right=0,left=0.004", "mm", 1000, 2),
+    ("latency_change:time=30,delay=0.08", "s", 1, 4),
+    ("laser_knock:time=30,dx=0,dy=0,dyaw=0.035", "rad", 1, 4),
+    (None, "", 1, 0),
+]
+
+
+SEEDS = ["1", "2", "3", "4", "5"]
+
+
+def changes_of(runner, effect, seed):
+    """`changes` of `calibrate --json` on a simulated 60 s run."""
+    name = f"chg-{(effect or 'none').replace(':', '_').replace(',', '_')}-{seed}"
+    bag = runner.path(f"{name}.mcap")
+    sim = ["simulate", "--seed", seed, "--duration", "60", "--out", bag]
+    runner.run(sim + (["--effect", effect] if effect else []))
+    out = runner.run(["calibrate", "--input", bag, "--out", runner.path(name), "--json"])
+    return json.loads(out).get("changes", [])
+
+
+def firing_cells(runs):
+    """(fired at, named): the runs' first firings and later ones, their
+    detector; what was named in how many runs, and the others' verdicts."""
+    first = [r[0]["time_s"] for r in runs]
+    later = [t for r in runs for t in [c["time_s"] for c in r[1:]] + r[0]["refired_s"]]
+    fired = span(first, 2) + (f", again at {span(later, 2)}" if later else "")
+    fired += f" ({'mounting watch' if runs[0][0]['detector'] == 'laser_mount' else runs[0][0]['detector']})"
+    named = [r[0] for r in runs if r[0]["effect"] != "undetermined"]
+    kinds = sorted({(c["effect"], c["parameter"]) for c in named})
+    parts = [f"{e}, {p}, {sum(1 for c in named if (c['effect'], c['parameter']) == (e, p))} of {len(runs)}"
+             for e, p in kinds]
+    if any(c["refired_s"] for c in named):
+        parts[-1] += ", reported once with the later firing"
+    if named and named[0]["effect"] == "laser_offset":
+        off = max(abs(c["parameters"][k]) for c in named for k in ("x", "y")) * 1000
+        parts[-1] += f" (x, y within {off:.0f} mm of 0)"
+    left = [r[0] for r in runs if r[0]["effect"] == "undetermined"]
+    if left:
+        standing = sorted({c["standing"] for c in left if c["standing"]})
+        parts.append(f"{len(left)} `undetermined`" + (f", {', '.join(standing)} standing" if standing else ""))
+    return fired, "; ".join(parts), named
+
+
+def block_what_changed(runner, csm):
+    rows = [
+        "| change at 30 s (truth) | fired at (s) | named | estimate ± stderr | onset (s) [95 % interval] | ΔBIC |",
+        "|---|---|---|---|---|---|",
+    ]
+    futures = {(e, s): runner.pool.submit(changes_of, runner, e, s) for e, *_ in CHANGES for s in SEEDS}
+    for effect, unit, scale, digits in CHANGES:
+        runs = [futures[(effect, s)].result() for s in SEEDS]
+        label = f"`{effect}`" if effect else "none"
+        if not any(runs):
+            rows.append(f"| {label} | never | – | – | – | – |")
+            continue
+        if not all(runs):
+            raise RuntimeError(f"{label}: fired in only {sum(map(bool, runs))} of {len(runs)} runs")
+        fired, named_cell, named = firing_cells(runs)
+        est = span([c["estimate"] * scale for c in named], digits)
+        err = span([c["stderr"] * scale for c in named], digits)
+        onset = span([c["onset_s"] for c in named], 2)
+        lo = min(c["onset_interval_s"][0] for c in named)
+        hi = max(c["onset_interval_s"][1] for c in named)
+        bic = span([c["delta_bic"] for c in named], 0)
+        rows.append(f"| {label} | {fired} | {named_cell} | {est} {unit} ± {err} {unit} | "
+                    f"{onset} [{num(lo, 2)}–{num(hi, 2)}] | {bic} |")
+    return rows
+
+
+# (label, bag: under the data folder or, starting with scans/, bundled, robot
+# file, what was named there before the naming rules: a record, not computed).
+FIRING_RECORDINGS = [
+    ("Mines exp1", "mines-rover/exp1.mcap", "mines-rover", "turn_slip at 272.9 s (ΔBIC 12.1)"),
+    ("Mines exp2", "mines-rover/exp2.mcap", "mines-rover",
+     "laser_offset yaw −0.064 rad at 367.8 s, x −81 mm at 386.9 s"),
+    ("LEGO robot", "lego-robot/lego-robot.mcap", "lego-robot",
+     "laser_offset yaw −0.090 rad at 17.6 s, latency −0.435 s at 46.3 s"),
+    ("`scans/wheelchair-corridor.mcap` (step right −5 mm, left +4 mm at 40 s)",
+     "scans/wheelchair-corridor.mcap", None, "the same"),
+]
+
+
+def firings_of(runner, rel, robot):
+    """`changes` of `calibrate --json` (the real recordings from the batch)."""
+    if rel.startswith("scans/"):
+        args = ["--input", os.path.join(ROOT, rel)]
+    else:
+        args = ["--input", os.path.join(runner.data, rel), "--robot", robot, "--init", "batch"]
+    out = runner.path(f"firings-{os.path.basename(rel)}")
+    return json.loads(runner.run(["calibrate", *args, "--out", out, "--json"])).get("changes", [])
+
+
+def named_change(c):
+    """A named change: effect, parameter, size ± stderr, onset [interval]."""
+    scale, unit, digits = {"radius_step": (1000, "mm", 2), "latency": (1, "s", 3)}.get(
+        c["effect"], (1, "", 4))
+    lo, hi = c["onset_interval_s"]
+    return (f"{c['effect']} {c['parameter']} {num(c['estimate'] * scale, digits)} ± "
+            f"{num(c['stderr'] * scale, digits)} {unit}, onset {num(c['onset_s'], 2)} s "
+            f"[{num(lo, 2)}–{num(hi, 2)}]").replace("  ", " ")
+
+
+def block_real_firings(runner, csm):
+    rows = [
+        "| recording | firings | named | named, before these rules |",
+        "|---|---|---|---|",
+    ]
+    for _, rel, _, _ in FIRING_RECORDINGS:
+        if not rel.startswith("scans/"):
+            runner.data_file(rel)
+    futures = [runner.pool.submit(firings_of, runner, rel, robot) for _, rel, robot, _ in FIRING_RECORDINGS]
+    for (label, _, _, before), fut in zip(FIRING_RECORDINGS, futures):
+        changes = fut.result()
+        detectors = sorted({"mounting watch" if c["detector"] == "laser_mount" else c["detector"]
+                            for c in changes})
+        fired = f"{len(changes)} ({', '.join(detectors)})" if changes else "0"
+        named = [named_change(c) for c in changes if c["effect"] != "undetermined"]
+        standing = [c["standing"] for c in changes if c["effect"] == "undetermined" and c["standing"]]
+        below = sum(1 for c in changes if c["effect"] == "undetermined" and not c["standing"])
+        names = ", ".join(dict.fromkeys(standing))
+        left = ([f"{len(standing)} standing ({names})"] if standing else []) + (
+            [f"{below} below the margin"] if below else [])
+        cell = "; ".join(named) if named else "none" + (f": {', '.join(left)}" if left else "")
+        rows.append(f"| {label} | {fired} | {cell} | {before} |")
+    return rows

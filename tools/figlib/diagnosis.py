@@ -1,0 +1,125 @@
+"""The diagnosis blocks: the real recordings diagnosed, and the blind suite
+of simulated runs."""
+import json
+import os
+
+from .common import num, pm, percent
+
+# (label, input under the data folder, robot: a bundled name or a robot file's
+# text, settings, the authors' results file of a Censi set or None).
+DIAGNOSED = [
+    ('lego-robot (`[topics] reference = "/reference"`), every candidate',
+     "lego-robot/lego-robot.mcap", "lego-robot", '[topics]\nreference = "/reference"\n', None),
+    ("lego-robot, candidates latency, radius_scale, wheel_base_scale",
+     "lego-robot/lego-robot.mcap", "lego-robot",
+     '[topics]\nreference = "/reference"\n[diagnose]\n'
+     'candidates = ["latency", "radius_scale", "wheel_base_scale"]\n', None),
+    ("mines-rover exp1", "mines-rover/exp1.mcap", "mines-rover", "", None),
+    ("mines-rover exp2", "mines-rover/exp2.mcap", "mines-rover", "", None),
+    ("censi lstraight (tuples; no latency candidate: no common clock)",
+     "censi-calibration/lstraight.tuple", "khepera", "", "censi-calibration/lstraight_results.json"),
+    ("censi l90", "censi-calibration/l90.tuple", "khepera", "", "censi-calibration/l90_results.json"),
+    ("censi lmov", "censi-calibration/lmov.tuple", "khepera", "", "censi-calibration/lmov_results.json"),
+    ("intel (odometry against ICP, `[diagnose] min_interval = 1.0`, virtual wheels r 0.1 m, D 0.4 m)",
+     "slam-benchmark/intel.mcap",
+     'name = "intel-virtual"\nr_right = 0.1\nr_left = 0.1\nwheel_base = 0.4\n',
+     "[diagnose]\nmin_interval = 1.0\n", None),
+]
+
+
+def diagnose(runner, k, rel, robot, settings):
+    """`odocal diagnose --measured --json` of one row."""
+    if "\n" in robot:
+        path = runner.path(f"robot-{k}.toml")
+        with open(path, "w") as f:
+            f.write(robot)
+        robot = path
+    cfg = runner.path(f"diagnose-{k}.toml")
+    with open(cfg, "w") as f:
+        f.write(settings)
+    return json.loads(runner.run(["diagnose", "--measured", os.path.join(runner.data, rel),
+                                  "--robot", robot, "--config", cfg, "--json"]))
+
+
+def cause_cell(c, authors):
+    """One named cause with its ΔBIC; a Censi set's laser mount beside the
+    authors' (absolute: the robot file states none)."""
+    e, p, se = c["effect"], c["parameters"], c["stderr"]
+    if e == "latency":
+        d = p["delay"]
+        text = pm(d, se["delay"], 1, 3, "s") if abs(d) >= 0.01 else pm(d, se["delay"], 1000, 3, "ms")
+    elif e == "laser_offset" and authors:
+        text = (f"x {pm(p['x'], se['x'], 1000, 1, 'mm')}, y {pm(p['y'], se['y'], 1000, 1, 'mm')}, "
+                f"yaw {pm(p['yaw'], se['yaw'], 1, 4, 'rad')} (authors {num(authors['l_x'] * 1000, 1)}, "
+                f"{num(authors['l_y'] * 1000, 1)} mm, {num(authors['l_theta'], 4)} rad)")
+    elif e == "laser_offset":
+        text = ", ".join(f"{k} {pm(p[k], se[k], 100, 1, 'cm')}" for k in ("x", "y"))
+        text += f", yaw {pm(p['yaw'], se['yaw'], 1, 3, 'rad')}"
+    elif e in ("turn_slip", "encoder_gain"):
+        text = pm(p["k"], se["k"], 1, 2 if e == "turn_slip" else 4, "s/rad")
+    elif e == "wheel_base_scale":
+        text = percent(p["scale"], se["scale"])
+    elif e == "radius_scale":
+        text = f"L {percent(p['left'], se['left'])}, R {percent(p['right'], se['right'])}"
+    elif e == "radius_step":
+        text = (f"at {p['time']:.0f} s, L {pm(p['left'], se['left'], 1000, 2, 'mm')}, "
+                f"R {pm(p['right'], se['right'], 1000, 2, 'mm')}")
+    else:
+        text = ", ".join(f"{k} {pm(v, se.get(k, float('nan')), 1, 4, '')}".rstrip() for k, v in p.items())
+    return f"{e} {text} ({c['delta_bic']:.0f})"
+
+
+def left_cell(r):
+    """A structure the final model leaves: stream, kind, size, p."""
+    size, unit = r["size"], r["unit"]
+    if unit == "rad/s per rad/s":
+        text = f"{num(size * 100, 2)} %"
+    elif unit.startswith("m/s") and abs(size) < 0.001:
+        text = f"{num(size * 1000, 2)} mm{unit[1:]}"
+    else:
+        text = f"{num(size, 3)} {unit}"
+    mantissa, exponent = f"{r['p_value']:.0e}".split("e")
+    return f"{r['stream']}: {r['structure']} {text} ({mantissa}e{int(exponent)})"
+
+
+def gain_cell(g):
+    before, after = g["heldout_rmse_before"], g["heldout_rmse_after"]
+    text = f"{before:.2f} → {after:.2f} ({num(-g['relative'] * 100, 0)} %)"
+    t = g.get("trajectory")
+    if not t:
+        return text + "; no reference"
+    return (text + f"; RPE {t['rpe_before']:.3f} → {t['rpe_after']:.3f} m, "
+            f"ATE {t['ate_before']:.3f} → {t['ate_after']:.3f} m")
+
+
+def block_real_diagnosis(runner, csm):
+    rows = [
+        "| data | verdict | causes (estimate ± stderr, ΔBIC) | left (stream: structure, size, p) "
+        "| held-out residual RMSE; reference error |",
+        "|---|---|---|---|---|",
+    ]
+    for _, rel, _, _, _ in DIAGNOSED:
+        runner.data_file(rel)
+    futures = [runner.pool.submit(diagnose, runner, k, rel, robot, cfg)
+               for k, (_, rel, robot, cfg, _) in enumerate(DIAGNOSED)]
+    for (label, _, _, _, results), fut in zip(DIAGNOSED, futures):
+        d = fut.result()
+        authors = None
+        if results:
+            with open(os.path.join(runner.data, results)) as f:
+                authors = json.load(f)
+        causes = [cause_cell(c, authors) for c in d["causes"]]
+        causes += [f"fault {f.get('fault') or f.get('effect') or f}" for f in d["faults"]]
+        left = [left_cell(r) for r in d["remaining"]]
+        rows.append(f"| {label} | {d['verdict']} | {'; '.join(causes) or '–'} | "
+                    f"{'; '.join(left) or '–'} | {gain_cell(d['gain'])} |")
+    return rows
+
+
+def block_blind_suite(runner, csm):
+    """The blind diagnosis suite's table, as `odocal experiment diagnose`
+    writes it (125 simulated runs through bag, ICP and diagnosis)."""
+    out = runner.path("blind-suite")
+    runner.run(["experiment", "diagnose", "--runs", "5", "--seed", "200", "--out", out])
+    with open(os.path.join(out, "diagnose.md")) as f:
+        return [line.rstrip("\n") for line in f if line.startswith("|")]
