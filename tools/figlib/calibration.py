@@ -14,9 +14,7 @@ REAL_RECORDINGS = [
     ("lego-robot", "lego-robot/lego-robot.mcap", "lego-robot"),
 ]
 
-
 FILTERS = ["adaptive-pf", "dkf", "akf"]
-
 
 PARAMETER_LABEL = {"r_right": "R_R", "r_left": "R_L", "wheel_base": "D"}
 
@@ -94,11 +92,9 @@ def block_real_calibration(runner, csm):
         rows.append(f"| {label} | {' | '.join(cells)} |")
     return rows
 
-
 # The columns (the experiment's configurations) and seed 000's own figures
 # (its Table II: a record, not computed).
 TABLE_II = [("Adaptive-PF", "adaptive-pf"), ("DKF", "dkf"), ("AKF", "akf"), ("PF (fixed)", "pf")]
-
 
 PAPER = {
     "final radius error R_R / R_L (mm)": ("1.86 / 1.91", "2.11 / 1.85"),

@@ -15,7 +15,6 @@ CHANGES = [
     (None, "", 1, 0),
 ]
 
-
 SEEDS = ["1", "2", "3", "4", "5"]
 
 
@@ -76,7 +75,6 @@ def block_what_changed(runner, csm):
         rows.append(f"| {label} | {fired} | {named_cell} | {est} {unit} ± {err} {unit} | "
                     f"{onset} [{num(lo, 2)}–{num(hi, 2)}] | {bic} |")
     return rows
-
 
 # (label, bag: under the data folder or, starting with scans/, bundled, robot
 # file, what was named there before the naming rules: a record, not computed).

@@ -11,7 +11,6 @@ from .common import ROOT, Skip, spread, write_atomically
 
 LOGS = ["intel", "mit-csail", "fr079", "aces"]
 
-
 # The names the tables give the logs (the last two were never tuned on).
 LOG_LABEL = {
     "intel": "intel",
@@ -20,21 +19,18 @@ LOG_LABEL = {
     "aces": "aces (not used for tuning)",
 }
 
-
 # Factors of the default convergence bound (tests/support.rs,
 # CONVERGENCE_FACTORS); 1.0 is the default run.
 FACTORS = ["0.8", "0.9", "1.0", "1.1", "1.2"]
 
-
 CSM_FILE = os.path.join(ROOT, "tools", "figures_csm.json")
-
 
 CSM_SOURCE = (
     "CSM (Censi's PL-ICP, github.com/AndreaCensi/csm at dff2557, CMake Release, "
     "-O3 -D_GNU_SOURCE, default sm_icp parameters, scan to scan from the odometry, "
-    "the scans' true beam angles; the laser pose -laser_x 0.04 on FR079), epsilon_xy = epsilon_theta = F x 1e-4 for each "
-    "factor F; each run's trajectory scored with `odocal eval --relations --json` "
-    "(README, Performance)"
+    "the scans' true beam angles; the laser pose -laser_x 0.04 on FR079), "
+    "epsilon_xy = epsilon_theta = F x 1e-4 for each factor F; each run's trajectory "
+    "scored with `odocal eval --relations --json` (README, Performance)"
 )
 
 
@@ -119,7 +115,6 @@ def block_run_to_run(runner, csm):
         theirs = ensemble_cells([csm_run(csm, log, f) for f in FACTORS])
         rows.append(f"| {log} | {' | '.join(ours + theirs)} |")
     return rows
-
 
 # Rows of the truth table: label, how the recording is made (None: the
 # bundled one), and the `[icp]` settings.
