@@ -3,7 +3,6 @@ calibrations, seed 000's Table II on simulated scans, a simulated fleet."""
 import json
 import os
 import re
-import subprocess
 
 from .common import num, pm
 
@@ -20,17 +19,22 @@ PARAMETER_LABEL = {"r_right": "R_R", "r_left": "R_L", "wheel_base": "D"}
 
 
 def calibrate(runner, bag, robot, method, init_batch):
-    """(`--json` output or None, the refusal) of one `odocal calibrate`."""
+    """A future of one `odocal calibrate --json` (run once): its output, or
+    None and the reason when the calibration is refused (exit 2)."""
     args = ["calibrate", "--input", bag, "--robot", robot, "--method", method, "--json"]
     args += ["--init", "batch"] if init_batch else []
     out = runner.path(f"cal-{os.path.basename(bag)}-{method}-{int(init_batch)}")
-    p = subprocess.run([runner.odocal, *args, "--out", out], capture_output=True, text=True)
-    refused = re.search(r"calibration refused: (.*)", p.stderr)
-    if p.returncode == 2 and refused:
-        return None, refused.group(1)
-    if p.returncode != 0:
-        raise RuntimeError(f"odocal {' '.join(args)} failed ({p.returncode}):\n{p.stderr}")
-    return json.loads(p.stdout), None
+
+    def work():
+        p = runner.call([*args, "--out", out], allowed=(0, 2))
+        refused = re.search(r"calibration refused: (.*)", p.stderr)
+        if p.returncode == 2 and refused:
+            return None, refused.group(1)
+        if p.returncode != 0:
+            raise RuntimeError(f"odocal {' '.join(args)} failed ({p.returncode}):\n{p.stderr}")
+        return json.loads(p.stdout), None
+
+    return runner.once(("calibrate", bag, robot, method, init_batch), work)
 
 
 def refusal_cell(reason):
@@ -80,7 +84,7 @@ def block_real_calibration(runner, csm):
     for _, rel, _ in REAL_RECORDINGS:
         runner.data_file(rel)
     futures = {
-        (rel, m, b): runner.pool.submit(calibrate, runner, os.path.join(runner.data, rel), robot, m, b)
+        (rel, m, b): calibrate(runner, os.path.join(runner.data, rel), robot, m, b)
         for _, rel, robot in REAL_RECORDINGS
         for m, b in [("batch", False)] + [(m, b) for m in FILTERS for b in (False, True)]
     }

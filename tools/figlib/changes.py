@@ -3,6 +3,7 @@ simulated runs with a known change, and on the real recordings."""
 import json
 import os
 
+from .calibration import calibrate
 from .common import ROOT, num, span
 
 # (effect spec, unit, scale to it and decimals of the estimate); seeds 1-5,
@@ -89,14 +90,15 @@ FIRING_RECORDINGS = [
 ]
 
 
-def firings_of(runner, rel, robot):
-    """`changes` of `calibrate --json` (the real recordings from the batch)."""
-    if rel.startswith("scans/"):
-        args = ["--input", os.path.join(ROOT, rel)]
-    else:
-        args = ["--input", os.path.join(runner.data, rel), "--robot", robot, "--init", "batch"]
+def firings(runner, rel, robot):
+    """A future of the Adaptive-PF's `calibrate --json` output (None and the
+    reason when refused): the real recordings from the batch, the very run of
+    the calibration table; the bundled one with the defaults."""
+    if not rel.startswith("scans/"):
+        return calibrate(runner, runner.data_file(rel), robot, "adaptive-pf", True)
     out = runner.path(f"firings-{os.path.basename(rel)}")
-    return json.loads(runner.run(["calibrate", *args, "--out", out, "--json"])).get("changes", [])
+    args = ["calibrate", "--input", os.path.join(ROOT, rel), "--out", out, "--json"]
+    return runner.once(("firings", rel), lambda: (json.loads(runner.run(args)), None))
 
 
 def named_change(c):
@@ -114,12 +116,12 @@ def block_real_firings(runner, csm):
         "| recording | firings | named | named, before these rules |",
         "|---|---|---|---|",
     ]
-    for _, rel, _, _ in FIRING_RECORDINGS:
-        if not rel.startswith("scans/"):
-            runner.data_file(rel)
-    futures = [runner.pool.submit(firings_of, runner, rel, robot) for _, rel, robot, _ in FIRING_RECORDINGS]
-    for (label, _, _, before), fut in zip(FIRING_RECORDINGS, futures):
-        changes = fut.result()
+    futures = [firings(runner, rel, robot) for _, rel, robot, _ in FIRING_RECORDINGS]
+    for (label, rel, _, before), fut in zip(FIRING_RECORDINGS, futures):
+        d, refused = fut.result()
+        if refused:
+            raise RuntimeError(f"{rel}: calibration refused: {refused}")
+        changes = d.get("changes", [])
         detectors = sorted({"mounting watch" if c["detector"] == "laser_mount" else c["detector"]
                             for c in changes})
         fired = f"{len(changes)} ({', '.join(detectors)})" if changes else "0"

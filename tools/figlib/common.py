@@ -27,13 +27,18 @@ class Runner:
     def path(self, name):
         return os.path.join(self.scratch, name)
 
-    def run(self, args, check=True):
-        """Runs odocal with `args`; its stdout, or an error naming the command."""
+    def call(self, args, allowed=(0,)):
+        """Runs odocal with `args`; the finished process, or an error naming
+        the command when its exit code is not among `allowed`."""
         cmd = [self.odocal] + [str(a) for a in args]
         p = subprocess.run(cmd, capture_output=True, text=True)
-        if check and p.returncode != 0:
+        if p.returncode not in allowed:
             raise RuntimeError(f"{' '.join(cmd)} failed ({p.returncode}):\n{p.stderr}")
-        return p.stdout
+        return p
+
+    def run(self, args):
+        """Runs odocal with `args`; its stdout (an error if it fails)."""
+        return self.call(args).stdout
 
     def once(self, key, fn):
         """`fn()` started once per key in the pool; its future."""
@@ -49,11 +54,11 @@ class Runner:
         return path
 
 
-def spread(values, fmt):
-    """(median, range) as text; the range is None when every value prints
-    alike."""
-    lo, hi = fmt(min(values)), fmt(max(values))
-    return fmt(statistics.median(values)), (None if lo == hi else f"{lo}–{hi}")
+def spread(values, digits):
+    """(median, `lo–hi`) at `digits` decimals; the range is None when every
+    value prints alike."""
+    r = span(values, digits)
+    return num(statistics.median(values), digits), (r if "–" in r else None)
 
 
 def num(x, digits):

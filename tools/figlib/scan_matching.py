@@ -92,15 +92,14 @@ def block_relations(runner, csm):
 
 def ensemble_cells(runs):
     """(local, all) cells over the five bounds: median (range)."""
-    f4, f3 = (lambda v: f"{v:.4f}"), (lambda v: f"{v:.3f}")
-    t, t_range = spread([r["local"]["trans_mean"] for r in runs], f4)
-    a, a_range = spread([r["local"]["rot_mean_deg"] for r in runs], f3)
+    t, t_range = spread([r["local"]["trans_mean"] for r in runs], 4)
+    a, a_range = spread([r["local"]["rot_mean_deg"] for r in runs], 3)
     if t_range is None and a_range is None:
         local = f"{t} m, {a}° (every run)"
     else:
         local = f"{t} m{f' ({t_range})' if t_range else ''}, {a}°"
         local += f" ({a_range}°)" if a_range else ""
-    m, m_range = spread([r["trans_mean"] for r in runs], f3)
+    m, m_range = spread([r["trans_mean"] for r in runs], 3)
     return local, f"{m} m ({m_range})" if m_range else f"{m} m (every run)"
 
 
