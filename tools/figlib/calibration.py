@@ -81,10 +81,9 @@ def block_real_calibration(runner, csm):
         + " | ".join(f"{m} nominal / from batch" for m in FILTERS) + " |",
         "|---|---|---|---|---|",
     ]
-    for _, rel, _ in REAL_RECORDINGS:
-        runner.data_file(rel)
+    bags = {rel: runner.data_file(rel) for _, rel, _ in REAL_RECORDINGS}
     futures = {
-        (rel, m, b): calibrate(runner, os.path.join(runner.data, rel), robot, m, b)
+        (rel, m, b): calibrate(runner, bags[rel], robot, m, b)
         for _, rel, robot in REAL_RECORDINGS
         for m, b in [("batch", False)] + [(m, b) for m in FILTERS for b in (False, True)]
     }
@@ -95,6 +94,7 @@ def block_real_calibration(runner, csm):
             cells.append(" / ".join(pair))
         rows.append(f"| {label} | {' | '.join(cells)} |")
     return rows
+
 
 # The columns (the experiment's configurations) and seed 000's own figures
 # (its Table II: a record, not computed).

@@ -29,16 +29,17 @@ def changes_of(runner, effect, seed):
     return json.loads(out).get("changes", [])
 
 
-def firing_cells(runs):
+def firing_cells(runs, total):
     """(fired at, named): the runs' first firings and later ones, their
-    detector; what was named in how many runs, and the others' verdicts."""
+    detector; what was named in how many of the `total` runs, and the others'
+    verdicts (`runs` are those that fired)."""
     first = [r[0]["time_s"] for r in runs]
     later = [t for r in runs for t in [c["time_s"] for c in r[1:]] + r[0]["refired_s"]]
     fired = span(first, 2) + (f", again at {span(later, 2)}" if later else "")
     fired += f" ({'mounting watch' if runs[0][0]['detector'] == 'laser_mount' else runs[0][0]['detector']})"
     named = [r[0] for r in runs if r[0]["effect"] != "undetermined"]
     kinds = sorted({(c["effect"], c["parameter"]) for c in named})
-    parts = [f"{e}, {p}, {sum(1 for c in named if (c['effect'], c['parameter']) == (e, p))} of {len(runs)}"
+    parts = [f"{e}, {p}, {sum(1 for c in named if (c['effect'], c['parameter']) == (e, p))} of {total}"
              for e, p in kinds]
     if any(c["refired_s"] for c in named):
         parts[-1] += ", reported once with the later firing"
@@ -49,7 +50,21 @@ def firing_cells(runs):
     if left:
         standing = sorted({c["standing"] for c in left if c["standing"]})
         parts.append(f"{len(left)} `undetermined`" + (f", {', '.join(standing)} standing" if standing else ""))
+    if len(runs) < total:
+        parts.append(f"{total - len(runs)} never fired")
     return fired, "; ".join(parts), named
+
+
+def estimate_cells(named, unit, scale, digits):
+    """(estimate ± stderr, onset [interval], ΔBIC) over the named runs."""
+    if not named:
+        return "–", "–", "–"
+    est = span([c["estimate"] * scale for c in named], digits)
+    err = span([c["stderr"] * scale for c in named], digits)
+    lo = min(c["onset_interval_s"][0] for c in named)
+    hi = max(c["onset_interval_s"][1] for c in named)
+    onset = f"{span([c['onset_s'] for c in named], 2)} [{num(lo, 2)}–{num(hi, 2)}]"
+    return f"{est} {unit} ± {err} {unit}", onset, span([c["delta_bic"] for c in named], 0)
 
 
 def block_what_changed(runner, csm):
@@ -64,18 +79,11 @@ def block_what_changed(runner, csm):
         if not any(runs):
             rows.append(f"| {label} | never | – | – | – | – |")
             continue
-        if not all(runs):
-            raise RuntimeError(f"{label}: fired in only {sum(map(bool, runs))} of {len(runs)} runs")
-        fired, named_cell, named = firing_cells(runs)
-        est = span([c["estimate"] * scale for c in named], digits)
-        err = span([c["stderr"] * scale for c in named], digits)
-        onset = span([c["onset_s"] for c in named], 2)
-        lo = min(c["onset_interval_s"][0] for c in named)
-        hi = max(c["onset_interval_s"][1] for c in named)
-        bic = span([c["delta_bic"] for c in named], 0)
-        rows.append(f"| {label} | {fired} | {named_cell} | {est} {unit} ± {err} {unit} | "
-                    f"{onset} [{num(lo, 2)}–{num(hi, 2)}] | {bic} |")
+        fired, named_cell, named = firing_cells([r for r in runs if r], len(runs))
+        cells = [label, fired, named_cell, *estimate_cells(named, unit, scale, digits)]
+        rows.append("| " + " | ".join(cells) + " |")
     return rows
+
 
 # (label, bag: under the data folder or, starting with scans/, bundled, robot
 # file, what was named there before the naming rules: a record, not computed).

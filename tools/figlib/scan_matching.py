@@ -115,6 +115,7 @@ def block_run_to_run(runner, csm):
         rows.append(f"| {log} | {' | '.join(ours + theirs)} |")
     return rows
 
+
 # Rows of the truth table: label, how the recording is made (None: the
 # bundled one), and the `[icp]` settings.
 TRUTH_ROWS = [
