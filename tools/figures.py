@@ -16,6 +16,7 @@ or --only):
   relations         the four benchmark logs' relation errors, odocal and CSM
   run-to-run        the same over the five convergence bounds 0.8-1.2 x default
   real-calibration  the real recordings' batch and filter calibrations
+  lego-scanner      the LEGO robot's batch with and without its scanner corrections
   what-changed      the changes named at each firing on 25 simulated runs
   real-diagnosis    the diagnosis of the real recordings
   real-firings      the firings of the real recordings and the bundled one
@@ -58,6 +59,7 @@ BLOCKS = {
     "relations": (scan_matching.block_relations, False),
     "run-to-run": (scan_matching.block_run_to_run, False),
     "real-calibration": (calibration.block_real_calibration, False),
+    "lego-scanner": (calibration.block_lego_scanner, False),
     "what-changed": (changes.block_what_changed, False),
     "real-diagnosis": (diagnosis.block_real_diagnosis, False),
     "real-firings": (changes.block_real_firings, False),

@@ -4,7 +4,7 @@ import json
 import os
 import re
 
-from .common import num, pm
+from .common import ROOT, num, pm
 
 # (label, bag under the data folder, robot file name)
 REAL_RECORDINGS = [
@@ -94,6 +94,68 @@ def block_real_calibration(runner, csm):
             cells.append(" / ".join(pair))
         rows.append(f"| {label} | {' | '.join(cells)} |")
     return rows
+
+
+# The LEGO robot's scanner corrections, each row's `[scanner]` keys kept from
+# its robot file (scans/robots/lego-robot.toml), then the data README's own
+# dead reckoning (a record, not computed).
+LEGO_SCANNER = [
+    ("as recorded", ()),
+    ("range offset 70 mm", ("range_offset",)),
+    ("beam spacing ×1.03", ("angle_increment",)),
+    ("both (the robot file)", ("angle_increment", "range_offset")),
+]
+LEGO_DATA_README = ("| data README: 0.349 mm/tick (fitted to the tracker), width and start pose fitted to the "
+                    "tracker | 20.0 | 172.5 | – | 0.056 m | – |")
+
+
+def lego_robot_with(runner, keys):
+    """The LEGO robot file with only `keys` of its `[scanner]` table."""
+    with open(os.path.join(ROOT, "scans", "robots", "lego-robot.toml")) as f:
+        lines, table = f.read().splitlines(), None
+    kept = []
+    for line in lines:
+        if line.startswith("["):
+            table = line.split("]")[0].strip("[")
+        key = line.split("=")[0].strip()
+        if table == "scanner" and "=" in line and key not in keys:
+            continue
+        kept.append(line)
+    path = runner.path(f"lego-robot-{'-'.join(keys) or 'as-recorded'}.toml")
+    with open(path, "w") as f:
+        f.write("\n".join(kept) + "\n")
+    return path
+
+
+def lego_scanner_row(runner, bag, label, keys):
+    """The batch with these scanner corrections, then its odometry (`--method
+    none`, on the laser clock) against the tracker, SE(2)- and Sim(2)-aligned
+    after moving it back by the batch's time offset."""
+    out, cfg = runner.path(f"lego-scanner-{len(keys)}-{'-'.join(keys)}"), runner.path("lego-reference.toml")
+    with open(cfg, "w") as f:
+        f.write('[topics]\nreference = "/reference"\n')
+    args = ["calibrate", "--input", bag, "--robot", lego_robot_with(runner, keys), "--init", "batch",
+            "--method", "none", "--out", out, "--json"]
+    start = json.loads(runner.run(args))["start"]
+    delta = start["time_offset"]["value"]
+    ape = {}
+    for align in ("se2", "sim2"):
+        ape[align] = json.loads(runner.run([
+            "eval", "--estimate", os.path.join(out, "trajectory.tum"), "--reference", bag, "--align",
+            align, "--t-offset", repr(delta), "--config", cfg, "--json"]))
+    rr, rl, wb = start["r_right"], start["r_left"], start["wheel_base"]
+    return (f"| {label} | {num(rr['value'] * 1000, 1)} / {num(rl['value'] * 1000, 1)} ± "
+            f"{num(max(rr['std'], rl['std']) * 1000, 1)} | {num(wb['value'] * 1000, 0)} ± {num(wb['std'] * 1000, 0)} | "
+            f"{num(delta, 3)} | {ape['se2']['ape']['rmse']:.3f} m | {ape['sim2']['ape']['rmse']:.3f} m, "
+            f"{ape['sim2']['alignment']['scale']:.3f} |")
+
+
+def block_lego_scanner(runner, csm):
+    bag = runner.data_file("lego-robot/lego-robot.mcap")
+    rows = ["| scanner | R_R / R_L (mm) | D (mm) | δ (s) | APE SE(2) | APE Sim(2), scale |",
+            "|---|---|---|---|---|---|"]
+    futures = [runner.pool.submit(lego_scanner_row, runner, bag, label, keys) for label, keys in LEGO_SCANNER]
+    return rows + [f.result() for f in futures] + [LEGO_DATA_README]
 
 
 # The columns (the experiment's configurations) and seed 000's own figures
