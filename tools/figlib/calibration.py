@@ -131,7 +131,8 @@ def lego_scanner_row(runner, bag, label, keys):
     """The batch with these scanner corrections, then its odometry (`--method
     none`, on the laser clock) against the tracker, SE(2)- and Sim(2)-aligned
     after moving it back by the batch's time offset."""
-    out, cfg = runner.path(f"lego-scanner-{len(keys)}-{'-'.join(keys)}"), runner.path("lego-reference.toml")
+    name = f"lego-scanner-{len(keys)}-{'-'.join(keys)}"
+    out, cfg = runner.path(name), runner.path(f"{name}.toml")
     with open(cfg, "w") as f:
         f.write('[topics]\nreference = "/reference"\n')
     args = ["calibrate", "--input", bag, "--robot", lego_robot_with(runner, keys), "--init", "batch",

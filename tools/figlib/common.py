@@ -6,6 +6,7 @@ import os
 import statistics
 import subprocess
 import tempfile
+import threading
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -23,6 +24,7 @@ class Runner:
         self.scratch = scratch
         self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=jobs)
         self.futures = {}
+        self.lock = threading.Lock()
 
     def path(self, name):
         return os.path.join(self.scratch, name)
@@ -41,10 +43,13 @@ class Runner:
         return self.call(args).stdout
 
     def once(self, key, fn):
-        """`fn()` started once per key in the pool; its future."""
-        if key not in self.futures:
-            self.futures[key] = self.pool.submit(fn)
-        return self.futures[key]
+        """`fn()` started once per key in the pool; its future. The blocks
+        ask from their own threads, and two runs of one command would write
+        the same outputs."""
+        with self.lock:
+            if key not in self.futures:
+                self.futures[key] = self.pool.submit(fn)
+            return self.futures[key]
 
     def data_file(self, rel):
         """A file of the shared data folder; Skip when it is missing."""

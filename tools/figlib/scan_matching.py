@@ -43,12 +43,13 @@ def default_convergence():
     return float(m.group(1))
 
 
-def bound_config(runner, factor):
+def bound_config(runner, log, factor):
     """`--config` arguments setting the convergence bound to `factor` times
-    its default; none for the default itself."""
+    its default (a file of the log's own: the runs go in parallel); none for
+    the default itself."""
     if factor == "1.0":
         return []
-    cfg = runner.path(f"conv-{factor}.toml")
+    cfg = runner.path(f"conv-{log}-{factor}.toml")
     with open(cfg, "w") as f:
         f.write(f"[icp]\nconvergence = {float(factor) * default_convergence()!r}\n")
     return ["--config", cfg]
@@ -61,7 +62,7 @@ def relations(runner, log, factor):
 
     def work():
         tum = runner.path(f"{log}-{factor}.tum")
-        runner.run(["icp", "--input", bag, "--out", tum] + bound_config(runner, factor))
+        runner.run(["icp", "--input", bag, "--out", tum] + bound_config(runner, log, factor))
         rel = os.path.join(runner.data, "slam-benchmark", f"{log}.relations")
         out = runner.run(["eval", "--estimate", tum, "--relations", rel, "--json"])
         return json.loads(out)["relations"]
