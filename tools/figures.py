@@ -134,7 +134,7 @@ def regenerate(runner, a):
     with open(README) as f:
         text = f.read()
     lines, found = blocks_of(text)
-    names = a.only or sorted(n for n, (_, slow) in BLOCKS.items() if a.all or not slow)
+    names = list(dict.fromkeys(a.only or sorted(n for n, (_, slow) in BLOCKS.items() if a.all or not slow)))
     missing = [n for n in names if n not in found]
     if missing:
         raise SystemExit(f"README.md has no block {', '.join(missing)}")
