@@ -10,11 +10,12 @@ bundled recording, the simulator and the real logs of the shared data folder:
   figures.py --write   rewrite the blocks in README.md (atomically)
   figures.py --print   print the blocks
 
-Blocks (tools/figlib/; about 45 s on 2 cores, the slow ones only with --all
+Blocks (tools/figlib/; about 2 minutes on 2 cores, the slow ones only with --all
 or --only):
   icp-truth         motion sums against the simulator's truth (tools/icp_bias.py)
   relations         the four benchmark logs' relation errors, odocal and CSM
   run-to-run        the same over the five convergence bounds 0.8-1.2 x default
+  bound-sweep       iterations and relations from a 1 m to the default 10 µm bound
   real-calibration  the real recordings' batch and filter calibrations
   lego-scanner      the LEGO robot's batch with and without its scanner corrections
   what-changed      the changes named at each firing on 25 simulated runs
@@ -58,6 +59,7 @@ BLOCKS = {
     "icp-truth": (scan_matching.block_icp_truth, False),
     "relations": (scan_matching.block_relations, False),
     "run-to-run": (scan_matching.block_run_to_run, False),
+    "bound-sweep": (scan_matching.block_bound_sweep, False),
     "real-calibration": (calibration.block_real_calibration, False),
     "lego-scanner": (calibration.block_lego_scanner, False),
     "what-changed": (changes.block_what_changed, False),

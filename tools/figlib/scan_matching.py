@@ -4,6 +4,7 @@ CSM's recorded runs."""
 import json
 import os
 import re
+import statistics
 import subprocess
 import sys
 
@@ -57,15 +58,16 @@ def bound_config(runner, log, factor):
 
 def relations(runner, log, factor):
     """`odocal eval --relations --json` of a benchmark log matched with the
-    convergence bound at `factor` times its default (a future, run once)."""
+    convergence bound at `factor` times its default, with the matcher's mean
+    iterations per pair (a future, run once)."""
     bag = runner.data_file(f"slam-benchmark/{log}.mcap")
 
     def work():
         tum = runner.path(f"{log}-{factor}.tum")
-        runner.run(["icp", "--input", bag, "--out", tum] + bound_config(runner, log, factor))
+        icp = runner.run(["icp", "--input", bag, "--out", tum, "--json"] + bound_config(runner, log, factor))
         rel = os.path.join(runner.data, "slam-benchmark", f"{log}.relations")
         out = runner.run(["eval", "--estimate", tum, "--relations", rel, "--json"])
-        return json.loads(out)["relations"]
+        return dict(json.loads(out)["relations"], iterations_per_pair=json.loads(icp)["mean_iterations"])
 
     return runner.once(("relations", log, factor), work)
 
@@ -115,6 +117,40 @@ def block_run_to_run(runner, csm):
         theirs = ensemble_cells([csm_run(csm, log, f) for f in FACTORS])
         rows.append(f"| {log} | {' | '.join(ours + theirs)} |")
     return rows
+
+
+# The convergence bounds of the speed table (m, as multiples of the default
+# 10 µm), each judged over its own five-bound ensemble.
+SWEEP = [("1 m (one step)", 100000), ("1 cm", 1000), ("1 mm", 100), ("0.1 mm", 10), ("10 µm (default)", 1)]
+
+
+def sweep_factor(multiple, factor):
+    """The factor of the default bound for `factor` times `multiple` of it."""
+    return "1.0" if multiple == 1 and factor == "1.0" else repr(multiple * float(factor))
+
+
+def sweep_cell(runs, at_bound):
+    """Iterations per pair at the bound itself; the ensemble's median local
+    translation and rotation and all-relations errors."""
+    med = lambda xs: statistics.median(xs)
+    return (f"{at_bound['iterations_per_pair']:.1f} it; "
+            f"{med([r['local']['trans_mean'] for r in runs]):.4f} m, "
+            f"{med([r['local']['rot_mean_deg'] for r in runs]):.3f}°, "
+            f"{med([r['trans_mean'] for r in runs]):.3f} m")
+
+
+def block_bound_sweep(runner, csm):
+    rows = ["| bound | " + " | ".join(LOGS) + " |", "|---|---|---|---|---|"]
+    futures = {(log, m, f): relations(runner, log, sweep_factor(m, f))
+               for _, m in SWEEP for log in LOGS for f in FACTORS}
+    for label, m in SWEEP:
+        cells = []
+        for log in LOGS:
+            runs = [futures[(log, m, f)].result() for f in FACTORS]
+            cells.append(sweep_cell(runs, runs[FACTORS.index("1.0")]))
+        rows.append(f"| {label} | {' | '.join(cells)} |")
+    theirs = [sweep_cell([csm_run(csm, log, f) for f in FACTORS], csm_run(csm, log, "1.0")) for log in LOGS]
+    return rows + [f"| CSM (its loop) | {' | '.join(theirs)} |"]
 
 
 # Rows of the truth table: label, how the recording is made (None: the
@@ -207,12 +243,16 @@ def csm_run(csm, log, factor):
 
 
 def record_csm(runner, folder):
-    """Scores CSM's trajectories DIR/LOG-F.tum and rewrites figures_csm.json."""
+    """Scores CSM's trajectories DIR/LOG-F.tum, reads its iterations per pair
+    from the driver's DIR/LOG-F.err, and rewrites figures_csm.json."""
     csm = {"source": CSM_SOURCE}
     for log in LOGS:
         for factor in FACTORS:
             tum = os.path.join(folder, f"{log}-{factor}.tum")
             rel = os.path.join(runner.data, "slam-benchmark", f"{log}.relations")
             out = runner.run(["eval", "--estimate", tum, "--relations", rel, "--json"])
-            csm.setdefault("runs", {}).setdefault(log, {})[factor] = json.loads(out)["relations"]
+            run = json.loads(out)["relations"]
+            with open(os.path.join(folder, f"{log}-{factor}.err")) as f:
+                run["iterations_per_pair"] = float(re.search(r"iters_per_pair ([0-9.]+)", f.read()).group(1))
+            csm.setdefault("runs", {}).setdefault(log, {})[factor] = run
     write_atomically(CSM_FILE, json.dumps(csm, indent=1) + "\n")
