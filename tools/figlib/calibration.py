@@ -121,10 +121,8 @@ def lego_robot_with(runner, keys):
         if table == "scanner" and "=" in line and key not in keys:
             continue
         kept.append(line)
-    path = runner.path(f"lego-robot-{'-'.join(keys) or 'as-recorded'}.toml")
-    with open(path, "w") as f:
-        f.write("\n".join(kept) + "\n")
-    return path
+    name = f"lego-robot-{'-'.join(keys) or 'as-recorded'}.toml"
+    return runner.scratch_file(name, "\n".join(kept) + "\n")
 
 
 def lego_scanner_row(runner, bag, label, keys):
@@ -132,9 +130,7 @@ def lego_scanner_row(runner, bag, label, keys):
     none`, on the laser clock) against the tracker, SE(2)- and Sim(2)-aligned
     after moving it back by the batch's time offset."""
     name = f"lego-scanner-{len(keys)}-{'-'.join(keys)}"
-    out, cfg = runner.path(name), runner.path(f"{name}.toml")
-    with open(cfg, "w") as f:
-        f.write('[topics]\nreference = "/reference"\n')
+    out, cfg = runner.path(name), runner.scratch_file(f"{name}.toml", '[topics]\nreference = "/reference"\n')
     args = ["calibrate", "--input", bag, "--robot", lego_robot_with(runner, keys), "--init", "batch",
             "--method", "none", "--out", out, "--json"]
     start = json.loads(runner.run(args))["start"]
@@ -250,9 +246,7 @@ def fleet_alarm_cell(found, alarms):
 def block_fleet(runner, csm):
     """`odocal experiment fleet --runs 12 --seed 7` with ten days: each
     robot's hidden history against what the fleet run found."""
-    out, cfg = runner.path("fleet"), runner.path("fleet.toml")
-    with open(cfg, "w") as f:
-        f.write("[fleet]\ndays = 10\n")
+    out, cfg = runner.path("fleet"), runner.scratch_file("fleet.toml", "[fleet]\ndays = 10\n")
     runner.run(["experiment", "fleet", "--runs", "12", "--seed", "7", "--settings", cfg, "--out", out])
     with open(os.path.join(out, "fleet.json")) as f:
         verdicts = json.load(f)["verdicts"]

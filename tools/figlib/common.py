@@ -29,6 +29,13 @@ class Runner:
     def path(self, name):
         return os.path.join(self.scratch, name)
 
+    def scratch_file(self, name, text):
+        """`text` written to the scratch file `name`; its path."""
+        path = self.path(name)
+        with open(path, "w") as f:
+            f.write(text)
+        return path
+
     def call(self, args, allowed=(0,)):
         """Runs odocal with `args`; the finished process, or an error naming
         the command when its exit code is not among `allowed`."""

@@ -30,13 +30,8 @@ DIAGNOSED = [
 def diagnose(runner, k, rel, robot, settings):
     """`odocal diagnose --measured --json` of one row."""
     if "\n" in robot:
-        path = runner.path(f"robot-{k}.toml")
-        with open(path, "w") as f:
-            f.write(robot)
-        robot = path
-    cfg = runner.path(f"diagnose-{k}.toml")
-    with open(cfg, "w") as f:
-        f.write(settings)
+        robot = runner.scratch_file(f"robot-{k}.toml", robot)
+    cfg = runner.scratch_file(f"diagnose-{k}.toml", settings)
     return json.loads(runner.run(["diagnose", "--measured", os.path.join(runner.data, rel),
                                   "--robot", robot, "--config", cfg, "--json"]))
 

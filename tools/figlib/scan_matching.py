@@ -50,10 +50,8 @@ def bound_config(runner, log, factor):
     the default itself."""
     if factor == "1.0":
         return []
-    cfg = runner.path(f"conv-{log}-{factor}.toml")
-    with open(cfg, "w") as f:
-        f.write(f"[icp]\nconvergence = {float(factor) * default_convergence()!r}\n")
-    return ["--config", cfg]
+    bound = float(factor) * default_convergence()
+    return ["--config", runner.scratch_file(f"conv-{log}-{factor}.toml", f"[icp]\nconvergence = {bound!r}\n")]
 
 
 def relations(runner, log, factor):
@@ -132,7 +130,7 @@ def sweep_factor(multiple, factor):
 def sweep_cell(runs, at_bound):
     """Iterations per pair at the bound itself; the ensemble's median local
     translation and rotation and all-relations errors."""
-    med = lambda xs: statistics.median(xs)
+    med = statistics.median
     return (f"{at_bound['iterations_per_pair']:.1f} it; "
             f"{med([r['local']['trans_mean'] for r in runs]):.4f} m, "
             f"{med([r['local']['rot_mean_deg'] for r in runs]):.3f}°, "
@@ -197,9 +195,7 @@ def truth_row(runner, k, sim, icp_settings):
         truth = os.path.join(ROOT, "scans", "wheelchair-corridor.truth.json")
     else:
         bag, truth = simulated(runner, sim)
-    cfg = runner.path(f"truth-{k}.toml")
-    with open(cfg, "w") as f:
-        f.write(icp_settings)
+    cfg = runner.scratch_file(f"truth-{k}.toml", icp_settings)
     tum, motions = runner.path(f"truth-{k}.tum"), runner.path(f"truth-{k}.csv")
     runner.run(["icp", "--input", bag, "--out", tum, "--motions", motions, "--config", cfg])
     bias = subprocess.run(
