@@ -257,7 +257,7 @@ fn associate(
         // A point without a surface normal of its own is never admitted
         // (`admits` refuses a NaN normal), and its hint and line serve no
         // other point: it is not searched for (every correspondence the
-        // same as with the search; 13 % of the benchmark logs' points).
+        // same as with the search; 13–15 % of the benchmark logs' points).
         if !ns[0].is_finite() {
             continue;
         }
