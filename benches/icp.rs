@@ -2,7 +2,8 @@
 //! throughput in pairs per second on one core. And per benchmark log
 //! (Intel, MIT-CSAIL, FR079, ACES under `$ODOCAL_DATA/slam-benchmark`, read
 //! once): the time per scan pair of matching the first 1,000 scans with the
-//! log's odometry as prior, as `odocal icp` does (decoding excluded).
+//! log's odometry as prior, as `odocal icp` does (decoding excluded), with
+//! every point of the scans and with two thinned sources.
 
 use std::path::PathBuf;
 
@@ -92,11 +93,23 @@ fn logs(c: &mut Criterion) {
             odom.push(p.stamp, p.pose);
         }
         let mount = rec.base_from_laser.unwrap_or_else(Pose2::identity);
-        let params = IcpParams::default();
         g.throughput(Throughput::Elements(scans.len() as u64 - 1));
-        g.bench_function(format!("{name}_per_pair"), |b| {
-            b.iter(|| match_recording(scans, mount, Some(&odom), &params).unwrap())
-        });
+        // The default, and the thinned sources of README's "Speed against
+        // thinning": every second beam, and that with one point per 10 cm cell.
+        let thinned = |beam_stride, voxel_size| IcpParams {
+            beam_stride,
+            voxel_size,
+            ..IcpParams::default()
+        };
+        for (suffix, params) in [
+            ("", IcpParams::default()),
+            ("_every_2nd_beam", thinned(2, 0.0)),
+            ("_every_2nd_beam_10cm_cells", thinned(2, 0.1)),
+        ] {
+            g.bench_function(format!("{name}_per_pair{suffix}"), |b| {
+                b.iter(|| match_recording(scans, mount, Some(&odom), &params).unwrap())
+            });
+        }
     }
     g.finish();
 }

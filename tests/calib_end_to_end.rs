@@ -273,3 +273,73 @@ fn fig5_fixed_count_baseline(md: &str, v: &serde_json::Value) {
     assert!((end_mm - table_mm).abs() < 6e-4, "{end_mm} vs {table_mm}");
     assert!(run0["convergence_s"].as_f64().is_some(), "{run0}");
 }
+
+/// Final estimate and its std (m) of `odocal calibrate --json` on the bundled
+/// recording, with `config` (a `--config` file's text) when given.
+fn bundled_calibration(d: &std::path::Path, config: Option<&str>) -> [[f64; 2]; 3] {
+    let bag = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scans/wheelchair-corridor.mcap"
+    );
+    let out_dir = d.join(if config.is_some() { "thinned" } else { "all" });
+    let mut args = vec!["calibrate", "--input", bag, "--json", "--out"];
+    let out_dir = out_dir.to_str().unwrap().to_string();
+    args.push(&out_dir);
+    let cfg = d.join("thin.toml");
+    let cfg = cfg.to_str().unwrap().to_string();
+    if let Some(text) = config {
+        std::fs::write(&cfg, text).unwrap();
+        args.extend(["--config", cfg.as_str()]);
+    }
+    let out = crate::support::odocal(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    ["r_right", "r_left", "wheel_base"].map(|k| {
+        [
+            v["final"][k].as_f64().unwrap(),
+            v["std"][k].as_f64().unwrap(),
+        ]
+    })
+}
+
+#[test]
+fn thinned_scans_calibrate_the_chair_as_whole_ones_only_less_precisely() {
+    // README ("Speed against thinning"): every second beam of the scans being
+    // matched is a throughput setting whose cost shows in the spread, not in
+    // the values. Against the simulator's final radii and wheel base.
+    let d = crate::support::scratch("calib_thinned");
+    let truth: serde_json::Value = serde_json::from_str(include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scans/wheelchair-corridor.truth.json"
+    )))
+    .unwrap();
+    let last = truth["parameters"]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap()
+        .clone();
+    let truth = ["r_right", "r_left", "wheel_base"].map(|k| last[k].as_f64().unwrap());
+    let all = bundled_calibration(&d, None);
+    let thinned = bundled_calibration(&d, Some("[icp]\nbeam_stride = 2\n"));
+    for (k, name) in ["right radius", "left radius", "wheel base"]
+        .iter()
+        .enumerate()
+    {
+        let [est, std] = thinned[k];
+        assert!(
+            (est - truth[k]).abs() < 2.5 * std,
+            "{name}: thinned {est:.5} ± {std:.5} m, truth {:.5} m",
+            truth[k]
+        );
+        assert!(
+            std > 1.1 * all[k][1],
+            "{name}: thinned std {std:.5} m, not wider than the whole scans' {:.5} m",
+            all[k][1]
+        );
+    }
+}
