@@ -274,31 +274,36 @@ fn fig5_fixed_count_baseline(md: &str, v: &serde_json::Value) {
     assert!(run0["convergence_s"].as_f64().is_some(), "{run0}");
 }
 
-/// Final estimate and its std (m) of `odocal calibrate --json` on the bundled
-/// recording, with `config` (a `--config` file's text) when given.
-fn bundled_calibration(d: &std::path::Path, config: Option<&str>) -> [[f64; 2]; 3] {
+/// The calibrated parameters of the bundled recording's JSON and truth file.
+const CHAIR_PARAMS: [&str; 3] = ["r_right", "r_left", "wheel_base"];
+
+/// Final estimate and its std (m) of each of [`CHAIR_PARAMS`], from
+/// `odocal calibrate --json` on the bundled recording with `icp` as the
+/// `[icp]` table of its config file (run `name` in `d`).
+fn bundled_calibration(d: &std::path::Path, name: &str, icp: &str) -> [[f64; 2]; 3] {
     let bag = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/scans/wheelchair-corridor.mcap"
     );
-    let out_dir = d.join(if config.is_some() { "thinned" } else { "all" });
-    let mut args = vec!["calibrate", "--input", bag, "--json", "--out"];
-    let out_dir = out_dir.to_str().unwrap().to_string();
-    args.push(&out_dir);
-    let cfg = d.join("thin.toml");
-    let cfg = cfg.to_str().unwrap().to_string();
-    if let Some(text) = config {
-        std::fs::write(&cfg, text).unwrap();
-        args.extend(["--config", cfg.as_str()]);
-    }
-    let out = crate::support::odocal(&args);
+    let (cfg, out_dir) = (d.join(format!("{name}.toml")), d.join(name));
+    std::fs::write(&cfg, format!("[icp]\n{icp}")).unwrap();
+    let out = crate::support::odocal(&[
+        "calibrate",
+        "--input",
+        bag,
+        "--json",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    ["r_right", "r_left", "wheel_base"].map(|k| {
+    CHAIR_PARAMS.map(|k| {
         [
             v["final"][k].as_f64().unwrap(),
             v["std"][k].as_f64().unwrap(),
@@ -317,19 +322,11 @@ fn thinned_scans_calibrate_the_chair_as_whole_ones_only_less_precisely() {
         "/scans/wheelchair-corridor.truth.json"
     )))
     .unwrap();
-    let last = truth["parameters"]
-        .as_array()
-        .unwrap()
-        .last()
-        .unwrap()
-        .clone();
-    let truth = ["r_right", "r_left", "wheel_base"].map(|k| last[k].as_f64().unwrap());
-    let all = bundled_calibration(&d, None);
-    let thinned = bundled_calibration(&d, Some("[icp]\nbeam_stride = 2\n"));
-    for (k, name) in ["right radius", "left radius", "wheel base"]
-        .iter()
-        .enumerate()
-    {
+    let last = &truth["parameters"][truth["parameters"].as_array().unwrap().len() - 1];
+    let truth = CHAIR_PARAMS.map(|k| last[k].as_f64().unwrap());
+    let all = bundled_calibration(&d, "all", "");
+    let thinned = bundled_calibration(&d, "thinned", "beam_stride = 2\n");
+    for (k, name) in CHAIR_PARAMS.iter().enumerate() {
         let [est, std] = thinned[k];
         assert!(
             (est - truth[k]).abs() < 2.5 * std,
