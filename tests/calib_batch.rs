@@ -3,7 +3,7 @@
 //! the nominal ones the bag states (the simulator keeps them in its truth
 //! file), and Censi et al.'s tuples on the command line.
 
-use crate::support::{scratch, shared_data};
+use crate::support::{ok_json as json, scratch, shared_data};
 use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -13,15 +13,6 @@ fn odocal(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run odocal")
-}
-
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
 }
 
 /// Asserts |estimate − truth| < 3 std and returns the error in stds.

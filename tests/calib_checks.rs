@@ -4,7 +4,7 @@
 //! estimate far from the nominal robot each end in exit 2 with a message
 //! saying what to fix — never in a number.
 
-use crate::support::{odocal, scratch, shared_data};
+use crate::support::{odocal, ok_json as json, scratch, shared_data};
 use odocal::io::{read_recording, write_mcap, ReadOptions, WriteOptions};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -26,15 +26,6 @@ fn refused(out: &Output) -> String {
     let err = String::from_utf8_lossy(&out.stderr).to_string();
     assert_eq!(out.status.code(), Some(2), "expected a refusal: {err}");
     err
-}
-
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
 }
 
 /// `odocal icp --json` over `bag` into `out` (TUM), with `--robot ROBOT`

@@ -297,12 +297,7 @@ fn bundled_calibration(d: &std::path::Path, name: &str, icp: &str) -> [[f64; 2];
         "--out",
         out_dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = crate::support::ok_json(&out);
     CHAIR_PARAMS.map(|k| {
         [
             v["final"][k].as_f64().unwrap(),

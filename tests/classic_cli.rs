@@ -1,8 +1,7 @@
 //! `odocal experiment` for the literature comparison and the seed tables:
 //! files written, JSON keys, exit codes, determinism.
 
-use crate::support::{scratch, shared_data};
-use serde_json::Value;
+use crate::support::{ok_json, scratch, shared_data};
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -11,15 +10,6 @@ fn odocal(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run odocal")
-}
-
-fn ok_json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "odocal failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
 }
 
 fn s(p: &Path) -> &str {

@@ -2,7 +2,7 @@
 //! calibrate → eval → demo), print design.md's JSON keys, and answer bad input
 //! with exit code 2 and a message naming the file.
 
-use crate::support::scratch;
+use crate::support::{ok_json as json, scratch};
 use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -12,20 +12,6 @@ fn odocal(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run odocal")
-}
-
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "odocal failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-        panic!(
-            "stdout is not one JSON object ({e}): {}",
-            String::from_utf8_lossy(&out.stdout)
-        )
-    })
 }
 
 fn has_keys(v: &Value, keys: &[&str]) {

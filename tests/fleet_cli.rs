@@ -4,7 +4,7 @@
 //! calibrated again, bad manifests and a missing Ray engine are refused
 //! with exit 2 naming what to fix.
 
-use crate::support::scratch;
+use crate::support::{ok_json, scratch};
 use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -14,15 +14,6 @@ pub fn odocal(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run odocal")
-}
-
-fn ok_json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
 }
 
 /// Two robots × two days of 20 s corridor runs, laid out ROBOT/DATE/run.mcap.

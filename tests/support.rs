@@ -63,6 +63,22 @@ pub fn scratch(test: &str) -> PathBuf {
     d
 }
 
+/// The one JSON object a successful `odocal … --json` printed; fails the
+/// test with odocal's stderr when it did not succeed.
+pub fn ok_json(out: &std::process::Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "odocal failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "stdout is not one JSON object ({e}): {}",
+            String::from_utf8_lossy(&out.stdout)
+        )
+    })
+}
+
 /// Runs the `odocal` binary with `args`.
 pub fn odocal(args: &[&str]) -> std::process::Output {
     std::process::Command::new(env!("CARGO_BIN_EXE_odocal"))
