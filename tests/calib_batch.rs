@@ -3,17 +3,9 @@
 //! the nominal ones the bag states (the simulator keeps them in its truth
 //! file), and Censi et al.'s tuples on the command line.
 
-use crate::support::{ok_json as json, scratch, shared_data};
+use crate::support::{odocal, ok_json as json, scratch, shared_data};
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
-}
 
 /// Asserts |estimate − truth| < 3 std and returns the error in stds.
 fn within_3_std(name: &str, v: &Value, truth: f64, angle: bool) -> f64 {

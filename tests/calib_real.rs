@@ -7,17 +7,10 @@
 //! check of the data README (2050 / 2160 ticks per revolution on exp1 /
 //! exp2: exp1's effective radius 5.4 % larger).
 
-use crate::support::{scratch, shared_data};
+use crate::support::{odocal, scratch, shared_data};
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
-}
+use std::process::Output;
 
 fn ok(out: &Output) -> Value {
     assert!(

@@ -1,16 +1,8 @@
 //! `odocal experiment` for the literature comparison and the seed tables:
 //! files written, JSON keys, exit codes, determinism.
 
-use crate::support::{ok_json, scratch, shared_data};
+use crate::support::{odocal, ok_json, scratch, shared_data};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
-}
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()

@@ -2,17 +2,9 @@
 //! calibrate → eval → demo), print design.md's JSON keys, and answer bad input
 //! with exit code 2 and a message naming the file.
 
-use crate::support::{ok_json as json, scratch};
+use crate::support::{odocal, ok_json as json, scratch};
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
-}
 
 fn has_keys(v: &Value, keys: &[&str]) {
     for k in keys {
@@ -570,7 +562,7 @@ fn check_run_rrd(test: &str, rrd: &Path, scans: usize, steps: usize, changes: us
     let exp = rrd.with_extension("expect.json");
     std::fs::write(&exp, serde_json::to_vec_pretty(&expect).unwrap()).unwrap();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/rrd_check.py");
-    let out = Command::new(py)
+    let out = std::process::Command::new(py)
         .arg(script)
         .arg(rrd)
         .arg(&exp)

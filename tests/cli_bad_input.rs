@@ -7,7 +7,7 @@
 //! absurd TUM values. Every bad input is written by the test itself.
 
 use crate::io_time::{bag, Msg};
-use crate::support::scratch;
+use crate::support::{odocal, scratch};
 use odocal::io::ros_msgs::{Header, JointStateMsg, LaserScanMsg, RosMsg, Time};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -20,13 +20,6 @@ const BUNDLED_TRUTH: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/scans/wheelchair-corridor.truth.json"
 );
-
-fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
-}
 
 /// Asserts exit code 2 and that stderr holds every needle; returns stderr.
 fn refused(o: &Output, needles: &[&str]) -> String {

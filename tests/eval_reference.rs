@@ -4,19 +4,12 @@
 //! file; a reference whose quaternions are placeholders; reports without a
 //! reference; and the demo from an installed copy of the binary.
 
-use crate::support;
+use crate::support::{self, odocal};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use odocal::eval::{self, Alignment, EvalOptions, SyncOptions, Trajectory3};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
-}
 
 fn ok(out: &Output) -> String {
     assert!(

@@ -4,17 +4,10 @@
 //! calibrated again, bad manifests and a missing Ray engine are refused
 //! with exit 2 naming what to fix.
 
-use crate::support::{ok_json, scratch};
+use crate::support::{odocal, ok_json, scratch};
 use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Output};
-
-pub fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
-}
 
 /// Two robots × two days of 20 s corridor runs, laid out ROBOT/DATE/run.mcap.
 pub fn tiny_fleet(dir: &Path) {

@@ -3,21 +3,14 @@
 //! its target and stays a link, a directory or device is refused, and a
 //! failed write leaves no temporary file. Inputs are written by the tests.
 
-use crate::support::scratch;
+use crate::support::{odocal, scratch};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 const BUNDLED: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/scans/wheelchair-corridor.mcap"
 );
-
-fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
-}
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()

@@ -8,13 +8,13 @@
 //! is refused naming the robot-file keys.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use odocal::io::{collect, open, ReadOptions};
 use odocal::recording::{Recording, WheelValues};
 use odocal::robot::RobotConfig;
 
-use crate::support::{python_with, scratch};
+use crate::support::{odocal, python_with, scratch};
 
 const BUNDLED: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -85,13 +85,6 @@ fn ticks_bag(test: &str, dir: &Path, extra: &[&str]) -> Option<PathBuf> {
     args.extend(extra);
     wheel_sources(test, Path::new(BUNDLED), &out, &args)?;
     Some(out)
-}
-
-fn odocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_odocal"))
-        .args(args)
-        .output()
-        .expect("run odocal")
 }
 
 /// `odocal calibrate --method dkf --json` on `input` with robot file `robot`.

@@ -6,8 +6,8 @@
 //! the fleet's own outputs refused before any work.
 #![cfg(feature = "rerun")]
 
-use crate::fleet_cli::{odocal, tiny_fleet};
-use crate::support::scratch;
+use crate::fleet_cli::tiny_fleet;
+use crate::support::{odocal, scratch};
 use crate::viz_rrd::run_check;
 use serde_json::{json, Value};
 
