@@ -25,7 +25,7 @@ fn filter(method: Method, trigger: Trigger, n: usize) -> ParticleFilter {
     };
     p.adaptive.n_min = n;
     p.adaptive.n_max = n;
-    ParticleFilter::new(&p)
+    ParticleFilter::new(&p.pf_settings())
 }
 
 fn bench(c: &mut Criterion) {

@@ -31,6 +31,20 @@ pub enum Origin {
 }
 
 impl Origin {
+    /// The JSON name (`tf_static`, `robot_file`, …).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Origin::TfStatic => "tf_static",
+            Origin::Tf => "tf",
+            Origin::Log => "log",
+            Origin::Recording => "recording",
+            Origin::RobotFile => "robot_file",
+            Origin::Estimated => "estimated",
+            Origin::Config => "config",
+            Origin::Default => "default",
+        }
+    }
+
     /// Words for the human output.
     pub fn describe(self) -> &'static str {
         match self {

@@ -30,7 +30,7 @@ pub fn khepera_params(method: Method) -> CalibParams {
     let mut p = CalibParams {
         method,
         seed: 7,
-        ranges: Ranges::around(0.021, 0.021, 0.09, 0.1),
+        ranges: Some(Ranges::around(0.021, 0.021, 0.09, 0.1)),
         ..Default::default()
     };
     p.noise.param_sigma = 1e-6;

@@ -169,7 +169,7 @@ fn a_radius_step_mid_run_is_retracked() {
         seed: 21,
         ..Default::default()
     };
-    let mut pf = ParticleFilter::new(&p);
+    let mut pf = ParticleFilter::new(&p.pf_settings());
     let r = run(&mut pf, &st, NOMINAL);
     // The change detector fired after the step, not before it.
     assert!(pf.jumps() >= 1, "the jump went unnoticed");
@@ -233,7 +233,7 @@ fn the_change_detector_stays_quiet_without_a_change() {
             seed,
             ..Default::default()
         };
-        let mut pf = ParticleFilter::new(&p);
+        let mut pf = ParticleFilter::new(&p.pf_settings());
         let r = run(&mut pf, &st, NOMINAL);
         assert_eq!(pf.jumps(), 0, "seed {seed}: false alarm");
         let f = r.final_drive();

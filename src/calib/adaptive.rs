@@ -7,6 +7,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::normal::inverse_normal_cdf;
+use super::params::{PAPER_RADIUS_M, SQRT_PAPER_STEP};
 use super::steps::{usable, CalibStep, Kind};
 use serde::{Deserialize, Serialize};
 
@@ -32,7 +33,8 @@ pub enum CountRule {
 pub struct AdaptiveParams {
     /// Count rule used by the `adaptive-pf` method.
     pub rule: CountRule,
-    /// Radius dispersion per particle (m): seed 000's "one particle per 0.01 mm".
+    /// Radius dispersion per particle, in wheel radii: [Farina]'s "one
+    /// particle per 0.01 mm" on its 0.32 m wheels (3.125·10⁻⁵).
     pub per_particle: f64,
     /// How many standard deviations of a radius make its dispersion (the
     /// width of the interval its particles fill: 6 = ±3σ, 99.7 % of a
@@ -44,22 +46,32 @@ pub struct AdaptiveParams {
     pub n_min: usize,
     /// Upper clamp of the particle count.
     pub n_max: usize,
-    /// α of eq. 11 (s): σ_ε = α·sqrt((V_m−V_O)² + (W_m−W_O)²).
+    /// α of [Farina, eq. 11] (√s: σ_ε per √s, the paper's 10⁻⁴ per 0.02 s
+    /// iteration): σ_ε = α·sqrt((V_m−V_O)² + (ℓ·(W_m−W_O))²),
+    /// the turn rate's residual weighed by the lever ℓ that turns it into a
+    /// wheel speed (half the wheel base: each wheel runs ±W·D/2 from V). The
+    /// paper prints ℓ = 1 (m/s and rad/s added as they are), which only
+    /// suits a robot of its size; `preset = "published"` keeps that form.
+    /// σ_ε comes out in the unit the parameters are configured in (the
+    /// wheel radius, see [`super::NoiseParams`]).
     pub alpha: f64,
+    /// ℓ of eq. 11 (m), set when the filter is built (not configured).
+    #[serde(skip, default = "unit_lever")]
+    pub turn_lever: f64,
     /// Time constant (s) of the exponential average of the residuals
     /// V_m − V_O, W_m − W_O that enter eq. 11: white measurement noise
     /// averages out, a persistent disagreement (the parameters changed) stays.
     /// 0 = the paper's instantaneous residuals.
     pub residual_tau: f64,
-    /// Lower clamp of σ_ε (m).
+    /// Lower clamp of σ_ε, in wheel radii per √s.
     pub sigma_min: f64,
-    /// Upper clamp of σ_ε (m).
+    /// Upper clamp of σ_ε, in wheel radii per √s.
     pub sigma_max: f64,
     /// KLD error bound ε.
     pub kld_epsilon: f64,
     /// KLD confidence 1−δ (the quantile z_{1−δ} is taken of it).
     pub kld_confidence: f64,
-    /// KLD bin sizes over (R_R, R_L, D) in m.
+    /// KLD bin sizes over (R_R, R_L, D), in wheel radii.
     pub kld_bin: [f64; 3],
 }
 
@@ -67,22 +79,46 @@ impl Default for AdaptiveParams {
     fn default() -> Self {
         Self {
             rule: CountRule::Dispersion,
-            per_particle: 1e-5,
+            per_particle: 1e-5 / PAPER_RADIUS_M,
             dispersion_sigmas: 6.0,
             n_min: 300,
             n_max: 20_000,
-            alpha: 1e-4,
+            alpha: 1e-4 / SQRT_PAPER_STEP,
+            turn_lever: 1.0,
             residual_tau: 1.0,
-            sigma_min: 1e-7,
-            sigma_max: 5e-3,
+            sigma_min: 1e-7 / PAPER_RADIUS_M / SQRT_PAPER_STEP,
+            sigma_max: 5e-3 / PAPER_RADIUS_M / SQRT_PAPER_STEP,
             kld_epsilon: 0.05,
             kld_confidence: 0.99,
-            kld_bin: [1e-4, 1e-4, 1e-3],
+            kld_bin: [
+                1e-4 / PAPER_RADIUS_M,
+                1e-4 / PAPER_RADIUS_M,
+                1e-3 / PAPER_RADIUS_M,
+            ],
         }
     }
 }
 
+fn unit_lever() -> f64 {
+    1.0
+}
+
 impl AdaptiveParams {
+    /// The rules in metres for a robot whose lengths are `unit` (m) wheel
+    /// radii, with eq. 11's turn lever `lever` (m), σ_ε's per-√s values
+    /// multiplied by `sqrt_s` (see [`super::NoiseParams::in_metres`]).
+    pub fn in_metres(&self, unit: f64, lever: f64, sqrt_s: f64) -> Self {
+        Self {
+            per_particle: self.per_particle * unit,
+            alpha: self.alpha * sqrt_s,
+            sigma_min: self.sigma_min * unit * sqrt_s,
+            sigma_max: self.sigma_max * unit * sqrt_s,
+            kld_bin: self.kld_bin.map(|b| b * unit),
+            turn_lever: lever,
+            ..self.clone()
+        }
+    }
+
     /// Checks ranges; the message names the bad field.
     pub fn validate(&self) -> Result<(), String> {
         let pos = |x: f64| x.is_finite() && x > 0.0;
@@ -168,9 +204,11 @@ impl AdaptiveParams {
         (ev.is_finite() && ew.is_finite()).then_some([ev, ew])
     }
 
-    /// Eq. 11 on (averaged) residuals: `σ_ε = α·sqrt(e_V² + e_W²)`, clamped.
+    /// Eq. 11 on (averaged) residuals: `σ_ε = α·sqrt(e_V² + (ℓ·e_W)²)`,
+    /// clamped.
     pub fn sigma_of(&self, e: [f64; 2]) -> f64 {
-        let s = self.alpha * (e[0] * e[0] + e[1] * e[1]).sqrt();
+        let w = self.turn_lever * e[1];
+        let s = self.alpha * (e[0] * e[0] + w * w).sqrt();
         if s.is_finite() {
             s.clamp(self.sigma_min, self.sigma_max)
         } else {
@@ -221,7 +259,8 @@ mod tests {
 
     #[test]
     fn dispersion_count_is_one_particle_per_hundredth_mm_of_cloud_width() {
-        let p = AdaptiveParams::default();
+        // The paper's rule on its 0.32 m wheels.
+        let p = AdaptiveParams::default().in_metres(PAPER_RADIUS_M, 1.0, 1.0);
         // σ 0.5 mm and 0.3 mm: ±3σ widths 3.0 + 1.8 = 4.8 mm = 480 × 0.01 mm.
         assert_eq!(p.dispersion_count(0.5e-3, 0.3e-3), 480);
         // The uniform start over 30 mm (σ = 30/√12 = 8.66 mm each): 10,392.
@@ -253,12 +292,17 @@ mod tests {
 
     #[test]
     fn process_sigma_follows_disagreement() {
-        let p = AdaptiveParams::default();
+        let p = AdaptiveParams::default().in_metres(PAPER_RADIUS_M, 1.0, SQRT_PAPER_STEP);
         let s = CalibStep::new(0.0, 0.02, 1.0, 1.0)
             .with(Kind::V, 1.3, 0.05)
             .with(Kind::W, 0.4, 0.01);
         let e = p.residuals(&s, 1.0, 0.0, 1e-3).unwrap();
         assert!((p.sigma_of(e) - 1e-4 * 0.5).abs() < 1e-15);
+        // With the turn rate weighed by half a 0.65 m wheel base, the same
+        // residuals (0.3 m/s, 0.4 rad/s) give α·sqrt(0.3² + 0.13²).
+        let lever = AdaptiveParams::default().in_metres(PAPER_RADIUS_M, 0.325, SQRT_PAPER_STEP);
+        let want = 1e-4 * (0.09f64 + 0.13 * 0.13).sqrt();
+        assert!((lever.sigma_of(e) - want).abs() < 1e-15, "{}", lever.sigma_of(e));
         let none = CalibStep::new(0.0, 0.02, 1.0, 1.0).with(Kind::V, 1.0, f64::INFINITY);
         assert!(p.residuals(&none, 0.0, 0.0, 1e-3).is_none());
         // A persistent residual survives the average, alternating noise does not.

@@ -6,7 +6,7 @@
 use super::change::KalmanChange;
 use super::kalman::kalman_estimate;
 use super::kalman::{model, observability, prior, turn_jacobian, turn_rate_for_observability};
-use super::params::CalibParams;
+use super::params::KalmanSettings;
 use super::robust::student_t_weight;
 use super::steps::{usable, CalibStep, Kind};
 use super::{Calibrator, Estimate};
@@ -24,13 +24,14 @@ pub struct AugmentedKf {
     floor: f64,
     dof: f64,
     w_obs: f64,
+    per_step: bool,
     change: Option<KalmanChange>,
 }
 
 impl AugmentedKf {
     /// Starts at the centre of `params.ranges` with the uniform variances.
-    pub fn new(params: &CalibParams) -> Self {
-        let (m, pm) = prior(params);
+    pub fn new(params: &KalmanSettings) -> Self {
+        let (m, pm) = prior(&params.ranges);
         let mut x = V5::zeros();
         let mut p = M5::zeros();
         for i in 0..3 {
@@ -52,7 +53,8 @@ impl AugmentedKf {
             floor: params.noise.sigma_floor,
             dof: params.noise.robust_dof,
             w_obs: params.noise.observability_turn_rate,
-            change: KalmanChange::new(&params.change),
+            per_step: params.per_step,
+            change: KalmanChange::new(params.detector.as_ref()),
         }
     }
 }
@@ -74,6 +76,10 @@ impl Calibrator for AugmentedKf {
         self.x[0] = v;
         self.x[1] = w;
         let mut q = self.q;
+        // The parameters' random walk per √s (per step under the paper's
+        // preset).
+        let dt = if self.per_step { 1.0 } else { s.dt().max(0.0) };
+        (2..5).for_each(|i| q[i] *= dt);
         q[4] *= obs * obs;
         self.p = f * self.p * f.transpose() + M5::from_diagonal(&q);
         if let Some(c) = &mut self.change {

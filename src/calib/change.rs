@@ -25,9 +25,10 @@
 // `!(x > y)` is deliberate: it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::normal::inverse_normal_cdf;
+use super::params::PAPER_RADIUS_M;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
+use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Settings of the change detector (used by `adaptive-pf`, and by `dkf` and
 /// `akf` when `kalman` is set; the fixed `pf` is seed 000's plain filter and
@@ -37,16 +38,12 @@ use serde::{Deserialize, Serialize};
 pub struct ChangeParams {
     /// Whether the detector runs (false: seed 000's rules alone).
     pub enabled: bool,
-    /// Whether the Kalman filters (`dkf`, `akf`) run it too. Off by default:
-    /// their parameter random walk keeps their covariance wide enough that
-    /// at the default `false_alarm` the test stays mute on a 4 mm step, and
-    /// on recordings whose residuals are far beyond their σ (the Mines
-    /// rover's 0.15 s latency) a more sensitive test fires again and again,
-    /// each time re-opening the covariance. `odocal experiment changing`
-    /// compares every filter with it on (`false_alarm` 1e-4) and off. The
-    /// default `false_alarm` of 1e-5 is the most sensitive at which the
-    /// Adaptive-PF is still refused, not re-opened without end, on the Mines
-    /// rover (at 1e-4 it ends there at 79.6 ± 44 mm).
+    /// Whether the Kalman filters (`dkf`, `akf`) run it too (default: the
+    /// same detector for every method). Their robust likelihood takes a
+    /// change of the radii, seen over intervals of a second at many times
+    /// the intervals' σ, for a run of outliers and follows it only slowly;
+    /// the detector re-opens their covariance instead. `odocal experiment
+    /// changing` compares every filter with it on and off.
     pub kalman: bool,
     /// Time constant τ of the window's exponential forgetting (s).
     pub window: f64,
@@ -54,8 +51,9 @@ pub struct ChangeParams {
     /// threshold; evaluations within a window are strongly correlated, so the
     /// false-alarm rate per window is of this order).
     pub false_alarm: f64,
-    /// Smallest spread (σ, m) added to R_R, R_L, D when the test fires; the
-    /// spread is widened to the window's estimate of the jump when larger.
+    /// Smallest spread (σ, in wheel radii) added to R_R, R_L, D when the
+    /// test fires; the spread is widened to the window's estimate of the
+    /// jump when larger.
     pub jump_sigma: [f64; 3],
     /// Naming of what changed at each firing, after the run
     /// ([`crate::diagnose::onset`]).
@@ -66,10 +64,10 @@ impl Default for ChangeParams {
     fn default() -> Self {
         Self {
             enabled: true,
-            kalman: false,
+            kalman: true,
             window: 5.0,
             false_alarm: 1e-5,
-            jump_sigma: [3e-3, 3e-3, 0.0],
+            jump_sigma: [3e-3 / PAPER_RADIUS_M, 3e-3 / PAPER_RADIUS_M, 0.0],
             naming: Default::default(),
         }
     }
@@ -90,12 +88,34 @@ impl ChangeParams {
         self.naming.validate()
     }
 
-    /// The χ²₃ quantile of `1 − false_alarm` (Wilson–Hilferty).
+    /// The detector's own settings, its spread in metres for a robot whose
+    /// lengths are `unit` (m) wheel radii (not the naming, which runs after).
+    pub fn detector(&self, unit: f64) -> DetectorParams {
+        DetectorParams {
+            window: self.window,
+            false_alarm: self.false_alarm,
+            jump_sigma: self.jump_sigma.map(|s| s * unit),
+        }
+    }
+}
+
+/// What a running detector needs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DetectorParams {
+    /// Time constant τ of the window's exponential forgetting (s).
+    pub window: f64,
+    /// Probability that one evaluation fires without a change.
+    pub false_alarm: f64,
+    /// Smallest spread (σ, m) added to R_R, R_L, D when the test fires.
+    pub jump_sigma: [f64; 3],
+}
+
+impl DetectorParams {
+    /// The χ²₃ quantile of `1 − false_alarm`.
     pub fn threshold(&self) -> f64 {
-        let k = 3.0f64;
-        let a = 2.0 / (9.0 * k);
-        let z = inverse_normal_cdf(1.0 - self.false_alarm);
-        k * (1.0 - a + a.sqrt() * z).powi(3)
+        ChiSquared::new(3.0)
+            .expect("3 degrees of freedom")
+            .inverse_cdf(1.0 - self.false_alarm)
     }
 }
 
@@ -137,7 +157,7 @@ pub struct ChangeDetector {
 
 impl ChangeDetector {
     /// A detector with an empty window.
-    pub fn new(p: &ChangeParams) -> Self {
+    pub fn new(p: &DetectorParams) -> Self {
         Self {
             g: Vector3::zeros(),
             f: Matrix3::zeros(),
@@ -263,7 +283,7 @@ mod tests {
     /// at which it fired.
     fn feed(truth: [f64; 3], belief: [f64; 3], p: Matrix3<f64>, steps: usize) -> Option<usize> {
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(4);
-        let mut det = ChangeDetector::new(&ChangeParams::default());
+        let mut det = ChangeDetector::new(&ChangeParams::default().detector(PAPER_RADIUS_M));
         let (sv, sw) = (0.05f64, 0.01f64);
         for k in 0..steps {
             let t = k as f64 * 0.02;
@@ -302,8 +322,9 @@ mod tests {
             let p = ChangeParams {
                 false_alarm: fa,
                 ..Default::default()
-            };
-            assert!((p.threshold() - q).abs() < 0.05 * q, "{}", p.threshold());
+            }
+            .detector(1.0);
+            assert!((p.threshold() - q).abs() < 1e-3, "{}", p.threshold());
         }
     }
 
@@ -333,9 +354,9 @@ pub(crate) struct KalmanChange {
 }
 
 impl KalmanChange {
-    /// `None` when the detector is off for the Kalman filters.
-    pub(crate) fn new(p: &ChangeParams) -> Option<Self> {
-        (p.enabled && p.kalman).then(|| Self {
+    /// The detector of a Kalman filter (`None`: it runs none).
+    pub(crate) fn new(p: Option<&DetectorParams>) -> Option<Self> {
+        p.map(|p| Self {
             det: ChangeDetector::new(p),
             floor: p.jump_sigma,
         })

@@ -10,7 +10,7 @@ use super::change::KalmanChange;
 use super::kalman::{
     kalman_estimate, model, observability, prior, turn_jacobian, turn_rate_for_observability,
 };
-use super::params::CalibParams;
+use super::params::KalmanSettings;
 use super::robust::student_t_weight;
 use super::steps::{usable, CalibStep, Kind};
 use super::{Calibrator, Estimate};
@@ -22,31 +22,31 @@ pub struct DualKf {
     theta: Vector3<f64>,
     p_theta: Matrix3<f64>,
     q_theta: f64,
-    q_x: f64,
+    q_x: [f64; 2],
     floor: f64,
     dof: f64,
     w_obs: f64,
     model_var: [f64; 2],
+    per_step: bool,
     change: Option<KalmanChange>,
 }
 
 impl DualKf {
-    /// Starts at the centre of `params.ranges` with the uniform variances.
-    pub fn new(params: &CalibParams) -> Self {
-        let (theta, p_theta) = prior(params);
+    /// Starts at the centre of `p.ranges` with the uniform variances.
+    pub fn new(p: &KalmanSettings) -> Self {
+        let (theta, p_theta) = prior(&p.ranges);
+        let n = &p.noise;
         Self {
             theta,
             p_theta,
-            q_theta: params.noise.kalman_param_sigma.powi(2),
-            q_x: params.noise.kalman_velocity_sigma.powi(2),
-            floor: params.noise.sigma_floor,
-            dof: params.noise.robust_dof,
-            w_obs: params.noise.observability_turn_rate,
-            model_var: [
-                params.noise.model_sigma_v.powi(2),
-                params.noise.model_sigma_w.powi(2),
-            ],
-            change: KalmanChange::new(&params.change),
+            q_theta: n.kalman_param_sigma.powi(2),
+            q_x: [n.kalman_velocity_sigma.powi(2), n.kalman_turn_sigma.powi(2)],
+            floor: n.sigma_floor,
+            dof: n.robust_dof,
+            w_obs: n.observability_turn_rate,
+            model_var: [n.model_sigma_v.powi(2), n.model_sigma_w.powi(2)],
+            per_step: p.per_step,
+            change: KalmanChange::new(p.detector.as_ref()),
         }
     }
 }
@@ -58,8 +58,10 @@ impl Calibrator for DualKf {
         // D's observability this step (see `NoiseParams::observability_turn_rate`).
         let obs = observability(turn_rate_for_observability(s, self.floor, w0), self.w_obs);
         // Parameter filter, time update: random walk (D's scaled by it).
+        // (per √s: times dt; per step under the paper's preset).
+        let dt = if self.per_step { 1.0 } else { s.dt().max(0.0) };
         self.p_theta +=
-            Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, obs * obs)) * self.q_theta;
+            Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, obs * obs)) * self.q_theta * dt;
         if let Some(c) = &mut self.change {
             let fd = (self.floor, self.dof);
             c.observe(s, &self.theta, &self.p_theta, obs, fd, self.model_var);
@@ -67,7 +69,7 @@ impl Calibrator for DualKf {
         // State filter update with the measurements (scalar updates, V and W
         // independent given θ), each robustly weighted.
         let mut x = [v0, w0];
-        let mut px = [self.q_x, self.q_x];
+        let mut px = self.q_x;
         let mut seen = [false, false];
         for m in s.measurements().iter().filter(|m| usable(m)) {
             let k = match m.kind {

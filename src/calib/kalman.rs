@@ -1,7 +1,7 @@
 //! Pieces shared by the Kalman baselines: the motion model's Jacobian with
 //! respect to the parameters and the initial parameter belief.
 
-use super::params::CalibParams;
+use super::params::Ranges;
 use super::Estimate;
 use nalgebra::{Matrix3, Vector3};
 
@@ -36,8 +36,8 @@ pub(crate) fn turn_jacobian(
 
 /// Initial belief: centre of the uniform ranges, variance of the uniform
 /// distribution (width²/12).
-pub(crate) fn prior(params: &CalibParams) -> (Vector3<f64>, Matrix3<f64>) {
-    let r = params.ranges.all();
+pub(crate) fn prior(ranges: &Ranges) -> (Vector3<f64>, Matrix3<f64>) {
+    let r = ranges.all();
     let mean = Vector3::from_fn(|i, _| 0.5 * (r[i][0] + r[i][1]));
     let var = Vector3::from_fn(|i, _| (r[i][1] - r[i][0]).powi(2) / 12.0);
     (mean, Matrix3::from_diagonal(&var))

@@ -15,6 +15,7 @@ mod kalman;
 mod kernels;
 mod nominal;
 mod normal;
+pub mod online;
 mod params;
 mod pf;
 mod pool;
@@ -31,12 +32,15 @@ mod weights;
 
 pub use adaptive::{occupied_bins, AdaptiveParams, CountRule};
 pub use akf::AugmentedKf;
-pub use change::{ChangeDetector, ChangeParams, Jump};
+pub use change::{ChangeDetector, ChangeParams, DetectorParams, Jump};
 pub use dkf::DualKf;
 pub use evidence::{Evidence, Wiring};
 pub use nominal::Nominal;
 pub use normal::{erfc, inverse_normal_cdf};
-pub use params::{CalibParams, Method, NoiseParams, Ranges, MAX_PARTICLES};
+pub use params::{
+    CalibParams, KalmanSettings, Method, NoiseParams, PfSettings, Preset, Ranges, Units,
+    MAX_PARTICLES, PAPER_RADIUS_M, PAPER_STEP_S, SQRT_PAPER_STEP,
+};
 pub use pf::{ParticleFilter, Particles};
 pub use pool::NormalPool;
 pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};
@@ -170,16 +174,16 @@ pub struct CloudView<'a> {
 }
 
 /// Builds the calibrator `params.method` names, after validating `params`.
-/// `nominal` is what `none` returns (the filters start from `params.ranges`).
+/// `nominal` is what `none` returns (the filters start from `params.ranges()`).
 pub fn build(
     params: &CalibParams,
     nominal: DiffDrive,
 ) -> Result<Box<dyn Calibrator + Send>, CalibError> {
     params.validate()?;
     Ok(match params.method {
-        Method::AdaptivePf | Method::Pf => Box::new(ParticleFilter::new(params)),
-        Method::Dkf => Box::new(DualKf::new(params)),
-        Method::Akf => Box::new(AugmentedKf::new(params)),
+        Method::AdaptivePf | Method::Pf => Box::new(ParticleFilter::new(&params.pf_settings())),
+        Method::Dkf => Box::new(DualKf::new(&params.kalman_settings())),
+        Method::Akf => Box::new(AugmentedKf::new(&params.kalman_settings())),
         Method::None => Box::new(Nominal::new(nominal)),
         Method::Batch => {
             return Err(CalibError::Config(

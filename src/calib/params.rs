@@ -1,14 +1,51 @@
 //! Configuration of a calibration run: method, resampling, particles, seed,
-//! initial ranges and noise, with the defaults of seed 000.
+//! initial ranges and noise, with the defaults of [Farina]; and what each
+//! filter is built from ([`PfSettings`], [`KalmanSettings`]): only its own
+//! settings, in the robot's units.
+//!
+//! Lengths that scale with the robot (process noise, eq. 11's clamps, the
+//! dispersion per particle, KLD bins, the change detector's spread, the
+//! forward speed's model σ) are configured in wheel radii: a filter built
+//! for a robot multiplies them by the mean radius it starts from, so the
+//! same settings serve a 20 mm and a 320 mm wheel. The defaults are
+//! [Farina]'s metres on its 0.32 m wheels, divided by 0.32.
 
 use super::adaptive::AdaptiveParams;
-use super::change::ChangeParams;
+use super::change::{ChangeParams, DetectorParams};
 use super::resample::Scheme;
 use super::trigger::Trigger;
 use serde::{Deserialize, Serialize};
 
 /// Most particles a filter may be asked for (`--particles`, `adaptive.n_max`).
 pub const MAX_PARTICLES: usize = 1_000_000;
+
+/// The wheel radius (m) of [Farina]'s wheelchair, the unit its printed
+/// noise values are in.
+pub const PAPER_RADIUS_M: f64 = 0.32;
+
+/// The step (s) its printed per-iteration noise values are taken at: one
+/// scan of its LMS111 at 50 Hz. odocal's random walks are per √s, so that
+/// the filters follow a change as fast whatever their step rate (one scan
+/// pair, or an interval of a second); the defaults are the paper's values
+/// divided by √0.02.
+pub const PAPER_STEP_S: f64 = 0.02;
+
+/// Which form of the filters runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// odocal's filters: the settings as configured.
+    #[default]
+    Odocal,
+    /// [Farina]'s Adaptive-PF as published: no Liu–West move
+    /// (`kernel_shrink` = 1), no model σ, no Student-t likelihood, no change
+    /// detector, no observability scaling of D's noise, eq. 11 on the
+    /// instantaneous residuals in its printed form (m/s and rad/s added),
+    /// and every noise value in the paper's metres whatever the robot's
+    /// size. The measurement front end (time offset, mounting, intervals)
+    /// is not part of the filter and stays.
+    Published,
+}
 
 /// Calibration method (the words of `odocal calibrate --method`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -107,9 +144,10 @@ impl Ranges {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct NoiseParams {
-    /// σ of the Gaussian random walk on R_R, R_L, D per step (m): the fixed
-    /// PF's process noise (seed 000: 0.0005) and the Adaptive-PF's σ until
-    /// its first measurement.
+    /// σ of the Gaussian random walk on R_R, R_L, D, in wheel radii per √s
+    /// (a step of dt draws σ·√dt): the fixed PF's process noise ([Farina]:
+    /// 0.0005 m per 0.02 s iteration on 0.32 m wheels) and the Adaptive-PF's
+    /// σ until its first measurement.
     pub param_sigma: f64,
     /// Half-width of the uniform jitter on each particle's V (m/s) and W
     /// (rad/s) after prediction (seed 000 mentions such jitter without a
@@ -118,14 +156,16 @@ pub struct NoiseParams {
     /// Measurement σ below this (m/s or rad/s), including σ = 0, is clamped
     /// to it; a σ of ∞ or NaN removes the measurement.
     pub sigma_floor: f64,
-    /// σ of the velocity model itself (m/s): added in quadrature to every V
-    /// measurement's σ (encoder quantisation, slip, timing), the analytic
-    /// form of seed 000's jitter on V. The Kalman baselines use the same
-    /// model noise: the AKF as the process noise of V, the DKF in its
-    /// parameter filter's measurement variance.
+    /// σ of the velocity model itself, in wheel radii per second (× the
+    /// radius: m/s): added in quadrature to every V measurement's σ
+    /// (encoder quantisation, slip, timing), the analytic form of
+    /// [Farina]'s jitter on V. The Kalman baselines use the same model
+    /// noise: the AKF as the process noise of V, the DKF in its parameter
+    /// filter's measurement variance.
     pub model_sigma_v: f64,
-    /// σ of the turn-rate model (rad/s), added in quadrature to W's σ (and
-    /// used by the Kalman baselines as for V).
+    /// σ of the turn-rate model (rad/s: a turn rate does not scale with the
+    /// robot), added in quadrature to W's σ (and used by the Kalman
+    /// baselines as for V).
     pub model_sigma_w: f64,
     /// Liu–West kernel shrinkage `a` applied at each resampling of the
     /// particle filters: θ ← a·θ + (1−a)·θ̄ + sqrt(1−a²)·L·ε with L the
@@ -151,27 +191,46 @@ pub struct NoiseParams {
     /// it physically is: only V may observe that scale, or a gyro pinning W
     /// biases the radii. 0 = off.
     pub observability_turn_rate: f64,
-    /// Kalman baselines: σ of the parameter random walk per step (m).
+    /// Kalman baselines: σ of the parameter random walk, in wheel radii
+    /// per √s.
     pub kalman_param_sigma: f64,
-    /// Dual Kalman filter: σ of its state filter's prior on V and W around
-    /// the wheel-rate prediction (m/s, rad/s); loose, so the state estimate
-    /// the parameter filter learns from follows the measurements.
+    /// Dual Kalman filter: σ of its state filter's prior on V around the
+    /// wheel-rate prediction (m/s); loose against any measurement, so the
+    /// state estimate the parameter filter learns from follows the
+    /// measurements (a bound on a speed error, not a length: not scaled).
     pub kalman_velocity_sigma: f64,
+    /// The same on W (rad/s).
+    pub kalman_turn_sigma: f64,
 }
 
 impl Default for NoiseParams {
     fn default() -> Self {
         Self {
-            param_sigma: 5e-4,
+            param_sigma: 5e-4 / PAPER_RADIUS_M / SQRT_PAPER_STEP,
             velocity_jitter: 0.0,
             sigma_floor: 1e-3,
-            model_sigma_v: 0.01,
+            model_sigma_v: 0.01 / PAPER_RADIUS_M,
             model_sigma_w: 0.01,
             kernel_shrink: 0.8,
             robust_dof: 4.0,
             observability_turn_rate: 0.05,
-            kalman_param_sigma: 1e-5,
+            kalman_param_sigma: 1e-5 / PAPER_RADIUS_M / SQRT_PAPER_STEP,
             kalman_velocity_sigma: 0.05,
+            kalman_turn_sigma: 0.05,
+        }
+    }
+}
+
+impl NoiseParams {
+    /// The noise in metres for a robot whose lengths are `unit` (m) wheel
+    /// radii, the random walks per √s multiplied by `sqrt_s` (√s: 1 keeps
+    /// them per √s; √0.02 gives the paper's per-iteration values).
+    pub fn in_metres(&self, unit: f64, sqrt_s: f64) -> Self {
+        Self {
+            param_sigma: self.param_sigma * unit * sqrt_s,
+            model_sigma_v: self.model_sigma_v * unit,
+            kalman_param_sigma: self.kalman_param_sigma * unit * sqrt_s,
+            ..self.clone()
         }
     }
 }
@@ -190,8 +249,12 @@ pub struct CalibParams {
     pub particles: Option<usize>,
     /// Seed of every random draw (same seed, same numbers).
     pub seed: u64,
-    /// Initial uniform ranges of R_R, R_L, D.
-    pub ranges: Ranges,
+    /// Which form of the filters runs.
+    pub preset: Preset,
+    /// Initial uniform ranges of R_R, R_L, D; `None`: [Farina]'s
+    /// wheelchair ranges for a filter built alone, and for `calibrate`
+    /// where the online front end starts the filters ([`super::online`]).
+    pub ranges: Option<Ranges>,
     /// Process and measurement noise.
     pub noise: NoiseParams,
     /// Adaptive-PF rules.
@@ -204,8 +267,11 @@ pub struct CalibParams {
     pub max_weight_factor: f64,
     /// Observability and plausibility checks before a result is reported.
     pub checks: super::sanity::CheckParams,
-    /// The batch calibration's settings (`--method batch`).
+    /// The batch calibration's settings (`--method batch`), also the
+    /// online front end's window fit.
     pub batch: super::batch::BatchParams,
+    /// The online front end: time offset, mounting, intervals, start.
+    pub online: super::online::OnlineParams,
 }
 
 impl Default for CalibParams {
@@ -216,7 +282,8 @@ impl Default for CalibParams {
             trigger: Trigger::Neff,
             particles: None,
             seed: 0,
-            ranges: Ranges::default(),
+            preset: Preset::Odocal,
+            ranges: None,
             noise: NoiseParams::default(),
             adaptive: AdaptiveParams::default(),
             change: ChangeParams::default(),
@@ -224,11 +291,92 @@ impl Default for CalibParams {
             max_weight_factor: 2.0,
             checks: Default::default(),
             batch: Default::default(),
+            online: Default::default(),
         }
     }
 }
 
 impl CalibParams {
+    /// The initial ranges: as configured, else [Farina]'s wheelchair's.
+    pub fn ranges(&self) -> Ranges {
+        self.ranges.clone().unwrap_or_default()
+    }
+
+    /// These settings with the preset applied: [`Preset::Published`]
+    /// switches every departure from [Farina] off.
+    pub fn with_preset(&self) -> Self {
+        let mut p = self.clone();
+        if p.preset == Preset::Published {
+            p.noise.kernel_shrink = 1.0;
+            p.noise.model_sigma_v = 0.0;
+            p.noise.model_sigma_w = 0.0;
+            p.noise.robust_dof = 0.0;
+            p.noise.observability_turn_rate = 0.0;
+            p.adaptive.residual_tau = 0.0;
+            p.change.enabled = false;
+        }
+        p
+    }
+
+    /// The length (m) the radius-relative settings are multiplied by,
+    /// eq. 11's turn lever (m) and the factor on the per-√s random walks,
+    /// for a filter starting in `ranges`: the mean nominal radius, half the
+    /// wheel base and 1 (the filters scale by √dt); under the published
+    /// preset the paper's own (0.32 m, 1 as printed, and its per-iteration
+    /// values: √0.02).
+    pub fn units(&self, ranges: &Ranges) -> Units {
+        let mid = |[lo, hi]: [f64; 2]| 0.5 * (lo + hi);
+        match self.preset {
+            Preset::Published => Units {
+                length: PAPER_RADIUS_M,
+                lever: 1.0,
+                sqrt_s: SQRT_PAPER_STEP,
+                per_step: true,
+            },
+            Preset::Odocal => Units {
+                length: 0.5 * (mid(ranges.r_right) + mid(ranges.r_left)),
+                lever: 0.5 * mid(ranges.wheel_base),
+                sqrt_s: 1.0,
+                per_step: false,
+            },
+        }
+    }
+
+    /// What a particle filter is built from.
+    pub fn pf_settings(&self) -> PfSettings {
+        let p = self.with_preset();
+        let ranges = p.ranges();
+        let u = p.units(&ranges);
+        let adaptive_pf = p.method == Method::AdaptivePf;
+        PfSettings {
+            adaptive_pf,
+            particles: p.initial_particles(),
+            seed: p.seed,
+            resampler: p.resampler,
+            trigger: p.trigger,
+            neff_ratio: p.neff_ratio,
+            max_weight_factor: p.max_weight_factor,
+            noise: p.noise.in_metres(u.length, u.sqrt_s),
+            adaptive: adaptive_pf.then(|| p.adaptive.in_metres(u.length, u.lever, u.sqrt_s)),
+            detector: (adaptive_pf && p.change.enabled).then(|| p.change.detector(u.length)),
+            per_step: u.per_step,
+            ranges,
+        }
+    }
+
+    /// What a Kalman filter is built from.
+    pub fn kalman_settings(&self) -> KalmanSettings {
+        let p = self.with_preset();
+        let ranges = p.ranges();
+        let u = p.units(&ranges);
+        KalmanSettings {
+            noise: p.noise.in_metres(u.length, u.sqrt_s),
+            detector: (p.change.enabled && p.change.kalman).then(|| p.change.detector(u.length)),
+            per_step: u.per_step,
+            ranges,
+        }
+    }
+
     /// Initial particle count for the method.
     pub fn initial_particles(&self) -> usize {
         self.particles.unwrap_or(match self.method {
@@ -242,7 +390,7 @@ impl CalibParams {
         let bad = |m: &str| Err(super::CalibError::Config(m.to_string()));
         for (name, [lo, hi]) in ["r_right", "r_left", "wheel_base"]
             .iter()
-            .zip(self.ranges.all())
+            .zip(self.ranges().all())
         {
             if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi >= lo) {
                 return bad(&format!("ranges.{name} must be finite with 0 < lo ≤ hi"));
@@ -285,6 +433,66 @@ impl CalibParams {
             return bad("max_weight_factor must be > 0");
         }
         self.adaptive.validate().or_else(|m| bad(&m))?;
+        self.online.validate().or_else(|m| bad(&m))?;
         self.change.validate().or_else(|m| bad(&m))
     }
 }
+
+/// Everything a particle filter is built from, in metres.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PfSettings {
+    /// The Adaptive-PF's rules (else a fixed count and σ).
+    pub adaptive_pf: bool,
+    /// Initial particle count.
+    pub particles: usize,
+    /// Seed of every random draw.
+    pub seed: u64,
+    /// Resampling scheme.
+    pub resampler: Scheme,
+    /// When to resample.
+    pub trigger: Trigger,
+    /// N_eff trigger threshold as a fraction of N.
+    pub neff_ratio: f64,
+    /// Max-weight trigger threshold as a multiple of 1/N.
+    pub max_weight_factor: f64,
+    /// Process and measurement noise (m, m/s, rad/s).
+    pub noise: NoiseParams,
+    /// The Adaptive-PF's rules (m), for `adaptive-pf`.
+    pub adaptive: Option<AdaptiveParams>,
+    /// The change detector, when it runs.
+    pub detector: Option<DetectorParams>,
+    /// Whether the random walks are per step (the paper's) rather than
+    /// per √s.
+    pub per_step: bool,
+    /// Where the particles are drawn.
+    pub ranges: Ranges,
+}
+
+/// Everything a Kalman filter is built from, in metres.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KalmanSettings {
+    /// Process and measurement noise (m, m/s, rad/s).
+    pub noise: NoiseParams,
+    /// The change detector, when it runs for the Kalman filters.
+    pub detector: Option<DetectorParams>,
+    /// Whether the random walk is per step rather than per √s.
+    pub per_step: bool,
+    /// The initial belief: the ranges' centre and uniform variance.
+    pub ranges: Ranges,
+}
+
+/// The units a filter's settings are turned into metres and steps with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Units {
+    /// Length (m) the radius-relative settings are multiplied by.
+    pub length: f64,
+    /// Eq. 11's turn lever (m).
+    pub lever: f64,
+    /// Factor on the per-√s random walks.
+    pub sqrt_s: f64,
+    /// Whether the random walks are then per step.
+    pub per_step: bool,
+}
+
+/// √[`PAPER_STEP_S`].
+pub const SQRT_PAPER_STEP: f64 = 0.141_421_356_237_309_5;

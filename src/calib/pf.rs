@@ -12,7 +12,7 @@
 use super::adaptive::{occupied_bins, AdaptiveParams, CountRule};
 use super::change::ChangeDetector;
 use super::kernels::{self, MIN_LENGTH};
-use super::params::{CalibParams, Method, Ranges};
+use super::params::{PfSettings, Ranges};
 use super::pool::NormalPool;
 use super::resample::{Resampler, Scheme};
 use super::steps::CalibStep;
@@ -109,21 +109,22 @@ pub struct ParticleFilter {
     jump_sigma: [f64; 3],
     initial: usize,
     jumps: usize,
+    per_step: bool,
     name: &'static str,
 }
 
 impl ParticleFilter {
-    /// A filter with particles drawn uniformly in `params.ranges`, V = W = 0.
-    /// `adaptive-pf` uses `params.adaptive` and `params.change`; every other
-    /// method a fixed count and σ. Call [`CalibParams::validate`] first.
-    pub fn new(params: &CalibParams) -> Self {
-        let n = params.initial_particles();
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(params.seed);
+    /// A filter with particles drawn uniformly in `p.ranges`, V = W = 0:
+    /// the Adaptive-PF's rules and change detector when `p` holds them,
+    /// else a fixed count and σ.
+    pub fn new(p: &PfSettings) -> Self {
+        let n = p.particles;
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(p.seed);
         let Ranges {
             r_right,
             r_left,
             wheel_base,
-        } = params.ranges.clone();
+        } = p.ranges.clone();
         let mut draw = |[lo, hi]: [f64; 2]| -> Vec<f64> {
             (0..n)
                 .map(|_| lo + (hi - lo) * rng.random::<f64>())
@@ -132,10 +133,6 @@ impl ParticleFilter {
         let rr = draw(r_right);
         let rl = draw(r_left);
         let d = draw(wheel_base);
-        let adaptive_pf = params.method == Method::AdaptivePf;
-        let adaptive = adaptive_pf.then(|| params.adaptive.clone());
-        let change =
-            (adaptive_pf && params.change.enabled).then(|| ChangeDetector::new(&params.change));
         let var = |[lo, hi]: [f64; 2]| (hi - lo) * (hi - lo) / 12.0;
         let mid = |[lo, hi]: [f64; 2]| 0.5 * (lo + hi);
         let belief = Belief {
@@ -146,6 +143,7 @@ impl ParticleFilter {
                 var(wheel_base),
             )),
         };
+        let noise = &p.noise;
         Self {
             p: Particles {
                 v: vec![0.0; n],
@@ -161,28 +159,26 @@ impl ParticleFilter {
             keys: Vec::new(),
             rng,
             pool: NormalPool::new(),
-            sigma: params.noise.param_sigma,
-            scheme: params.resampler,
-            trigger: params.trigger,
-            neff_ratio: params.neff_ratio,
-            max_weight_factor: params.max_weight_factor,
-            jitter: params.noise.velocity_jitter,
-            floor: params.noise.sigma_floor,
-            model_var: [
-                params.noise.model_sigma_v.powi(2),
-                params.noise.model_sigma_w.powi(2),
-            ],
-            shrink: params.noise.kernel_shrink,
-            robust_dof: params.noise.robust_dof,
-            observability_turn_rate: params.noise.observability_turn_rate,
+            sigma: noise.param_sigma,
+            scheme: p.resampler,
+            trigger: p.trigger,
+            neff_ratio: p.neff_ratio,
+            max_weight_factor: p.max_weight_factor,
+            jitter: noise.velocity_jitter,
+            floor: noise.sigma_floor,
+            model_var: [noise.model_sigma_v.powi(2), noise.model_sigma_w.powi(2)],
+            shrink: noise.kernel_shrink,
+            robust_dof: noise.robust_dof,
+            observability_turn_rate: noise.observability_turn_rate,
             ema: None,
             belief,
-            adaptive,
-            change,
-            jump_sigma: params.change.jump_sigma,
+            adaptive: p.adaptive.clone(),
+            change: p.detector.as_ref().map(ChangeDetector::new),
+            jump_sigma: p.detector.map_or([0.0; 3], |d| d.jump_sigma),
             initial: n,
             jumps: 0,
-            name: if adaptive_pf { "adaptive-pf" } else { "pf" },
+            per_step: p.per_step,
+            name: if p.adaptive_pf { "adaptive-pf" } else { "pf" },
         }
     }
 
@@ -257,7 +253,9 @@ impl ParticleFilter {
         let (wr, wl) = (s.omega_right, s.omega_left);
         let n = self.p.len();
         let obs = super::kalman::observability(w_turn, self.observability_turn_rate);
-        let (sr, sd) = (self.sigma, self.sigma * obs);
+        // The random walk per √s (per step under the paper's preset).
+        let k = if self.per_step { 1.0 } else { s.dt().max(0.0).sqrt() };
+        let (sr, sd) = (self.sigma * k, self.sigma * k * obs);
         let [o1, o2, o3] = self.pool.offsets::<3, _>(n, &mut self.rng);
         let pool = self.pool.data();
         let e = [&pool[o1..o1 + n], &pool[o2..o2 + n], &pool[o3..o3 + n]];
@@ -551,5 +549,116 @@ impl Calibrator for ParticleFilter {
 
     fn name(&self) -> &'static str {
         self.name
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calib::params::NoiseParams;
+    use crate::calib::steps::Kind;
+
+    /// A plain filter of three particles placed by hand: no process noise,
+    /// no model σ, Gaussian likelihood, no observability scaling, no
+    /// Liu–West move, no resampling.
+    fn three(rr: [f64; 3], rl: [f64; 3], d: [f64; 3]) -> ParticleFilter {
+        let s = PfSettings {
+            adaptive_pf: false,
+            particles: 3,
+            seed: 1,
+            resampler: Scheme::Systematic,
+            trigger: Trigger::Neff,
+            neff_ratio: 1e-9,
+            max_weight_factor: 2.0,
+            noise: NoiseParams {
+                param_sigma: 0.0,
+                model_sigma_v: 0.0,
+                model_sigma_w: 0.0,
+                robust_dof: 0.0,
+                observability_turn_rate: 0.0,
+                kernel_shrink: 1.0,
+                sigma_floor: 1e-9,
+                ..NoiseParams::default()
+            },
+            adaptive: None,
+            detector: None,
+            per_step: false,
+            ranges: Ranges::default(),
+        };
+        let mut f = ParticleFilter::new(&s);
+        f.p.rr = rr.to_vec();
+        f.p.rl = rl.to_vec();
+        f.p.d = d.to_vec();
+        f
+    }
+
+    #[test]
+    fn one_step_weighs_each_particle_by_its_predicted_velocities() {
+        // Wheels at 2.0 (right) and 1.0 (left) rad/s. Particle k predicts
+        // V = (2 R_R + R_L)/2 and W = (2 R_R − R_L)/D:
+        //   0: R 0.30/0.30, D 0.60 → V 0.450, W 0.500
+        //   1: R 0.32/0.30, D 0.60 → V 0.470, W 0.5666…
+        //   2: R 0.30/0.30, D 0.50 → V 0.450, W 0.600
+        let mut f = three([0.30, 0.32, 0.30], [0.30, 0.30, 0.30], [0.60, 0.60, 0.50]);
+        let step = CalibStep::new(0.0, 0.1, 2.0, 1.0)
+            .with(Kind::V, 0.47, 0.01)
+            .with(Kind::W, 0.55, 0.05);
+        let e = f.step(&step);
+        // Log-likelihoods −(V − 0.47)²/(2·0.01²) − (W − 0.55)²/(2·0.05²):
+        let ll = |v: f64, w: f64| -(v - 0.47f64).powi(2) / 2e-4 - (w - 0.55f64).powi(2) / 5e-3;
+        let l = [ll(0.45, 0.5), ll(0.47, 0.34 / 0.6), ll(0.45, 0.6)];
+        let m = l.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let z: f64 = l.iter().map(|x| (x - m).exp()).sum();
+        let w: Vec<f64> = l.iter().map(|x| (x - m).exp() / z).collect();
+        let got = f.weights().normalized();
+        for k in 0..3 {
+            assert!((got[k] - w[k]).abs() < 1e-12, "{k}: {} vs {}", got[k], w[k]);
+        }
+        // The estimate is the weighted mean and its spread, not the best
+        // particle (particle 1 carries most of the weight, not all).
+        let mean = |x: [f64; 3]| (0..3).map(|k| w[k] * x[k]).sum::<f64>();
+        let rr = mean([0.30, 0.32, 0.30]);
+        let d = mean([0.60, 0.60, 0.50]);
+        assert!((e.r_right - rr).abs() < 1e-12 && (e.wheel_base - d).abs() < 1e-12);
+        let var = (0..3)
+            .map(|k| w[k] * ([0.30, 0.32, 0.30][k] - rr).powi(2))
+            .sum::<f64>();
+        assert!((e.std_r_right - var.sqrt()).abs() < 1e-12);
+        assert!(w[1] > 0.9 && w[1] < 1.0, "{w:?}");
+        // V and W of the estimate: the weighted means of the predictions.
+        let v = mean([0.45, 0.47, 0.45]);
+        assert!((e.v - v).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_step_without_measurements_keeps_the_weights() {
+        let mut f = three([0.30, 0.32, 0.31], [0.30, 0.30, 0.30], [0.60, 0.60, 0.60]);
+        f.step(&CalibStep::new(0.0, 0.1, 2.0, 1.0));
+        let w = f.weights().normalized();
+        assert!(w.iter().all(|x| (x - 1.0 / 3.0).abs() < 1e-15), "{w:?}");
+    }
+
+    #[test]
+    fn a_measurement_with_infinite_sigma_is_ignored() {
+        let mut f = three([0.30, 0.32, 0.31], [0.30, 0.30, 0.30], [0.60, 0.60, 0.60]);
+        f.step(&CalibStep::new(0.0, 0.1, 2.0, 1.0).with(Kind::V, 0.9, f64::INFINITY));
+        let w = f.weights().normalized();
+        assert!(w.iter().all(|x| (x - 1.0 / 3.0).abs() < 1e-15), "{w:?}");
+    }
+
+    #[test]
+    fn the_cholesky_factor_rebuilds_the_covariance_and_falls_back_to_the_diagonal() {
+        let c = Matrix3::new(4e-6, 1e-6, 0.0, 1e-6, 9e-6, 2e-6, 0.0, 2e-6, 16e-6);
+        let l = cholesky(&c);
+        for r in 0..3 {
+            for k in 0..3 {
+                let s: f64 = (0..3).map(|j| l[r][j] * l[k][j]).sum();
+                assert!((s - c[(r, k)]).abs() < 1e-18, "{r}{k}");
+            }
+        }
+        // Not positive definite: the square roots of the diagonal.
+        let bad = Matrix3::new(1e-6, 2e-6, 0.0, 2e-6, 1e-6, 0.0, 0.0, 0.0, 4e-6);
+        let d = cholesky(&bad);
+        assert_eq!(d, [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 2e-3]]);
     }
 }

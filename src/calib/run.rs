@@ -84,6 +84,12 @@ pub struct CalibSummary {
     /// top-level keys.
     #[serde(flatten)]
     pub batch: Option<super::batch::BatchEstimate>,
+    /// What the online front end used and found ([`super::online`]): the
+    /// time offset, the laser mounting, the warm-up and every fit of the
+    /// window, as top-level keys (`time_offset`, `laser`, `warmup`,
+    /// `solves`, `route`).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub online: Option<super::online::OnlineReport>,
     /// The batch estimate an online filter started from (`--init batch`),
     /// under `start`.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -162,6 +168,7 @@ impl CalibSummary {
             wheel_source: None,
             odometry_scale: None,
             batch: None,
+            online: None,
             start: None,
             changes: Vec::new(),
             multipliers: Multipliers {

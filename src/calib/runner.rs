@@ -13,8 +13,10 @@ use crate::traj::Trajectory;
 
 /// Drives a calibrator step by step, integrating the calibrated odometry
 /// with the estimate after each step (what an online system knows then).
-pub struct Runner<'c> {
-    cal: &'c mut dyn Calibrator,
+/// It keeps the run's bookkeeping; the calibrator is lent to each step, so
+/// that a driver may build it once it knows where the filter starts.
+pub struct Runner {
+    name: &'static str,
     nominal: DiffDrive,
     pose: Pose2,
     /// End (s) of the time already integrated; `None` before the first step.
@@ -25,11 +27,12 @@ pub struct Runner<'c> {
     last: Option<Estimate>,
 }
 
-impl<'c> Runner<'c> {
-    /// A runner of `cal`; `nominal` is what the summary reports before any step.
-    pub fn new(cal: &'c mut dyn Calibrator, nominal: DiffDrive) -> Self {
+impl Runner {
+    /// A runner of the calibrator called `name`; `nominal` is what the
+    /// summary reports before any step.
+    pub fn new(name: &'static str, nominal: DiffDrive) -> Self {
         Self {
-            cal,
+            name,
             nominal,
             pose: Pose2::identity(),
             covered: None,
@@ -44,13 +47,18 @@ impl<'c> Runner<'c> {
     /// odometry's new poses (identity at the first step's `t0`, then the pose
     /// at `t1` of every step that adds time). Only the part of the step not
     /// already integrated moves the pose, so overlapping steps count once.
-    pub fn step(&mut self, s: &CalibStep, pose: &mut dyn FnMut(f64, &Pose2)) -> Estimate {
+    pub fn step(
+        &mut self,
+        cal: &mut dyn Calibrator,
+        s: &CalibStep,
+        pose: &mut dyn FnMut(f64, &Pose2),
+    ) -> Estimate {
         let covered = *self.covered.get_or_insert_with(|| {
             pose(s.t0, &Pose2::identity());
             s.t0
         });
         let t = Instant::now();
-        let e = self.cal.step(s);
+        let e = cal.step(s);
         self.total_s += t.elapsed().as_secs_f64();
         self.resets += e.weights_reset as usize;
         let dt = s.t1 - s.t0.max(covered);
@@ -62,11 +70,6 @@ impl<'c> Runner<'c> {
         self.steps += 1;
         self.last = Some(e);
         e
-    }
-
-    /// The particle cloud after the last step (particle filters only).
-    pub fn cloud(&self) -> Option<CloudView<'_>> {
-        self.cal.cloud()
     }
 
     /// Steps run so far.
@@ -82,7 +85,7 @@ impl<'c> Runner<'c> {
     /// The summary after the steps so far (the nominal parameters before any).
     pub fn summary(&self) -> CalibSummary {
         CalibSummary::after(
-            self.cal.name(),
+            self.name,
             self.last.as_ref(),
             self.nominal,
             self.steps,
@@ -111,12 +114,12 @@ pub fn run_observed(
 ) -> CalibrationRun {
     let mut history = Vec::with_capacity(steps.len());
     let mut trajectory = Trajectory::with_capacity(steps.len() + 1);
-    let mut runner = Runner::new(cal, nominal);
+    let mut runner = Runner::new(cal.name(), nominal);
     for s in steps {
-        let e = runner.step(s, &mut |t, p| {
+        let e = runner.step(cal, s, &mut |t, p| {
             trajectory.push(t, *p);
         });
-        on_step(&e, runner.cloud());
+        on_step(&e, cal.cloud());
         history.push(e);
     }
     CalibrationRun {

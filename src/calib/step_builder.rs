@@ -3,6 +3,11 @@
 //! soon as the samples around it are known. Only the samples still needed are
 //! kept, so a recording of any length streams through in flat memory;
 //! [`calib::steps`](crate::calib::steps) is the same builder fed whole streams.
+//!
+//! Steps are on the laser's clock (the observations' and the gyro's); the
+//! wheels are read `wheel_offset` s later on their own stamps (wheel stamp
+//! minus laser stamp of one instant), as the online time-offset estimate
+//! ([`crate::calib::online`]) sets it.
 
 // `!(x > y)` is deliberate: it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -66,6 +71,8 @@ pub struct StepBuilder {
     gyro_sigma: f64,
     covered: Option<f64>,
     finished: bool,
+    /// Wheel stamp minus laser stamp of one instant (s).
+    offset: f64,
 }
 
 impl StepBuilder {
@@ -82,7 +89,21 @@ impl StepBuilder {
             gyro_sigma,
             covered: None,
             finished: false,
+            offset: 0.0,
         }
+    }
+
+    /// Reads the wheels `offset` s after the laser time of each step from
+    /// now on (wheel stamp minus laser stamp of one instant).
+    pub fn set_wheel_offset(&mut self, offset: f64) {
+        if offset.is_finite() {
+            self.offset = offset;
+        }
+    }
+
+    /// The wheel offset in use (s).
+    pub fn wheel_offset(&self) -> f64 {
+        self.offset
     }
 
     /// A wheel sample (stamp order).
@@ -124,7 +145,8 @@ impl StepBuilder {
         if self.finished || self.wheels.count == 0 {
             return;
         }
-        let start = self.wheels.first.expect("a wheel sample exists");
+        let off = self.offset;
+        let start = self.wheels.first.expect("a wheel sample exists") - off;
         self.covered.get_or_insert(start);
         while let Some(o) = self.obs.front().copied() {
             let finite = [o.t0, o.t1, o.v, o.w].iter().all(|x| x.is_finite());
@@ -133,14 +155,14 @@ impl StepBuilder {
                 continue;
             }
             // `o.t1 <= end` of the whole wheel stream, once known.
-            if !self.wheels.covers(o.t1, |s| s.stamp) {
+            if !self.wheels.covers(o.t1 + off, |s| s.stamp) {
                 break;
             }
             if !self.gyro.covers(o.t1, |s| s.stamp) {
                 break;
             }
             self.obs.pop_front();
-            let last = self.wheels.items.back().map(|s| s.stamp);
+            let last = self.wheels.items.back().map(|s| s.stamp - off);
             if self.wheels.count < 2 || last.is_none_or(|l| o.t1 > l) {
                 continue;
             }
@@ -172,13 +194,13 @@ impl StepBuilder {
                 .unwrap_or(o.t0)
                 .min(o.t0)
                 .min(self.obs.front().map_or(f64::INFINITY, |n| n.t0));
-            self.wheels.forget_before(floor, |s| s.stamp);
+            self.wheels.forget_before(floor + off, |s| s.stamp);
             self.gyro.forget_before(floor, |s| s.stamp);
         }
         if all_done && self.obs.is_empty() && self.wheels.ended && self.gyro.ended {
             self.finished = true;
             if self.wheels.count >= 2 {
-                let end = self.wheels.items.back().expect("samples").stamp;
+                let end = self.wheels.items.back().expect("samples").stamp - off;
                 let covered = self.covered.expect("set above");
                 self.fill(covered, end, out);
             }
@@ -200,8 +222,8 @@ impl StepBuilder {
     }
 
     fn make(&self, t0: f64, t1: f64) -> Option<CalibStep> {
-        let (r0, l0) = self.angles_at(t0)?;
-        let (r1, l1) = self.angles_at(t1)?;
+        let (r0, l0) = self.angles_at(t0 + self.offset)?;
+        let (r1, l1) = self.angles_at(t1 + self.offset)?;
         let dt = t1 - t0;
         let mut s = CalibStep::new(t0, t1, (r1 - r0) / dt, (l1 - l0) / dt);
         if let Some((wz, k)) = self.gyro_mean(t0, t1) {
@@ -214,7 +236,7 @@ impl StepBuilder {
         (s.omega_right.is_finite() && s.omega_left.is_finite()).then_some(s)
     }
 
-    /// Wheel angles at `t` by linear interpolation between the last sample
+    /// Wheel angles at wheel time `t` by linear interpolation between the last sample
     /// at or before `t` and the next (capped one before the stream's last).
     fn angles_at(&self, t: f64) -> Option<(f64, f64)> {
         let w = &self.wheels.items;

@@ -14,9 +14,7 @@ use crate::calib::batch::{
 };
 use crate::calib::{CalibSummary, Observability};
 use crate::error::InputError;
-use crate::geom::Pose2;
 use crate::io::censi::CensiTuple;
-use crate::motion::Motion;
 use crate::recording::{Recording, WheelSource};
 use crate::robot::RobotConfig;
 use crate::robot::{DiffDrive, LaserMount};
@@ -176,10 +174,11 @@ fn state_prior(a: &mut Assumptions, cfg: &Config, nominal: &super::Nominal, rec:
     }
 }
 
-/// The batch problem of a recording: ICP scan to scan with the mounting the
-/// recording or robot file states (else the identity, so the motions are
-/// the laser's own), each motion moved into the laser frame,
-/// `s = M⁻¹ ⊕ m ⊕ M`, composed into intervals, and the wheel angles as the
+/// The batch problem of a recording: ICP as the online filters match (the
+/// same `[icp]` settings, so both calibrate from the same evidence) with the
+/// mounting the recording or robot file states (else the identity, so the
+/// motions are the laser's own), each motion's scan-measured part moved into
+/// the laser frame ([`LaserMotion::from_motion`]), composed into intervals, and the wheel angles as the
 /// track the time offset shifts; with the recording and the wheel source it
 /// was read from.
 pub(super) fn recording_problem(
@@ -210,10 +209,13 @@ pub(super) fn recording_problem(
         },
     };
     let mount = super::icp::mount(&rec, &robot_icp)?.pose;
-    let icp_params = super::diagnose::icp_for_diagnosis(&cfg.icp);
-    let icp_params = nominal.icp_params(&icp_params, &crate::io::StreamInfo::of(&rec));
+    let icp_params = nominal.icp_params(&cfg.icp, &crate::io::StreamInfo::of(&rec));
     let icp = super::icp::match_recording(&rec, &robot_icp, &icp_params)?;
-    let motions: Vec<LaserMotion> = icp.motions.iter().map(|m| to_laser(m, &mount)).collect();
+    let motions: Vec<LaserMotion> = icp
+        .motions
+        .iter()
+        .map(|m| LaserMotion::from_motion(m, &mount))
+        .collect();
     let intervals = batch::aggregate(&motions, p.interval_s, p.interval_rad, 1e-3);
     let track = WheelTrack {
         t: rec.wheels.iter().map(|w| w.stamp).collect(),
@@ -225,32 +227,4 @@ pub(super) fn recording_problem(
         track: Some(track),
     };
     Ok((rec, problem, wheels))
-}
-
-/// A base-frame ICP motion `m` (matched with mounting `M`) as the laser's
-/// own displacement `M⁻¹ ⊕ m ⊕ M`, its covariance carried by the Jacobian
-/// of that map (central differences; the map is the adjoint of `M⁻¹`).
-fn to_laser(m: &Motion, mount: &Pose2) -> LaserMotion {
-    let f = |x: [f64; 3]| {
-        let p = mount.inverse() * crate::geom::pose(x[0], x[1], x[2]) * mount;
-        [p.translation.x, p.translation.y, p.rotation.angle()]
-    };
-    let x0 = [m.dx, m.dy, m.dtheta];
-    let mut j = nalgebra::Matrix3::zeros();
-    for k in 0..3 {
-        let (mut a, mut b) = (x0, x0);
-        a[k] += 1e-6;
-        b[k] -= 1e-6;
-        let (fa, fb) = (f(a), f(b));
-        for r in 0..3 {
-            j[(r, k)] = (fa[r] - fb[r]) / 2e-6;
-        }
-    }
-    LaserMotion {
-        t0: m.t0,
-        t1: m.t1,
-        s: f(x0),
-        cov: j * m.cov * j.transpose(),
-        valid: m.failure.is_none(),
-    }
 }

@@ -14,6 +14,7 @@ use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
 use super::PipelineError;
 use crate::calib::{self, CalibParams, CalibSummary, CalibrationRun, Ranges};
+use crate::assumptions::Origin;
 use crate::error::InputError;
 use crate::io::out_lock::OutputLock;
 use crate::motion::VelocityObs;
@@ -32,18 +33,19 @@ pub struct CalibInput {
     pub gyro: Vec<GyroSample>,
 }
 
-/// The calibrator settings for `robot`: the configured ones, except that the
-/// initial ranges are re-centred (±5 %) on the nominal robot when the
-/// configured ranges do not contain it (they default to the wheelchair's).
+/// The calibrator settings for `robot` when the calibrator starts at once
+/// (observations given, no online front end): the configured ones, except
+/// that without configured ranges the filters search ± the front end's
+/// `search_nominal` around the robot's nominal values.
 pub fn params_for_robot(params: &CalibParams, robot: &RobotConfig) -> CalibParams {
     let mut p = params.clone();
-    let inside = |r: [f64; 2], x: f64| r[0] <= x && x <= r[1];
-    let r = &p.ranges;
-    if !(inside(r.r_right, robot.r_right)
-        && inside(r.r_left, robot.r_left)
-        && inside(r.wheel_base, robot.wheel_base))
-    {
-        p.ranges = Ranges::around(robot.r_right, robot.r_left, robot.wheel_base, 0.05);
+    if p.ranges.is_none() {
+        p.ranges = Some(Ranges::around(
+            robot.r_right,
+            robot.r_left,
+            robot.wheel_base,
+            p.online.search_nominal,
+        ));
     }
     p
 }
@@ -97,7 +99,12 @@ pub fn run(
     let _lock = check_job_outputs(job)?;
     let started = start(job, &cfg, &nominal)?;
     let robot = started.as_ref().map_or(&nominal.robot, |s| &s.robot);
-    let params = params_for_robot(&cfg.calib, robot);
+    // A recording goes through the online front end, which starts the
+    // filters; CSV velocity observations start them at once.
+    let params = match &job.input {
+        CalibSource::Recording(_) => cfg.calib.clone(),
+        CalibSource::Csv { .. } => params_for_robot(&cfg.calib, robot),
+    };
     let mut logger = open_logger(job.viewer.as_ref())?;
     let mut recorder = logger.as_deref_mut().map(|l| {
         StreamRecorder::new(
@@ -132,6 +139,12 @@ pub fn run(
             let (done, mut a) = run.recording(&mut source, &mut obs)?;
             super::start::state(&mut a, &s.est, &nominal.robot);
             (done, a, path, Some(s.wheels.clone()))
+        }
+        (CalibSource::Recording(path), None)
+            if crate::io::sniff(path)? == crate::io::Format::CensiTuples =>
+        {
+            let (done, a) = run.tuples(path, &mut obs)?;
+            (done, a, path, None)
         }
         (CalibSource::Recording(path), None) => {
             let (done, a, wheels) = run.file(path, &mut obs)?;
@@ -240,7 +253,48 @@ impl Run<'_> {
             &self.cfg.measurements,
             obs,
         )?;
-        let a = calibration_assumptions(self.nominal, &icp, self.cfg.icp.prior, &info);
+        let mut a = calibration_assumptions(self.nominal, &icp, self.cfg.icp.prior, &info);
+        if let Some(o) = &done.summary.online {
+            state_online(&mut a, o);
+        }
+        Ok((done, a))
+    }
+
+    /// The filters over Censi et al.'s tuples: one step per tuple through
+    /// the online front end, which estimates the laser mounting the tuples
+    /// are measured in (the robot file's is checked against it).
+    fn tuples(
+        &self,
+        path: &std::path::Path,
+        obs: &mut dyn RunObserver,
+    ) -> Result<(drive::CalibRunSummary, crate::assumptions::Assumptions), PipelineError> {
+        let tuples = crate::io::censi::read(path)?;
+        let problem = super::batch::tuples_problem(&tuples);
+        let stated = self
+            .robot
+            .laser
+            .map(|l| ([l.x, l.y, l.yaw], Origin::RobotFile.as_str().to_string()));
+        let done = drive::calibrate_intervals(
+            problem.intervals,
+            Some(self.robot.diff_drive()),
+            stated,
+            self.params,
+            &path.display().to_string(),
+            obs,
+        )?;
+        let mut a = self.nominal.assumptions();
+        if let Some(o) = &done.summary.online {
+            state_online(&mut a, o);
+        }
+        a.set(
+            "time_offset",
+            0.0,
+            Origin::Recording,
+            Some("the tuples pair each laser displacement with the wheel rates of its own \
+                  interval (already synchronised); they carry no time to estimate an offset \
+                  from"
+                .into()),
+        );
         Ok((done, a))
     }
 
@@ -338,6 +392,83 @@ fn state_clock(
     );
 }
 
+/// The particle filters' search ranges in a run: as configured, else where
+/// the online front end started them.
+fn summary_ranges(summary: &CalibSummary, params: &CalibParams) -> [[f64; 2]; 3] {
+    let started = summary.online.as_ref().and_then(|o| o.warmup.as_ref());
+    match (&params.ranges, started) {
+        (Some(r), _) => r.all(),
+        (None, Some(w)) => {
+            let c = w.centre;
+            Ranges::around(c.r_right, c.r_left, c.wheel_base, w.search).all()
+        }
+        (None, None) => params.ranges().all(),
+    }
+}
+
+/// States what the online front end used: the time offset it estimated
+/// (with its std and when it settled), the laser mounting (estimated, or the
+/// stated one with what the data said of it) and where the filters started.
+fn state_online(a: &mut crate::assumptions::Assumptions, o: &calib::online::OnlineReport) {
+    let t = &o.time_offset;
+    if t.source == "estimated" {
+        let settled = t
+            .converged_s
+            .map_or("not settled by the end".to_string(), |s| format!("settled at {s:.1} s"));
+        a.set(
+            "time_offset",
+            t.value,
+            Origin::Estimated,
+            Some(format!(
+                "± {:.4} s, wheel stamp minus laser stamp of one instant, estimated on the \
+                 stream by the joint fit of a sliding window ({} fits; {settled}); every \
+                 observation is read against the wheels at the offset in use then",
+                t.std,
+                o.solves.len()
+            )),
+        );
+    }
+    let l = &o.laser;
+    let mount = crate::robot::LaserMount {
+        x: l.x.value,
+        y: l.y.value,
+        yaw: l.yaw.value,
+    };
+    if l.source == "estimated" {
+        let note = l.check.clone().unwrap_or_else(|| {
+            format!(
+                "stated nowhere: estimated on the stream (± {:.4} m, {:.4} m, {:.4} rad)",
+                l.x.std, l.y.std, l.yaw.std
+            )
+        });
+        a.set("laser", mount, Origin::Estimated, Some(note));
+    } else if let (Some(check), Some(prev)) = (&l.check, a.0.get("laser").cloned()) {
+        a.set("laser", mount, prev.source, Some(check.clone()));
+    }
+    if let Some(w) = &o.warmup {
+        let note = match w.from {
+            "warm-up" => format!(
+                "the filters started at {:.1} s from the window's estimate, searching ± {:.0} % \
+                 around it",
+                w.t,
+                100.0 * w.search
+            ),
+            _ => format!(
+                "no fit of the window succeeded by {:.1} s: the filters started from the nominal \
+                 values, searching ± {:.0} % around them",
+                w.t,
+                100.0 * w.search
+            ),
+        };
+        let origin = if w.from == "warm-up" {
+            Origin::Estimated
+        } else {
+            Origin::RobotFile
+        };
+        a.set("start", w.centre, origin, Some(note));
+    }
+}
+
 /// Before a calibration is reported: the encoders' wiring, the parameters'
 /// observability (weak ones get a widened std) and the estimate's
 /// plausibility. What the data cannot support is an error naming `input`.
@@ -366,7 +497,7 @@ fn vet(
         )));
     }
     let pf = matches!(params.method, calib::Method::AdaptivePf | calib::Method::Pf);
-    let ranges = pf.then(|| params.ranges.all());
+    let ranges = pf.then(|| summary_ranges(summary, params));
     if let Some(m) = calib::implausible(&summary.final_params, &nominal, ranges, &params.checks) {
         let whose = match summary.assumptions.source("wheel_base") {
             Some(crate::assumptions::Origin::Default) => {

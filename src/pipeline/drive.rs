@@ -9,7 +9,13 @@ use std::time::Instant;
 
 use super::observe::RunObserver;
 use super::{Mount, PipelineError};
-use crate::calib::{self, CalibParams, CalibStep, CalibSummary, Calibrator, Runner, StepBuilder};
+use crate::calib::batch::{LaserMotion, P3};
+use crate::calib::online::{FrontEnd, Mounted, Started};
+use crate::calib::{
+    self, CalibParams, CalibStep, CalibSummary, Calibrator, Ranges, Runner, StepBuilder,
+};
+use crate::geom::{self, Pose2};
+use crate::robot::DiffDrive;
 use crate::error::InputError;
 use crate::icp::{IcpParams, IcpStats, Prior, StreamMatcher, Tally};
 use crate::io::{Item, SampleSource, StreamInfo};
@@ -57,6 +63,9 @@ pub struct IcpRunSummary {
 struct IcpStage {
     matcher: StreamMatcher,
     mount: Mount,
+    /// Whether the recording or robot file stated the mounting (else the
+    /// scans are matched in the laser's own frame).
+    stated: bool,
     /// The robot file's scanner corrections, applied to every scan.
     scanner: crate::robot::ScannerCorrection,
     prior: Prior,
@@ -68,12 +77,15 @@ struct IcpStage {
 
 impl IcpStage {
     /// The stage for a source with `info`; `robot` gives the laser mount when
-    /// the source states none, and the nominal wheel odometry prior.
+    /// the source states none, and the nominal wheel odometry prior. With
+    /// `unstated_ok`, no mounting stated anywhere matches in the laser's own
+    /// frame (the calibration estimates it) instead of refusing.
     fn new(
         info: &StreamInfo,
         source: &str,
         robot: &RobotConfig,
         params: &IcpParams,
+        unstated_ok: bool,
     ) -> Result<Self, PipelineError> {
         if info.scans < 2 {
             return Err(InputError::new(
@@ -89,12 +101,28 @@ impl IcpStage {
         }
         let prior = Prior::choose(params.prior, info.wheels, info.odom, robot.diff_drive())
             .map_err(|e| InputError::new(source, e))?;
-        let mount = Mount::resolve(info.into(), robot, source)?;
+        let (mount, stated) = match Mount::resolve(info.into(), robot, source) {
+            Ok(m) => (m, true),
+            Err(_) if unstated_ok => (
+                Mount {
+                    pose: Pose2::identity(),
+                    origin: crate::assumptions::Origin::Estimated,
+                    note: Some(
+                        "stated nowhere (recording or robot file): the scans were matched in \
+                         the laser's own frame and the mounting estimated on the stream"
+                            .into(),
+                    ),
+                },
+                false,
+            ),
+            Err(e) => return Err(e),
+        };
         let matcher = StreamMatcher::new(params, mount.pose, prior)
             .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
         Ok(Self {
             matcher,
             mount,
+            stated,
             scanner: robot.scanner,
             prior,
             tally: Tally::default(),
@@ -205,7 +233,7 @@ pub fn run_icp(
 ) -> Result<IcpRunSummary, PipelineError> {
     let info = source.info().clone();
     obs.start(&info);
-    let mut stage = IcpStage::new(&info, source.name(), robot, params)?;
+    let mut stage = IcpStage::new(&info, source.name(), robot, params, false)?;
     while let Some(item) = source.next_item()? {
         obs.item(&item);
         stage.feed(&item, &info, obs, &mut |_| {});
@@ -215,28 +243,93 @@ pub fn run_icp(
     Ok(stage.summary())
 }
 
-/// The calibration stage: the step builder aligning wheels, gyro and
-/// velocity observations into filter steps, and the runner over them.
-pub struct CalibStage<'c> {
+/// Where the calibration stage's observations come from.
+enum Feed {
+    /// Velocity observations as given (in memory, or per motion with no
+    /// front end): the calibrator starts at once from `params.ranges()`.
+    Direct,
+    /// The online front end ([`calib::online`]): motions composed into
+    /// intervals, read at the estimated time offset, moved into the base
+    /// frame with the mounting in use; the calibrator starts after its
+    /// warm-up. `icp_mount` is the mounting the scan matcher used.
+    Online {
+        front: Box<FrontEnd>,
+        icp_mount: Pose2,
+    },
+}
+
+/// The calibration stage: the front end, the step builder aligning wheels,
+/// gyro and velocity observations into filter steps, and the calibrator
+/// with the runner over them (built once the stage knows where it starts).
+pub struct CalibStage {
+    feed: Feed,
     steps: StepBuilder,
-    runner: Runner<'c>,
+    params: CalibParams,
+    nominal: DiffDrive,
+    cal: Option<Box<dyn Calibrator + Send>>,
+    runner: Runner,
     evidence: calib::Evidence,
     /// Steps that carried at least one measurement (not predict-only).
     measured: usize,
 }
 
-impl<'c> CalibStage<'c> {
-    /// The stage for `cal`; `nominal` is what the summary reports before any
-    /// step; the gyro is used when `meas` says so and `has_gyro`.
-    pub fn new(
-        cal: &'c mut dyn Calibrator,
-        robot: &RobotConfig,
+impl CalibStage {
+    /// A stage fed velocity observations directly: the calibrator `params`
+    /// names, started from `params.ranges()`; `nominal` is what the summary
+    /// reports before any step; the gyro is used when `meas` says so and
+    /// `has_gyro`.
+    pub fn direct(
+        params: &CalibParams,
+        nominal: DiffDrive,
+        meas: &MeasurementConfig,
+        has_gyro: bool,
+    ) -> Result<Self, PipelineError> {
+        let cal = calib::build(params, nominal).map_err(|e| PipelineError::BadArgument(e.to_string()))?;
+        Ok(Self::with(Feed::Direct, Some(cal), params, nominal, meas, has_gyro))
+    }
+
+    /// A stage behind the online front end ([`calib::online`]): `nominal`
+    /// (`None`: none known), the `stated` mounting and its source, and the
+    /// mounting the scan matcher used (`icp_mount`).
+    pub fn online(
+        params: &CalibParams,
+        nominal: Option<DiffDrive>,
+        stated: Option<(P3, String)>,
+        icp_mount: Pose2,
+        meas: &MeasurementConfig,
+        has_gyro: bool,
+    ) -> Result<Self, PipelineError> {
+        params
+            .validate()
+            .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
+        let front = FrontEnd::new(&params.online, &params.batch, &params.checks, nominal, stated);
+        let feed = Feed::Online {
+            front: Box::new(front),
+            icp_mount,
+        };
+        let shown = nominal.unwrap_or(DiffDrive {
+            r_right: f64::NAN,
+            r_left: f64::NAN,
+            wheel_base: f64::NAN,
+        });
+        Ok(Self::with(feed, None, params, shown, meas, has_gyro))
+    }
+
+    fn with(
+        feed: Feed,
+        cal: Option<Box<dyn Calibrator + Send>>,
+        params: &CalibParams,
+        nominal: DiffDrive,
         meas: &MeasurementConfig,
         has_gyro: bool,
     ) -> Self {
         Self {
+            feed,
             steps: StepBuilder::new(meas.use_gyro && has_gyro, meas.gyro_sigma),
-            runner: Runner::new(cal, robot.diff_drive()),
+            runner: Runner::new(params.method.as_str(), nominal),
+            params: params.clone(),
+            nominal,
+            cal,
             evidence: calib::Evidence::default(),
             measured: 0,
         }
@@ -244,6 +337,9 @@ impl<'c> CalibStage<'c> {
 
     /// A wheel sample (stamp order).
     pub fn push_wheel(&mut self, w: WheelSample) {
+        if let Feed::Online { front, .. } = &mut self.feed {
+            front.push_wheel(&w);
+        }
         self.steps.push_wheel(w);
     }
 
@@ -262,10 +358,25 @@ impl<'c> CalibStage<'c> {
         self.steps.end_gyro();
     }
 
-    /// A motion of ICP: a velocity observation unless the pair failed.
+    /// A motion of ICP: into the front end, or a velocity observation
+    /// unless the pair failed.
     pub fn push_motion(&mut self, m: &Motion) {
-        if let Some(o) = VelocityObs::from_motion(m) {
-            self.steps.push_obs(o);
+        match &mut self.feed {
+            Feed::Online { front, icp_mount } => {
+                front.push_motion(&LaserMotion::from_motion(m, icp_mount));
+            }
+            Feed::Direct => {
+                if let Some(o) = VelocityObs::from_motion(m) {
+                    self.steps.push_obs(o);
+                }
+            }
+        }
+    }
+
+    /// An interval of the laser's own displacement (Censi's tuples).
+    pub fn push_interval(&mut self, iv: calib::batch::Interval) {
+        if let Feed::Online { front, .. } = &mut self.feed {
+            front.push_interval(iv);
         }
     }
 
@@ -275,15 +386,38 @@ impl<'c> CalibStage<'c> {
     }
 
     /// Runs every step that is now final (with `all_done`, every step left).
-    pub fn poll(&mut self, all_done: bool, obs: &mut dyn RunObserver) {
+    pub fn poll(&mut self, all_done: bool, obs: &mut dyn RunObserver) -> Result<(), PipelineError> {
+        let mut whole = Vec::new();
+        if let Feed::Online { front, .. } = &mut self.feed {
+            if all_done {
+                front.finish();
+            }
+            if self.cal.is_none() {
+                if let Some(started) = front.started() {
+                    self.cal = Some(start_calibrator(&self.params, started, self.nominal)?);
+                }
+            }
+            self.steps.set_wheel_offset(front.time_offset());
+            let steps = &mut self.steps;
+            front.drain(&mut |m| match m {
+                Mounted::Observation(o) => steps.push_obs(o),
+                Mounted::Step(s) => whole.push(s),
+            });
+        }
+        let Some(cal) = self.cal.as_deref_mut() else {
+            return Ok(());
+        };
         let runner = &mut self.runner;
         let evidence = &mut self.evidence;
         let measured = &mut self.measured;
-        self.steps.poll(all_done, &mut |s: CalibStep| {
+        let mut one = |s: CalibStep| {
             evidence.add(&s);
             *measured += usize::from(!s.measurements().is_empty());
-            run_step(runner, &s, obs)
-        });
+            run_step(runner, cal, &s, obs)
+        };
+        whole.into_iter().for_each(&mut one);
+        self.steps.poll(all_done, &mut one);
+        Ok(())
     }
 
     /// What the steps so far show of the excitation and the wiring.
@@ -291,9 +425,30 @@ impl<'c> CalibStage<'c> {
         &self.evidence
     }
 
+    /// What the front end used and found (`None` without one).
+    pub fn online_report(&self) -> Option<calib::online::OnlineReport> {
+        match &self.feed {
+            Feed::Online { front, .. } => Some(front.report()),
+            Feed::Direct => None,
+        }
+    }
+
     /// The summary after the steps so far; an error when no step carried a
-    /// measurement (the filter would only return its prior).
+    /// measurement (the filter would only return its prior), or the filters
+    /// never started (no nominal values and no fit of the window).
     pub fn summary(&self) -> Result<CalibSummary, PipelineError> {
+        if self.cal.is_none() {
+            let why = self
+                .online_report()
+                .and_then(|r| r.solves.last().and_then(|s| s.refused.clone()))
+                .unwrap_or_else(|| "too few intervals were matched".into());
+            return Err(PipelineError::BadArgument(format!(
+                "the filters never started: without nominal wheel radii and wheel base they \
+                 start from a fit of the stream's first minutes, and none succeeded ({why}); \
+                 give r_right, r_left and wheel_base in the robot file, or record more \
+                 driving with turns both ways"
+            )));
+        }
         if self.measured == 0 {
             return Err(PipelineError::BadArgument(format!(
                 "nothing to calibrate: {} filter steps, none with a measurement (no velocity \
@@ -301,7 +456,9 @@ impl<'c> CalibStage<'c> {
                 self.runner.steps()
             )));
         }
-        Ok(self.runner.summary())
+        let mut s = self.runner.summary();
+        s.online = self.online_report();
+        Ok(s)
     }
 
     /// Steps whose weights all underflowed and were reset.
@@ -310,14 +467,35 @@ impl<'c> CalibStage<'c> {
     }
 }
 
+/// The calibrator `params` names, started where the front end says: its
+/// centre ± the search (relative) unless `[calib] ranges` is configured.
+fn start_calibrator(
+    params: &CalibParams,
+    started: &Started,
+    nominal: DiffDrive,
+) -> Result<Box<dyn Calibrator + Send>, PipelineError> {
+    let mut p = params.clone();
+    if p.ranges.is_none() {
+        let c = started.centre;
+        p.ranges = Some(Ranges::around(c.r_right, c.r_left, c.wheel_base, started.search));
+    }
+    let shown = if nominal.r_right.is_finite() { nominal } else { started.centre };
+    calib::build(&p, shown).map_err(|e| PipelineError::BadArgument(e.to_string()))
+}
+
 /// One filter step, its estimate and calibrated poses handed to the observer.
-fn run_step(runner: &mut Runner<'_>, s: &CalibStep, obs: &mut dyn RunObserver) {
+fn run_step(
+    runner: &mut Runner,
+    cal: &mut (dyn Calibrator + Send),
+    s: &CalibStep,
+    obs: &mut dyn RunObserver,
+) {
     let mut poses: [Option<(f64, crate::geom::Pose2)>; 2] = [None, None];
-    let e = runner.step(s, &mut |t, p| {
+    let e = runner.step(cal, s, &mut |t, p| {
         let slot = if poses[0].is_none() { 0 } else { 1 };
         poses[slot] = Some((t, *p));
     });
-    obs.step(&e, runner.cloud());
+    obs.step(&e, cal.cloud());
     for (t, p) in poses.into_iter().flatten() {
         obs.calibrated_pose(t, &p);
     }
@@ -331,7 +509,7 @@ struct Ends {
 }
 
 impl Ends {
-    fn feed(&mut self, item: &Item, info: &StreamInfo, stage: &mut CalibStage<'_>) {
+    fn feed(&mut self, item: &Item, info: &StreamInfo, stage: &mut CalibStage) {
         match item {
             Item::Wheel(w) => {
                 stage.push_wheel(*w);
@@ -364,10 +542,13 @@ pub struct CalibRunSummary {
 }
 
 /// Runs ICP and the calibrator `calib` names over `source` and gives both
-/// summaries: each motion
-/// becomes a velocity observation, aligned with the wheels (and gyro) into
-/// filter steps as soon as they are final. `calib` is used as given (see
-/// [`super::calibrate::params_for_robot`]).
+/// summaries: each motion goes through the online front end
+/// ([`calib::online`]), which composes the motions into intervals, estimates
+/// the time offset and checks the laser mounting on the stream, and starts
+/// the calibrator after its warm-up; the observations are aligned with the
+/// wheels (and gyro) into filter steps as soon as they are final. Without a
+/// stated mounting the scans are matched in the laser's own frame and the
+/// mounting is the front end's estimate.
 pub fn run_calibration(
     source: &mut dyn SampleSource,
     robot: &RobotConfig,
@@ -378,7 +559,7 @@ pub fn run_calibration(
 ) -> Result<(IcpRunSummary, CalibRunSummary), PipelineError> {
     let info = source.info().clone();
     obs.start(&info);
-    let mut icp_stage = IcpStage::new(&info, source.name(), robot, icp)?;
+    let mut icp_stage = IcpStage::new(&info, source.name(), robot, icp, true)?;
     if info.wheels < 2 {
         return Err(InputError::new(
             source.name(),
@@ -394,9 +575,17 @@ pub fn run_calibration(
         )
         .into());
     }
-    let mut cal = calib::build(calib, robot.diff_drive())
-        .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
-    let mut stage = CalibStage::new(cal.as_mut(), robot, meas, info.gyro > 0);
+    let stated = icp_stage
+        .stated
+        .then(|| (geom::xyt(&icp_stage.mount.pose), icp_stage.mount.origin.as_str().to_string()));
+    let mut stage = CalibStage::online(
+        calib,
+        Some(robot.diff_drive()),
+        stated,
+        icp_stage.mount.pose,
+        meas,
+        info.gyro > 0,
+    )?;
     if info.gyro == 0 {
         stage.end_gyro();
     }
@@ -405,28 +594,59 @@ pub fn run_calibration(
         obs.item(&item);
         ends.feed(&item, &info, &mut stage);
         icp_stage.feed(&item, &info, obs, &mut |m| stage.push_motion(m));
-        stage.poll(false, obs);
+        stage.poll(false, obs)?;
     }
     icp_stage.finish(obs, &mut |m| stage.push_motion(m));
     icp_stage.check_usable(source.name(), source.scan_topic())?;
     stage.end_wheels();
     stage.end_gyro();
-    stage.poll(true, obs);
-    let calibration = CalibRunSummary {
+    stage.poll(true, obs)?;
+    let calibration = finish(&stage, source.name())?;
+    Ok((icp_stage.summary(), calibration))
+}
+
+/// The stage's results; a failure names the input.
+fn finish(stage: &CalibStage, input: &str) -> Result<CalibRunSummary, PipelineError> {
+    Ok(CalibRunSummary {
         summary: stage.summary().map_err(|e| match e {
-            PipelineError::BadArgument(m) => InputError::new(source.name(), m).into(),
+            PipelineError::BadArgument(m) => InputError::new(input, m).into(),
             other => other,
         })?,
         weight_resets: stage.weight_resets(),
         evidence: stage.evidence().clone(),
-    };
-    Ok((icp_stage.summary(), calibration))
+    })
+}
+
+/// Runs the calibrator over intervals of the laser's own displacement
+/// with their wheel motion and no time (Censi et al.'s tuples) through the
+/// online front end: one filter step per interval once the window's fit
+/// gives the mounting (the tuples state none) and the residuals' σ's.
+pub fn calibrate_intervals(
+    intervals: Vec<calib::batch::Interval>,
+    nominal: Option<DiffDrive>,
+    stated: Option<(P3, String)>,
+    calib: &CalibParams,
+    input: &str,
+    obs: &mut dyn RunObserver,
+) -> Result<CalibRunSummary, PipelineError> {
+    let meas = MeasurementConfig::default();
+    let mut stage = CalibStage::online(calib, nominal, stated, Pose2::identity(), &meas, false)?;
+    stage.end_gyro();
+    stage.end_wheels();
+    obs.start(&StreamInfo::default());
+    for iv in intervals {
+        stage.push_interval(iv);
+        stage.poll(false, obs)?;
+    }
+    stage.poll(true, obs)?;
+    finish(&stage, input)
 }
 
 /// Runs the calibrator `calib` names over given wheel angles, velocity
 /// observations (sorted by `t0`) and gyro rates: the same stage as
-/// [`run_calibration`], fed whole streams. The observer sees the wheel and
-/// gyro samples as items, then the steps.
+/// [`run_calibration`] without the front end, fed whole streams, the
+/// calibrator starting from `calib.ranges()`. The observer sees the wheel
+/// and gyro samples as items, then the steps.
 pub fn calibrate_streams(
     wheels: &[WheelSample],
     observations: &[VelocityObs],
@@ -436,9 +656,7 @@ pub fn calibrate_streams(
     meas: &MeasurementConfig,
     obs: &mut dyn RunObserver,
 ) -> Result<CalibRunSummary, PipelineError> {
-    let mut cal = calib::build(calib, robot.diff_drive())
-        .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
-    let mut stage = CalibStage::new(cal.as_mut(), robot, meas, !gyro.is_empty());
+    let mut stage = CalibStage::direct(calib, robot.diff_drive(), meas, !gyro.is_empty())?;
     obs.start(&StreamInfo {
         wheels: wheels.len(),
         gyro: gyro.len(),
@@ -455,7 +673,7 @@ pub fn calibrate_streams(
     }
     stage.end_gyro();
     observations.iter().for_each(|o| stage.push_obs(*o));
-    stage.poll(true, obs);
+    stage.poll(true, obs)?;
     Ok(CalibRunSummary {
         summary: stage.summary()?,
         weight_resets: stage.weight_resets(),

@@ -20,6 +20,21 @@ pub fn estimate(
     p: &BatchParams,
     checks: &CheckParams,
 ) -> Result<BatchEstimate, BatchError> {
+    estimate_with_laser(pb, nominal, p, checks, None)
+}
+
+/// [`estimate`] with the laser mounting held at `laser` (base_from_laser
+/// `[x, y, yaw]`) when given: the radii, the wheel base and the time offset
+/// alone, better determined when the mounting is known (a corridor's turns
+/// hardly tell a laser's position from the wheel base). The held unknowns
+/// are reported with std 0.
+pub fn estimate_with_laser(
+    pb: &Problem,
+    nominal: &DiffDrive,
+    p: &BatchParams,
+    checks: &CheckParams,
+    laser: Option<P3>,
+) -> Result<BatchEstimate, BatchError> {
     validate(pb, p)?;
     let track = pb.track.as_ref();
     let spans = pb
@@ -45,7 +60,11 @@ pub fn estimate(
         true => pb.intervals.iter().map(|iv| iv.cov.unwrap()).collect(),
         false => vec![Matrix3::identity(); pb.intervals.len()],
     };
-    let init = closed_form(&rows(pb, &incs, &covs))?;
+    let mut init = closed_form(&rows(pb, &incs, &covs))?;
+    if let Some(l) = laser {
+        init.laser = l;
+    }
+    let free: Vec<bool> = (0..n).map(|i| laser.is_none() || !(3..6).contains(&i)).collect();
     let mut keep = vec![true; pb.intervals.len()];
     if !given {
         covs = noise(pb, &residuals(pb, &init.to_vec(6)), &keep);
@@ -58,13 +77,23 @@ pub fn estimate(
         info: nalgebra::DMatrix::zeros(n, n),
         chi2: 0.0,
     };
-    for round in 0..=p.outlier_iterations {
-        f = fit(&data(pb, &covs, &keep, &step), &f.p, p.max_iterations);
-        if round == p.outlier_iterations {
+    for round in 0..MAX_ROUNDS {
+        f = fit(&data(pb, &covs, &keep, &step, &free), &f.p, p.max_iterations);
+        let res = residuals(pb, &f.p);
+        let before = keep.clone();
+        if round < p.outlier_iterations {
+            drop_outliers(&res, &covs, &mut keep, p.outlier_fraction);
+        }
+        let fits = outliers::consistent(&res, &covs, &keep, p.outlier_probability);
+        keep.iter_mut().zip(&fits).for_each(|(k, f)| *k &= *f);
+        if keep.iter().filter(|k| **k).count() < p.min_intervals.max(6) {
+            // Too few would be left to fit: `f` is the fit of the last set.
+            keep = before;
             break;
         }
-        let res = residuals(pb, &f.p);
-        drop_outliers(&res, &covs, &mut keep, p.outlier_fraction);
+        if keep == before {
+            break;
+        }
         if !given {
             covs = noise(pb, &res, &keep);
         }
@@ -72,7 +101,7 @@ pub fn estimate(
     if !given {
         // The σ's of the final residuals, and the fit they weight.
         covs = noise(pb, &residuals(pb, &f.p), &keep);
-        f = fit(&data(pb, &covs, &keep, &step), &f.p, p.max_iterations);
+        f = fit(&data(pb, &covs, &keep, &step, &free), &f.p, p.max_iterations);
     }
     let ctx = report::Context {
         nominal,
@@ -84,8 +113,73 @@ pub fn estimate(
         dropped: keep.iter().filter(|k| !**k).count(),
         noise: (!given).then(|| [0, 1, 2].map(|i| covs[0][(i, i)].sqrt())),
         period: track.map(|t| t.period()),
+        free,
     };
     report::build(&f, ctx)
+}
+
+/// Most fit-and-reject rounds: Censi's `outlier_iterations` (with the
+/// robust rule), then rounds of the robust rule alone until the kept set
+/// stops changing.
+const MAX_ROUNDS: usize = 12;
+
+/// How much larger than their covariances claim the intervals' residuals
+/// are at `u`, per component `[x, y, θ]`, from the differences of
+/// consecutive whitened residuals (von Neumann's successive differences):
+/// √(median of (z_k − z_{k−1})²/2 over the median of χ²₁), at least 1. The
+/// differences keep the scan matcher's own noise, independent from one
+/// interval to the next, and drop what changes slowly (parameters that
+/// change during the window, a drift), which is for the filters to follow,
+/// not to be counted as noise; the median keeps outliers out. Intervals
+/// without a covariance count as σ = 1 (their scale is then the residuals'
+/// own).
+pub fn residual_scales(pb: &Problem, u: &Unknowns) -> [f64; 3] {
+    const MEDIAN_CHI2_1: f64 = 0.454_936_423_119_572_8;
+    let res = residuals(pb, &u.to_vec(7));
+    std::array::from_fn(|k| {
+        let z: Vec<f64> = res
+            .iter()
+            .zip(&pb.intervals)
+            .map(|(e, iv)| e[k] / iv.cov.map_or(1.0, |c| c[(k, k)].sqrt()))
+            .collect();
+        let mut d: Vec<f64> = z
+            .windows(2)
+            .map(|w| 0.5 * (w[1] - w[0]).powi(2))
+            .filter(|x| x.is_finite())
+            .collect();
+        if d.is_empty() {
+            return 1.0;
+        }
+        d.sort_by(f64::total_cmp);
+        (d[d.len() / 2] / MEDIAN_CHI2_1).sqrt().max(1.0)
+    })
+}
+
+/// The kinematics of the closed-form start alone ([Censi2013, Sec. IV], time
+/// offset 0): where a calibration without nominal values begins.
+pub fn closed_form_start(pb: &Problem, p: &BatchParams) -> Result<DiffDrive, BatchError> {
+    validate(pb, p)?;
+    let incs: Vec<Vec<[f64; 2]>> = pb
+        .intervals
+        .iter()
+        .map(|iv| {
+            let mut v = Vec::new();
+            increments(iv, pb.track.as_ref(), 0.0, &mut v);
+            v
+        })
+        .collect();
+    let covs: Vec<Matrix3<f64>> = pb
+        .intervals
+        .iter()
+        .map(|iv| iv.cov.unwrap_or_else(Matrix3::identity))
+        .collect();
+    let u = closed_form(&rows(pb, &incs, &covs))?;
+    signs(&u)?;
+    Ok(DiffDrive {
+        r_right: u.r_right,
+        r_left: u.r_left,
+        wheel_base: u.wheel_base,
+    })
 }
 
 fn validate(pb: &Problem, p: &BatchParams) -> Result<(), BatchError> {
@@ -163,7 +257,13 @@ fn drop_outliers(res: &[P3], covs: &[Matrix3<f64>], keep: &mut [bool], fraction:
     }
 }
 
-fn data<'a>(pb: &'a Problem, covs: &[Matrix3<f64>], keep: &[bool], step: &[f64]) -> Data<'a> {
+fn data<'a>(
+    pb: &'a Problem,
+    covs: &[Matrix3<f64>],
+    keep: &[bool],
+    step: &[f64],
+    free: &[bool],
+) -> Data<'a> {
     let sel: Vec<usize> = (0..keep.len()).filter(|&i| keep[i]).collect();
     Data {
         intervals: sel.iter().map(|&i| &pb.intervals[i]).collect(),
@@ -178,6 +278,7 @@ fn data<'a>(pb: &'a Problem, covs: &[Matrix3<f64>], keep: &[bool], step: &[f64])
             .collect(),
         track: pb.track.as_ref(),
         step: step.to_vec(),
+        free: free.to_vec(),
     }
 }
 

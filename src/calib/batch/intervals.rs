@@ -2,10 +2,14 @@
 //! motions are composed until the interval lasts `interval_s` or turns
 //! `interval_rad`, so that each interval excites the laser pose; the
 //! covariance is composed to first order, Σ' = J₁ Σ J₁ᵀ + J₂ Σ_m J₂ᵀ with
-//! the Jacobians of `a ⊕ b` (Censi 2013 uses ~1 s tuples for the same end).
+//! the Jacobians of `a ⊕ b` ([Censi2013] uses ~1 s tuples for the same end).
+//! [`IntervalBuilder`] does it one motion at a time, as they come off the
+//! scan matcher; [`aggregate`] is the same over a whole list.
 
 use super::model::{oplus, P3};
 use super::{Interval, WheelMotion};
+use crate::geom::Pose2;
+use crate::motion::{Motion, MIN_SCAN_SHARE};
 use nalgebra::Matrix3;
 
 /// One scan-to-scan motion of the laser in its own frame.
@@ -21,6 +25,41 @@ pub struct LaserMotion {
     pub cov: Matrix3<f64>,
     /// Whether the match is trustworthy.
     pub valid: bool,
+}
+
+impl LaserMotion {
+    /// The laser's own displacement `M⁻¹ ⊕ x ⊕ M` of a base-frame motion
+    /// matched with the mounting `M`, where `x` is the scan's own estimate
+    /// ([`Motion::scan_measured`]: never the part the matcher's odometry
+    /// prior supplied, which would feed the nominal model back into its own
+    /// calibration); its covariance is carried by the Jacobian of that map
+    /// (the adjoint of `M⁻¹`, by central differences). A failed pair, or one
+    /// whose forward motion the scan measured less than [`MIN_SCAN_SHARE`] of
+    /// (a corridor's axis), is not valid: it ends an interval.
+    pub fn from_motion(m: &Motion, mount: &Pose2) -> Self {
+        let (x0, share) = m.scan_measured();
+        let f = |x: [f64; 3]| {
+            let p = mount.inverse() * crate::geom::pose(x[0], x[1], x[2]) * mount;
+            [p.translation.x, p.translation.y, p.rotation.angle()]
+        };
+        let mut j = Matrix3::zeros();
+        for k in 0..3 {
+            let (mut a, mut b) = (x0, x0);
+            a[k] += 1e-6;
+            b[k] -= 1e-6;
+            let (fa, fb) = (f(a), f(b));
+            for r in 0..3 {
+                j[(r, k)] = (fa[r] - fb[r]) / 2e-6;
+            }
+        }
+        Self {
+            t0: m.t0,
+            t1: m.t1,
+            s: f(x0),
+            cov: j * m.cov * j.transpose(),
+            valid: m.failure.is_none() && share >= MIN_SCAN_SHARE,
+        }
+    }
 }
 
 /// `a ⊕ b` with the first-order covariance of the composition.
@@ -45,38 +84,63 @@ fn compose(a: (P3, Matrix3<f64>), b: (P3, Matrix3<f64>)) -> (P3, Matrix3<f64>) {
     )
 }
 
-/// Intervals of at least `min_s` seconds or `min_rad` of rotation, made of
-/// consecutive valid motions without gaps (a failed match or a gap longer
-/// than `max_gap_s` ends the interval; a shorter remainder is dropped).
+/// Composes consecutive valid motions into intervals of at least `min_s`
+/// seconds or `min_rad` of rotation, one motion at a time; a failed match or
+/// a gap longer than `max_gap_s` ends the interval, and a shorter remainder
+/// is dropped. `min_s = 0` makes every valid motion its own interval.
+#[derive(Debug, Clone)]
+pub struct IntervalBuilder {
+    min_s: f64,
+    min_rad: f64,
+    max_gap_s: f64,
+    cur: Option<(f64, f64, P3, Matrix3<f64>)>,
+}
+
+impl IntervalBuilder {
+    /// A builder of intervals of `min_s` (s) or `min_rad` (rad).
+    pub fn new(min_s: f64, min_rad: f64, max_gap_s: f64) -> Self {
+        Self {
+            min_s,
+            min_rad,
+            max_gap_s,
+            cur: None,
+        }
+    }
+
+    /// Adds the next motion (in time order); the interval it completes, if any.
+    pub fn push(&mut self, m: &LaserMotion) -> Option<Interval> {
+        let joins = self
+            .cur
+            .is_some_and(|c| m.valid && (m.t0 - c.1).abs() <= self.max_gap_s);
+        if !joins {
+            self.cur = m.valid.then_some((m.t0, m.t1, m.s, m.cov));
+        } else if let Some(c) = self.cur.as_mut() {
+            let (s, cov) = compose((c.2, c.3), (m.s, m.cov));
+            *c = (c.0, m.t1, s, cov);
+        }
+        let c = self.cur?;
+        if !(c.1 - c.0 >= self.min_s || c.2[2].abs() >= self.min_rad) {
+            return None;
+        }
+        self.cur = None;
+        Some(Interval {
+            s: [c.2[0], c.2[1], crate::geom::wrap_angle(c.2[2])],
+            cov: Some(c.3),
+            duration: c.1 - c.0,
+            wheels: WheelMotion::Span { t0: c.0, t1: c.1 },
+        })
+    }
+}
+
+/// [`IntervalBuilder`] over a whole list of motions.
 pub fn aggregate(
     motions: &[LaserMotion],
     min_s: f64,
     min_rad: f64,
     max_gap_s: f64,
 ) -> Vec<Interval> {
-    let mut out = Vec::new();
-    let mut cur: Option<(f64, f64, P3, Matrix3<f64>)> = None;
-    for m in motions {
-        let joins = cur.is_some_and(|c| m.valid && (m.t0 - c.1).abs() <= max_gap_s);
-        if !joins {
-            cur = m.valid.then_some((m.t0, m.t1, m.s, m.cov));
-        } else if let Some(c) = cur.as_mut() {
-            let (s, cov) = compose((c.2, c.3), (m.s, m.cov));
-            *c = (c.0, m.t1, s, cov);
-        }
-        if let Some(c) = cur {
-            if c.1 - c.0 >= min_s || c.2[2].abs() >= min_rad {
-                out.push(Interval {
-                    s: [c.2[0], c.2[1], crate::geom::wrap_angle(c.2[2])],
-                    cov: Some(c.3),
-                    duration: c.1 - c.0,
-                    wheels: WheelMotion::Span { t0: c.0, t1: c.1 },
-                });
-                cur = None;
-            }
-        }
-    }
-    out
+    let mut b = IntervalBuilder::new(min_s, min_rad, max_gap_s);
+    motions.iter().filter_map(|m| b.push(m)).collect()
 }
 
 #[cfg(test)]

@@ -23,9 +23,9 @@ mod solve;
 #[cfg(test)]
 mod tests;
 
-pub use estimate::estimate;
-pub use intervals::{aggregate, LaserMotion};
-pub use model::{Unknowns, P3};
+pub use estimate::{closed_form_start, estimate, estimate_with_laser, residual_scales};
+pub use intervals::{aggregate, IntervalBuilder, LaserMotion};
+pub use model::{inverse, oplus, Unknowns, P3};
 pub use report::{BatchEstimate, Valued};
 
 use nalgebra::Matrix3;
@@ -115,6 +115,10 @@ pub struct BatchParams {
     /// Fraction rejected per round in each of the translation and rotation
     /// residuals (Censi's solver: 0.01).
     pub outlier_fraction: f64,
+    /// Probability beyond which an interval's χ², in units of the kept
+    /// intervals' typical χ², is an outlier (`outliers::consistent`); 0 =
+    /// Censi's fixed fraction alone.
+    pub outlier_probability: f64,
     /// Estimate the time offset when the intervals carry wheel time.
     pub time_offset: bool,
     /// Levenberg–Marquardt iteration limit per fit.
@@ -150,6 +154,7 @@ impl Default for BatchParams {
         Self {
             outlier_iterations: 4,
             outlier_fraction: 0.01,
+            outlier_probability: 1e-3,
             time_offset: true,
             max_iterations: 50,
             min_intervals: 10,

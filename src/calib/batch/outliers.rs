@@ -1,12 +1,23 @@
-//! Outlier rejection as Censi et al.'s solver does it (`solver2.cpp`): after
-//! each fit, an interval is dropped when its translation residual or its
-//! rotation residual lies above that residual's (1 − f) quantile; four
-//! rounds of f = 1 % by default. Here the residuals are normalised by their
-//! covariance (χ² of the translation block, e_θ²/σ_θ²), which orders them as
-//! Censi's |e_xy| and |e_θ| when all intervals share one σ.
+//! Outlier rejection. Censi et al.'s solver (`solver2.cpp`): after each
+//! fit, an interval is dropped when its translation residual or its rotation
+//! residual lies above that residual's (1 − f) quantile; four rounds of
+//! f = 1 % by default. Here the residuals are normalised by their covariance
+//! (χ² of the translation block, e_θ²/σ_θ²), which orders them as Censi's
+//! |e_xy| and |e_θ| when all intervals share one σ.
+//!
+//! A fixed fraction removes at most one interval of a hundred per round,
+//! whatever the data hold: a scan matcher that stalls on a few fast
+//! stretches (it reports a fraction of the travel, with a confident
+//! covariance) leaves intervals that carry several per cent of the radii.
+//! [`consistent`] therefore also drops every interval whose whitened χ²,
+//! in units of the kept intervals' typical χ² (median / the median of χ²₃),
+//! lies beyond the χ²₃ quantile of `1 − p`: a robust scale, as in
+//! [Rousseeuw1987], so the threshold follows the recording's own spread
+//! rather than covariances that may be too small for it.
 
 use super::model::P3;
 use nalgebra::Matrix3;
+use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// The translation and rotation χ² of a residual.
 pub fn chi2_parts(e: P3, cov: &Matrix3<f64>) -> (f64, f64) {
@@ -43,6 +54,41 @@ pub fn keep(residuals: &[P3], covs: &[Matrix3<f64>], fraction: f64) -> Vec<bool>
     parts.iter().map(|&(a, b)| a <= qxy && b <= qth).collect()
 }
 
+/// The full whitened χ² `eᵀ Σ⁻¹ e` of a residual (∞ for a singular Σ).
+pub fn chi2(e: P3, cov: &Matrix3<f64>) -> f64 {
+    let v = nalgebra::Vector3::from(e);
+    cov.try_inverse()
+        .map(|i| (v.transpose() * i * v)[0])
+        .unwrap_or(f64::INFINITY)
+}
+
+/// Which intervals are consistent with the rest: `false` for those whose χ²
+/// over the robust scale (the median χ² of those in `kept`, over the median
+/// of χ²₃) exceeds the χ²₃ quantile of `1 − probability`. All kept when
+/// `probability` is 0 or fewer than 10 intervals are kept.
+pub fn consistent(
+    residuals: &[P3],
+    covs: &[Matrix3<f64>],
+    kept: &[bool],
+    probability: f64,
+) -> Vec<bool> {
+    let c: Vec<f64> = residuals.iter().zip(covs).map(|(e, s)| chi2(*e, s)).collect();
+    let mut k: Vec<f64> = c
+        .iter()
+        .zip(kept)
+        .filter(|(x, k)| **k && x.is_finite())
+        .map(|(x, _)| *x)
+        .collect();
+    if !(probability > 0.0) || k.len() < 10 {
+        return vec![true; c.len()];
+    }
+    k.sort_by(f64::total_cmp);
+    let chi3 = ChiSquared::new(3.0).expect("3 degrees of freedom");
+    let scale = (k[k.len() / 2] / chi3.inverse_cdf(0.5)).max(f64::MIN_POSITIVE);
+    let limit = chi3.inverse_cdf(1.0 - probability);
+    c.iter().map(|x| *x / scale <= limit).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -58,5 +104,27 @@ mod tests {
         assert!(k[..990].iter().enumerate().all(|(i, &x)| x == (i != 3)));
         assert!(k[990] && k[991..].iter().all(|x| !x));
         assert_eq!(k.iter().filter(|x| !**x).count(), 10);
+    }
+
+    #[test]
+    fn drops_what_lies_beyond_the_robust_spread_whatever_the_covariances_claim() {
+        // 200 residuals of σ 1 mm judged with a covariance claiming 0.1 mm
+        // (χ² ≈ 100 each), and four stalls of 50 mm: the scale follows the
+        // data, so the ordinary ones stay and only the stalls go.
+        let covs = vec![Matrix3::identity() * 1e-8; 204];
+        let mut e: Vec<P3> = (0..200)
+            .map(|i| {
+                let a = (i as f64 * 0.7).sin();
+                let b = (i as f64 * 1.3).cos();
+                [1e-3 * a, 1e-3 * b, 1e-3 * (a - b)]
+            })
+            .collect();
+        e.extend([[0.05, 0.0, 0.0]; 4]);
+        let k = consistent(&e, &covs, &vec![true; 204], 1e-3);
+        assert!(k[..200].iter().all(|x| *x));
+        assert!(k[200..].iter().all(|x| !*x));
+        // Off, or too few to judge: all kept.
+        assert!(consistent(&e, &covs, &vec![true; 204], 0.0).iter().all(|x| *x));
+        assert!(consistent(&e[..9], &covs[..9], &[true; 9], 1e-3).iter().all(|x| *x));
     }
 }

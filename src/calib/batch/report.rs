@@ -143,6 +143,8 @@ pub struct Context<'a> {
     pub noise: Option<[f64; 3]>,
     /// The wheel stream's period (s), if timed.
     pub period: Option<f64>,
+    /// Which unknowns were fitted (the others held: std 0).
+    pub free: Vec<bool>,
 }
 
 /// The covariance from the Fisher information, normalised to unit diagonal
@@ -194,10 +196,14 @@ pub fn build(f: &Fit, c: Context) -> Result<BatchEstimate, BatchError> {
                 .join("; "),
         )
     })?;
-    let dof = (3 * c.kept).saturating_sub(n);
+    let dof = (3 * c.kept).saturating_sub(c.free.iter().filter(|x| **x).count());
     let mut notes = Vec::new();
     let widening = birge(f.chi2, dof, c.noise.is_none(), &mut notes);
-    let cov = cov * (widening * widening);
+    let mut cov = cov * (widening * widening);
+    for j in (0..n).filter(|&j| !c.free[j]) {
+        cov.row_mut(j).fill(0.0);
+        cov.column_mut(j).fill(0.0);
+    }
     let std: Vec<f64> = (0..n).map(|i| cov[(i, i)].sqrt()).collect();
     let u = Unknowns::from_slice(&f.p);
     let obs = observe(&std, &c);
@@ -230,7 +236,14 @@ pub fn build(f: &Fit, c: Context) -> Result<BatchEstimate, BatchError> {
         correlation: Correlation {
             names: NAMES[..n].iter().map(|s| s.to_string()).collect(),
             matrix: (0..n)
-                .map(|i| (0..n).map(|j| cov[(i, j)] / (std[i] * std[j])).collect())
+                .map(|i| {
+                    (0..n)
+                        .map(|j| match std[i] * std[j] {
+                            0.0 => f64::from(u8::from(i == j)),
+                            s => cov[(i, j)] / s,
+                        })
+                        .collect()
+                })
                 .collect(),
         },
         observability: obs,
@@ -299,6 +312,10 @@ fn observe(std: &[f64], c: &Context) -> BTreeMap<String, ParamObservability> {
             missing: None,
         });
         e.std = std[i];
+        if !c.free.get(i).copied().unwrap_or(true) {
+            // Held at a stated value: neither estimated nor weak.
+            continue;
+        }
         if let Some(m) = unexcited {
             e.observable = false;
             e.missing = Some(m);

@@ -19,6 +19,8 @@ pub struct Data<'a> {
     pub track: Option<&'a WheelTrack>,
     /// Central-difference step of each unknown (its unit).
     pub step: Vec<f64>,
+    /// Which unknowns are fitted (the others are held where they start).
+    pub free: Vec<bool>,
 }
 
 /// The result of a fit.
@@ -67,6 +69,10 @@ fn normal(d: &Data, p: &[f64]) -> (DMatrix<f64>, DVector<f64>) {
     for (iv, w) in d.intervals.iter().zip(&d.whiten) {
         let e0 = nalgebra::Vector3::from(raw_residual(iv, d.track, p, &mut buf));
         for j in 0..n {
+            if !d.free[j] {
+                jac.set_column(j, &nalgebra::Vector3::zeros());
+                continue;
+            }
             q[j] = p[j] + d.step[j];
             let ep = raw_residual(iv, d.track, &q, &mut buf);
             q[j] = p[j] - d.step[j];
@@ -83,6 +89,10 @@ fn normal(d: &Data, p: &[f64]) -> (DMatrix<f64>, DVector<f64>) {
         let r = w * e0;
         h += jac.transpose() * &jac;
         g += jac.transpose() * r;
+    }
+    // A held unknown: a unit diagonal and no gradient, so its step is 0.
+    for j in (0..n).filter(|&j| !d.free[j]) {
+        h[(j, j)] = 1.0;
     }
     (h, g)
 }

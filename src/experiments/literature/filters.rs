@@ -33,7 +33,7 @@ fn filter_params(
     seed: u64,
 ) -> CalibParams {
     let inside = |r: [f64; 2], x: f64| r[0] <= x && x <= r[1];
-    let b = &base.ranges;
+    let b = &base.ranges();
     let ranges = if inside(b.r_right, nominal.r_right)
         && inside(b.r_left, nominal.r_left)
         && inside(b.wheel_base, nominal.wheel_base)
@@ -53,7 +53,7 @@ fn filter_params(
             Method::AdaptivePf => p.particles.or(base.particles),
             _ => base.particles,
         },
-        ranges,
+        ranges: Some(ranges),
         ..base.clone()
     }
 }
