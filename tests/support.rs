@@ -50,6 +50,26 @@ pub fn python_with(test: &str, modules: &[&str]) -> Option<String> {
     None
 }
 
+/// Runs `tools/NAME` with the python `py` (from [`python_with`]) and
+/// `args`; fails the test with the tool's stderr unless it succeeds, and
+/// returns what it printed.
+pub fn python_tool<A: AsRef<std::ffi::OsStr>>(py: &str, name: &str, args: &[A]) -> Vec<u8> {
+    let tool = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tools")
+        .join(name);
+    let o = std::process::Command::new(py)
+        .arg(tool)
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("run {name}: {e}"));
+    assert!(
+        o.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o.stdout
+}
+
 /// A fresh, empty scratch directory for one test, inside the target
 /// directory (Cargo's `CARGO_TARGET_TMPDIR`): each run empties and reuses
 /// the one its test had, so runs do not pile up (the suite writes about
