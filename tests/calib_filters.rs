@@ -157,6 +157,18 @@ fn degenerate_measurements_never_produce_nan() {
     }
 }
 
+/// Whether the detector's firing times `fired` (s) show a change at `step`:
+/// at least one firing, none before the step, the first within `delay` s
+/// of it.
+fn fired_after(fired: &[f64], step: f64, delay: f64) -> Result<(), String> {
+    match fired.first() {
+        None => Err("the jump went unnoticed".into()),
+        Some(&t) if t < step => Err(format!("fired at {t} s, before the step at {step} s")),
+        Some(&t) if t > step + delay => Err(format!("fired at {t} s, over {delay} s late")),
+        Some(_) => Ok(()),
+    }
+}
+
 #[test]
 fn a_radius_step_mid_run_is_retracked() {
     let step = RadiusStep {
@@ -171,8 +183,30 @@ fn a_radius_step_mid_run_is_retracked() {
     };
     let mut pf = ParticleFilter::new(&p.pf_settings());
     let r = run(&mut pf, &st, NOMINAL);
-    // The change detector fired after the step, not before it.
-    assert!(pf.jumps() >= 1, "the jump went unnoticed");
+    // The change detector fired after the step, not before it: a twin of
+    // the filter (same settings and seed) stepped by hand tells when.
+    let mut twin = ParticleFilter::new(&p);
+    let mut fired = Vec::new();
+    for s in &st {
+        let before = twin.jumps();
+        twin.step(s);
+        if twin.jumps() > before {
+            fired.push(s.t1);
+        }
+    }
+    assert_eq!(fired.len(), pf.jumps(), "the twin ran as the filter did");
+    eprintln!(
+        "the detector fired at {fired:?} s (step at {} s)",
+        step.time
+    );
+    // Its score forgets with a time constant (5 s): the post-step residuals
+    // fill it within two of them (measured: 30.5 s for the step at 25 s).
+    let delay = 2.0 * p.change.window;
+    fired_after(&fired, step.time, delay).unwrap();
+    // The same check on a detector that never fires, or that fired before
+    // the step as well, fails.
+    assert!(fired_after(&[], step.time, delay).is_err());
+    assert!(fired_after(&[step.time - 5.0, step.time + 1.0], step.time, delay).is_err());
     let f = r.final_drive();
     let k = d.truth_at(60.0);
     let before = r.history.iter().rfind(|h| h.t < 25.0).unwrap();

@@ -5,18 +5,47 @@
 //! score compares the names and estimates with what was hidden.
 
 use odocal::calib::CalibParams;
+use odocal::diagnose::Cause;
 use odocal::diagnose::DiagnoseParams;
-use odocal::experiments::blind::{cases, run_case, BlindParams, BlindRun};
+use odocal::experiments::blind::{cases, estimate_misses, run_case, BlindParams, BlindRun, Case};
 use odocal::experiments::ExperimentInputs;
 use odocal::icp::IcpParams;
 use odocal::robot::RobotConfig;
 
-fn blind(label: &str, scenario: &str, seed: u64) -> BlindRun {
-    let p = BlindParams::default();
-    let case = cases(p.duration_s)
+fn case(label: &str) -> Case {
+    cases(BlindParams::default().duration_s)
         .into_iter()
         .find(|c| c.label == label)
-        .unwrap_or_else(|| panic!("no case '{label}'"));
+        .unwrap_or_else(|| panic!("no case '{label}'"))
+}
+
+/// The answer of a diagnosis that names the hidden effects but leaves the
+/// robot nominal: every parameter zero, however uncertain.
+fn named_at_nominal(case: &Case) -> Vec<Cause> {
+    let zero = |e: &odocal::effects::Effect| {
+        e.params()
+            .iter()
+            .map(|(k, _)| (k.to_string(), 0.0))
+            .collect()
+    };
+    case.effects
+        .iter()
+        .map(|e| Cause {
+            effect: e.name().into(),
+            parameters: zero(e),
+            stderr: e
+                .params()
+                .iter()
+                .map(|(k, _)| (k.to_string(), 1.0))
+                .collect(),
+            delta_bic: 100.0,
+        })
+        .collect()
+}
+
+fn blind(label: &str, scenario: &str, seed: u64) -> BlindRun {
+    let p = BlindParams::default();
+    let case = case(label);
     let (calib, robot, icp, diagnose) = (
         CalibParams::default(),
         RobotConfig::default(),
@@ -65,6 +94,17 @@ fn table_effects_are_named_and_estimated_blind() {
         assert_eq!(r.verdict, "explained", "{r:?}");
         assert_eq!(r.estimates_ok, Some(true), "{r:?}");
         assert!(r.gain > 0.0, "{r:?}");
+        // The same tolerance fails the nominal robot's answer: every hidden
+        // effect has an estimate out of it.
+        let c = case(label);
+        let misses = estimate_misses(&c.effects, &named_at_nominal(&c));
+        for e in &c.effects {
+            let prefix = format!("{}.", e.name());
+            assert!(
+                misses.iter().any(|m| m.starts_with(&prefix)),
+                "{label}: nominal {misses:?}"
+            );
+        }
     }
 }
 

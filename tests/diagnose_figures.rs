@@ -1,5 +1,6 @@
 //! The figures of the diagnosis over many seeds (naming rate, estimate
-//! errors, null false-positive rate). Long: run on demand with
+//! errors, null false-positive rate), each asserted against a floor that
+//! the do-nothing diagnosis (nothing named) fails. Long: run on demand with
 //! `cargo test --release --no-default-features --test lib diagnose_figures -- --ignored --nocapture`.
 
 use crate::diagnose_synthetic::{check, draw, run};
@@ -8,11 +9,29 @@ use odocal::diagnose::Verdict;
 use odocal::effects::EFFECT_NAMES;
 use rand::{RngExt, SeedableRng};
 
+/// Each effect named right (exactly it, every estimate within 20 %, held-
+/// out gain) in at least this many of [`SEEDS`] runs.
+const NAMED_AT_LEAST: usize = 9;
+/// Seeds per effect.
+const SEEDS: u64 = 10;
+/// The median relative error of an effect's estimates at most this.
+const MEDIAN_ERROR: f64 = 0.1;
+
 #[test]
 #[ignore = "long sweep; prints the README figures"]
 fn diagnose_figures() {
-    let seeds = 10u64;
+    let seeds = SEEDS;
     let mut rng = rand::rngs::StdRng::seed_from_u64(31337);
+    let mut short = Vec::new();
+    // The do-nothing diagnosis: a null run's, which names nothing.
+    let nothing = run(
+        &SyntheticSpec {
+            duration: 60.0,
+            ..Default::default()
+        },
+        9999,
+    );
+    assert!(nothing.causes.is_empty(), "{:?}", nothing.causes);
     for name in EFFECT_NAMES {
         let (mut ok, mut errs) = (0, Vec::new());
         for seed in 0..seeds {
@@ -28,6 +47,8 @@ fn diagnose_figures() {
             if check(&d, &[e], name).is_ok() {
                 ok += 1;
             }
+            // The same check fails the diagnosis that names nothing.
+            assert!(check(&nothing, &[e], name).is_err(), "{name}");
             if let Some(c) = d.causes.iter().find(|c| c.effect == name) {
                 for (k, v) in e.params() {
                     if k != "time" {
@@ -44,6 +65,10 @@ fn diagnose_figures() {
             100.0 * med,
             100.0 * max
         );
+        // An effect never named leaves no errors: its median is NaN and fails.
+        if ok < NAMED_AT_LEAST || !(med <= MEDIAN_ERROR) {
+            short.push(format!("{name}: {ok}/{seeds}, median {med:.3}"));
+        }
     }
     let n = 100;
     let mut fp = 0;
@@ -60,7 +85,11 @@ fn diagnose_figures() {
         }
     }
     println!("null: {fp}/{n} not no-discrepancy");
-    let (mut un, mut other) = (0, Vec::new());
+    // At most 5 % false positives (the null test's 95 %).
+    if fp > 5 {
+        short.push(format!("null: {fp}/{n} not no-discrepancy"));
+    }
+    let (mut named_oor, mut other) = (0, Vec::new());
     for seed in 0..20 {
         let spec = SyntheticSpec {
             duration: 90.0,
@@ -68,8 +97,12 @@ fn diagnose_figures() {
             ..Default::default()
         };
         let d = run(&spec, 7000 + seed);
-        if d.verdict == Verdict::Unexplained {
-            un += 1;
+        let oor = |d: &odocal::diagnose::Diagnosis| {
+            d.causes.is_empty() && d.faults.iter().any(|f| f.name == "wheel_out_of_round")
+        };
+        assert!(!oor(&nothing));
+        if oor(&d) {
+            named_oor += 1;
         } else {
             let named: Vec<String> = d.causes.iter().map(|c| c.effect.clone()).collect();
             other.push(format!(
@@ -78,7 +111,10 @@ fn diagnose_figures() {
             ));
         }
     }
-    println!("out-of-roundness: {un}/20 unexplained; others: {other:?}");
+    println!("out-of-roundness: {named_oor}/20 named as itself; others: {other:?}");
+    if named_oor < 19 {
+        short.push(format!("out-of-roundness: {named_oor}/20"));
+    }
     let pairs = [
         ("radius_scale", "latency"),
         ("wheel_base_scale", "gyro_bias"),
@@ -100,7 +136,12 @@ fn diagnose_figures() {
             if check(&run(&spec, 8000 + 10 * i as u64 + seed), &[ea, eb], "pair").is_ok() {
                 ok += 1;
             }
+            assert!(check(&nothing, &[ea, eb], "pair").is_err());
         }
     }
     println!("pairs: {ok}/{} both named within 20 %", 5 * pairs.len());
+    if ok + 2 < 5 * pairs.len() {
+        short.push(format!("pairs: {ok}/{}", 5 * pairs.len()));
+    }
+    assert!(short.is_empty(), "below the floors: {short:#?}");
 }

@@ -169,14 +169,25 @@ fn mines_rover_scans_lag_the_encoders_in_both_recordings() {
 /// Censi et al.'s Khepera tuples: the diagnosis names the laser mount as
 /// the dominant cause and its estimate agrees with the authors' maximum-
 /// likelihood calibration (data README) in all three configurations; the
-/// turn-rate scale R/D agrees with theirs to better than 1 %.
+/// turn-rate scale R/D agrees with theirs to 0.15 %.
+///
+/// Each figure is judged against how far the authors' value lies from the
+/// nominal robot (laser at the origin, R/D as in khepera.toml): where that
+/// departure is at least three times the tolerance, the nominal value is
+/// put through the same check and must fail it (`assert_recovered`). The
+/// authors' R/D is 0.58–0.66 % above nominal on every set (a tolerance of
+/// 1 % used to pass a diagnosis that named nothing); their lstraight mount
+/// is 0.19 mm and 0.54° from the origin in y and yaw, which the tolerances
+/// (0.6 mm, 0.02 rad) cannot tell from zero: those two only agree.
 #[test]
 fn censi_tuples_laser_mount_matches_the_authors_calibration() {
     let Some(data) = shared_data("censi_diagnosis") else {
         return;
     };
     let robot = robot_file("khepera");
+    let mount = robot.laser.unwrap_or_default();
     let p = candidates(&["radius_scale", "wheel_base_scale", "laser_offset"]);
+    let mut discriminating = Vec::new();
     for set in ["lstraight", "l90", "lmov"] {
         let dir = data.join("censi-calibration");
         let tuples = censi::read(&dir.join(format!("{set}.tuple"))).unwrap();
@@ -194,16 +205,24 @@ fn censi_tuples_laser_mount_matches_the_authors_calibration() {
         assert!(cause(&d, "turn_slip").is_none(), "{:?}", d.causes);
         let l = cause(&d, "laser_offset").expect("laser mount named");
         assert_eq!(d.causes[0].effect, "laser_offset");
-        let got = [l.parameters["x"], l.parameters["y"], l.parameters["yaw"]];
-        let want = [authors.l_x, authors.l_y, authors.l_theta];
-        eprintln!("{set}: laser {got:?} authors {want:?}");
-        assert!((got[0] - want[0]).abs() < 0.002, "{set} x {got:?} {want:?}");
-        assert!((got[1] - want[1]).abs() < 0.002, "{set} y {got:?} {want:?}");
-        assert!(
-            (got[2] - want[2]).abs() < 0.02,
-            "{set} yaw {got:?} {want:?}"
-        );
-        // Turn-rate scale mean(R)/D relative to nominal, both calibrations.
+        // Measured: within 0.2 mm and 0.005 rad of the authors.
+        for (k, want, nominal, tol) in [
+            ("x", authors.l_x, mount.x, 0.6e-3),
+            ("y", authors.l_y, mount.y, 0.6e-3),
+            ("yaw", authors.l_theta, mount.yaw, 0.02),
+        ] {
+            let got = l.parameters[k];
+            let what = format!("{set} laser {k}");
+            eprintln!("{what}: {got:.5} authors {want:.5}");
+            if (want - nominal).abs() >= 3.0 * tol {
+                crate::support::assert_recovered(&what, got, want, nominal, tol);
+                discriminating.push(what);
+            } else {
+                assert!((got - want).abs() < tol, "{what}: {got} vs {want}");
+            }
+        }
+        // Turn-rate scale mean(R)/D relative to nominal, both calibrations
+        // (measured: within 0.05 % of the authors').
         let x = odocal::effects::Departures::of(&odocal::diagnose::fitted_effects(&d));
         let ours =
             (1.0 + 0.5 * (x.radius_scale[0] + x.radius_scale[1])) / (1.0 + x.wheel_base_scale);
@@ -211,9 +230,21 @@ fn censi_tuples_laser_mount_matches_the_authors_calibration() {
             / authors.axle
             / (robot.r_right / robot.wheel_base);
         eprintln!("{set}: R/D scale ours {ours:.5} authors {theirs:.5}");
-        assert!((ours - theirs).abs() < 0.01, "{set}: {ours} vs {theirs}");
+        crate::support::assert_recovered(&format!("{set} R/D"), ours, theirs, 1.0, 1.5e-3);
         assert!(d.gain.relative > 0.1, "{:?}", d.gain);
     }
+    assert_eq!(
+        discriminating,
+        [
+            "lstraight laser x",
+            "l90 laser x",
+            "l90 laser y",
+            "l90 laser yaw",
+            "lmov laser x",
+            "lmov laser y",
+            "lmov laser yaw"
+        ]
+    );
 }
 
 /// Intel lab (CARMEN ODOM = integrated odometry, replayed as virtual

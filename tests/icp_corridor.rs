@@ -24,6 +24,10 @@ const SCALE: f64 = 0.03;
 /// Length of the run (s).
 const DURATION: f64 = 180.0;
 
+/// How close the ensemble's mean radius must come to the true one (m): a
+/// quarter of the hidden departure (0.32 m · [`SCALE`] = 9.6 mm).
+const RADIUS_TOL: f64 = 2.4e-3;
+
 /// 180 s (142 m) down a 2.5 m wide corridor whose walls are straight but for
 /// a 0.9 m wide, 0.15 m deep recess (a door) every 12 m on one side,
 /// written to a bag and read back.
@@ -177,9 +181,9 @@ fn corridor_run(rec: &Recording, robot: &RobotConfig, params: &IcpParams) -> Cor
 /// move pairs across it; each member's calibration then differs by its own
 /// noise, which the filter states (its standard deviation of the radii).
 /// What every member must show is asserted per member; the calibrated scale
-/// on the ensemble's mean, against the filter's own uncertainty: the run is
-/// long enough for the nominal radii to lie far outside it, and the mean
-/// must lie within two standard deviations of the truth.
+/// on the ensemble's mean, against the hidden departure itself: within
+/// [`RADIUS_TOL`] of the true radius, a quarter of the 9.6 mm by which the
+/// nominal radii (which fail the same check) are off.
 #[test]
 fn along_a_corridor_the_axis_goes_to_the_prior_and_the_forward_velocity_is_observed_unbiased() {
     let (rec, robot) = corridor_bag();
@@ -232,19 +236,19 @@ fn along_a_corridor_the_axis_goes_to_the_prior_and_the_forward_velocity_is_obser
     // the door pairs' forward velocities.
     let mean = errs.iter().sum::<f64>() / errs.len() as f64;
     let sd = stds.iter().sum::<f64>() / stds.len() as f64;
-    // The run tells the nominal radii from the true ones ...
-    assert!(
-        nominal_err.abs() > 4.0 * sd,
-        "nominal {:.3} mm, std {:.3} mm",
-        nominal_err * 1e3,
-        sd * 1e3
-    );
-    // ... and the calibration lands on the true ones within its own
-    // uncertainty.
-    assert!(
-        mean.abs() < 2.0 * sd,
-        "mean radius error {:.3} mm, std {:.3} mm",
+    eprintln!(
+        "ensemble: mean radius error {:.3} mm (filter std {:.3} mm), nominal {:.3} mm",
         mean * 1e3,
-        sd * 1e3
+        sd * 1e3,
+        nominal_err * 1e3
+    );
+    // The calibration lands on the true radii, within a quarter of their
+    // departure from the nominal ones (which fail the same check).
+    crate::support::assert_recovered(
+        "mean radius",
+        truth + mean,
+        truth,
+        robot.r_right,
+        RADIUS_TOL,
     );
 }

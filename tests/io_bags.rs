@@ -12,7 +12,7 @@ use std::sync::OnceLock;
 use odocal::io::{collect, open, read_recording, sniff, Format, ReadOptions};
 use odocal::recording::Recording;
 
-use crate::support::{python_with, scratch, shared_data};
+use crate::support::{python_tool, python_with, scratch, shared_data};
 
 const BUNDLED: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -23,19 +23,9 @@ const BUNDLED: &str = concat!(
 /// Python and rosbags outside CI.
 fn convert(test: &str, src: &Path, out: &Path, args: &[&str]) -> Option<()> {
     let py = python_with(test, &["rosbags", "mcap"])?;
-    let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/bag_convert.py");
-    let o = Command::new(py)
-        .arg(tool)
-        .arg(src)
-        .arg(out)
-        .args(args)
-        .output()
-        .expect("run bag_convert.py");
-    assert!(
-        o.status.success(),
-        "bag_convert.py: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let mut all = vec![src.as_os_str(), out.as_os_str()];
+    all.extend(args.iter().map(std::ffi::OsStr::new));
+    python_tool(&py, "bag_convert.py", &all);
     Some(())
 }
 

@@ -8,13 +8,12 @@
 //! is refused naming the robot-file keys.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use odocal::io::{collect, open, ReadOptions};
 use odocal::recording::{Recording, WheelValues};
 use odocal::robot::RobotConfig;
 
-use crate::support::{odocal, python_with, scratch};
+use crate::support::{odocal, python_tool, python_with, scratch};
 
 const BUNDLED: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -43,19 +42,9 @@ const TICKS_ROBOT: &str = "r_right = 0.32\nr_left = 0.32\nwheel_base = 0.65\n\
 /// Python, mcap and rosbags outside CI.
 fn wheel_sources(test: &str, src: &Path, out: &Path, args: &[&str]) -> Option<()> {
     let py = python_with(test, &["mcap", "rosbags", "numpy"])?;
-    let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/wheel_sources.py");
-    let o = Command::new(py)
-        .arg(tool)
-        .arg(src)
-        .arg(out)
-        .args(args)
-        .output()
-        .expect("run wheel_sources.py");
-    assert!(
-        o.status.success(),
-        "wheel_sources.py: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let mut all = vec![src.as_os_str(), out.as_os_str()];
+    all.extend(args.iter().map(std::ffi::OsStr::new));
+    python_tool(&py, "wheel_sources.py", &all);
     Some(())
 }
 
@@ -357,14 +346,7 @@ fn read(path: &Path, opts: &ReadOptions) -> Recording {
 /// folders (SQLite, MCAP); the paths of each form.
 fn every_form(test: &str, src: &Path, out: &Path) -> Option<Vec<PathBuf>> {
     let py = python_with(test, &["rosbags", "mcap"])?;
-    let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/bag_convert.py");
-    let o = Command::new(py)
-        .arg(tool)
-        .arg(src)
-        .arg(out)
-        .output()
-        .expect("run bag_convert.py");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    python_tool(&py, "bag_convert.py", &[src, out]);
     let db3 = out.join("db3/db3.db3");
     Some(vec![
         src.to_path_buf(),

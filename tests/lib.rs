@@ -19,6 +19,7 @@ mod classic_umbmark;
 mod cli;
 mod cli_bad_input;
 mod diagnose_blind;
+mod diagnose_chain;
 mod diagnose_encoder_table;
 mod diagnose_figures;
 mod diagnose_real;

@@ -50,6 +50,43 @@ pub fn python_with(test: &str, modules: &[&str]) -> Option<String> {
     None
 }
 
+/// Runs `tools/NAME` with the python `py` (from [`python_with`]) and
+/// `args`; fails the test with the tool's stderr unless it succeeds, and
+/// returns what it printed.
+pub fn python_tool<A: AsRef<std::ffi::OsStr>>(py: &str, name: &str, args: &[A]) -> Vec<u8> {
+    let tool = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tools")
+        .join(name);
+    let o = std::process::Command::new(py)
+        .arg(tool)
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("run {name}: {e}"));
+    assert!(
+        o.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o.stdout
+}
+
+/// Asserts that `estimate` recovers a hidden departure: within `tol` of
+/// `truth`, where the departure of `truth` from the `nominal` (what an
+/// estimator that does nothing answers) is at least three times `tol`. The
+/// nominal is put through the same check first and must fail it (the
+/// negative control), so the assertion cannot pass on the do-nothing answer.
+pub fn assert_recovered(what: &str, estimate: f64, truth: f64, nominal: f64, tol: f64) {
+    let within = |x: f64| (x - truth).abs() < tol;
+    assert!(
+        (truth - nominal).abs() >= 3.0 * tol && !within(nominal),
+        "{what}: the departure {truth} − {nominal} is under three times the tolerance {tol}"
+    );
+    assert!(
+        within(estimate),
+        "{what}: {estimate} vs truth {truth} (tolerance {tol}, nominal {nominal})"
+    );
+}
+
 /// A fresh, empty scratch directory for one test, inside the target
 /// directory (Cargo's `CARGO_TARGET_TMPDIR`): each run empties and reuses
 /// the one its test had, so runs do not pile up (the suite writes about

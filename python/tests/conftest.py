@@ -1,6 +1,7 @@
 """Shared fixtures: the odocal binary (to compare the package with the
 command line on the same files) and a short simulated recording."""
 
+import importlib
 import json
 import os
 import shutil
@@ -24,6 +25,18 @@ def odocal_bin() -> str:
     if not found:
         pytest.fail("no odocal binary: build it (cargo build --release) or set ODOCAL_BIN")
     return found
+
+
+def need(module: str):
+    """The imported ``module``. Without it the test skips, but under CI
+    (``CI`` set, as ``.ci/run`` does) it fails: CI installs every module the
+    tests use, so a missing one is a broken setup, not a reason to pass."""
+    try:
+        return importlib.import_module(module)
+    except ImportError as e:
+        if os.environ.get("CI"):
+            pytest.fail(f"module {module} missing under CI ({e}); .ci/run installs it")
+        pytest.skip(f"module {module} not installed ({e})")
 
 
 def cli(*args, ok=True):

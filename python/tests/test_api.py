@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import odocal
-from conftest import cli
+from conftest import cli, need
 
 # Wall-clock figures differ from run to run; everything else must not.
 TIMINGS = {"wall_s", "pairs_per_s", "mean_iteration_ms", "match_ms_per_pair", "mean_pair_ms",
@@ -111,7 +111,7 @@ def test_eval_matches_the_command_line_and_evo(tmp_path, sim):
         py = odocal.eval(m["tum"], ref, align=align)
         c = cli("eval", "--estimate", m["tum"], "--reference", ref, "--align", align, "--json")
         assert py == c
-    pytest.importorskip("evo")
+    need("evo")
     from evo.core import metrics, sync
     from evo.main_ape import ape
     from evo.tools import file_interface

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 import odocal
-from conftest import cli
+from conftest import cli, need
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +46,7 @@ def test_local_and_ray_engines_give_the_command_lines_table(fleet, tmp_path):
     assert (tmp_path / "local" / "fleet.csv").read_text() == reference
     assert alarms(local) == alarms(cli_run)
 
-    ray = pytest.importorskip("ray")
+    ray = need("ray")
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         on_ray = odocal.fleet.run(manifest, tmp_path / "ray", engine="ray")

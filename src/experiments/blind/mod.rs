@@ -11,7 +11,7 @@ mod run;
 mod table;
 
 pub use cases::{cases, Case, Group};
-pub use run::{run_case, score, BlindRun};
+pub use run::{estimate_misses, run_case, score, BlindRun};
 pub use table::{summarise, BlindRow, BlindSummary};
 
 use super::inputs::{bad, ExperimentInputs};

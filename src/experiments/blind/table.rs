@@ -135,8 +135,10 @@ impl BlindSummary {
             md,
             "Each run: `simulate` ({} s, laser {} Hz, scenarios {} in turn by seed) → bag → \
              read back → ICP → `diagnose` with the nominal wheelchair; the truth never reaches \
-             the diagnosis. Estimates in tolerance: within 20 % of the true value or 2 standard \
-             errors, whichever is wider (a radius step's time within 2 s).\n",
+             the diagnosis. Estimates in tolerance: within 20 % of the true value (of the \
+             effect's largest value in that unit where the true value is zero), never widened \
+             by the fit's standard error; a radius step's time within 2 s; a parameter not \
+             reported is out of tolerance.\n",
             s.duration_s,
             s.laser_rate_hz,
             s.scenarios.join(", ")
