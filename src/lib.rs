@@ -5,7 +5,7 @@
 //! `eval`, `diagnose`) know nothing of files, the command line or Rerun; `io`
 //! reads and writes formats and nothing else; `pipeline` wires the stages
 //! through one driver, `viz` draws them, and `experiments` regenerates the
-//! seed papers' tables on top of all of them.
+//! implemented papers' tables on top of all of them.
 #![warn(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -86,7 +86,7 @@ fn literature_methods_beat_no_calibration_and_filters_follow_a_load_change() {
         assert!(e.wheel_base < e0.wheel_base, "{m:?}: {e:?} vs {e0:?}");
         assert!(x.rmse_theta < none.rmse_theta, "{m:?}");
     }
-    // The Adaptive-PF ends below 1 mm on the radii (seed 000: 1.9 mm).
+    // The Adaptive-PF ends below 1 mm on the radii ([Farina, Table II]: 1.9 mm).
     let apf = row(&r.rows, ClassicMethod::AdaptivePf);
     assert!(radius_err(apf) < 1e-3, "{:?}", apf.param_errors);
     // The heading source bounds the heading error of heading-pf below GA odometry's.

@@ -1,4 +1,4 @@
-//! Seed 001's encoder-versus-tachometer table (Table I): a constant scale
+//! The encoder-versus-tachometer table of [Paryanto, Table I]: a constant scale
 //! against the speed-dependent encoder gain ω_meas = ω (1 + k |ω|), per wheel,
 //! by BIC. The numbers are checked against an independent closed-form
 //! computation (numpy, one-regressor least squares) of the same data.

@@ -21,7 +21,7 @@ or --only):
   what-changed      the changes named at each firing on 25 simulated runs
   real-diagnosis    the diagnosis of the real recordings
   real-firings      the firings of the real recordings and the bundled one
-  table-ii-scans    seed 000's Table II on simulated scans through ICP, 30 runs
+  table-ii-scans    [Farina, Table II] on simulated scans through ICP, 30 runs
                     (slow: ~1.5 min; its time per step is not compared)
   blind-suite       the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
   fleet             a simulated fleet, 12 chairs over 10 days (slow: ~3 min)

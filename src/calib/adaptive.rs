@@ -1,7 +1,7 @@
-//! The Adaptive-PF rules (seed 000, section V): the particle count follows the
+//! The Adaptive-PF rules [Farina, Sec. V]: the particle count follows the
 //! dispersion of the radius particles, and the process noise follows the
 //! disagreement between measured and predicted velocities. KLD-sampling
-//! (Fox 2001) is offered as a second count rule.
+//! \[Fox2001\] is offered as a second count rule.
 
 // `!(x > y)` is deliberate: it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 pub enum CountRule {
     /// Fixed count.
     Fixed,
-    /// Seed 000: N = dispersion / `per_particle`, the dispersion being the
+    /// [Farina, Sec. V]: N = dispersion / `per_particle`, the dispersion being the
     /// width of the radius cloud (`dispersion_sigmas` weighted standard
     /// deviations of R_R plus as many of R_L).
     #[default]
@@ -32,11 +32,11 @@ pub enum CountRule {
 pub struct AdaptiveParams {
     /// Count rule used by the `adaptive-pf` method.
     pub rule: CountRule,
-    /// Radius dispersion per particle (m): seed 000's "one particle per 0.01 mm".
+    /// Radius dispersion per particle (m): "one particle per 0.01 mm" [Farina, Sec. V].
     pub per_particle: f64,
     /// How many standard deviations of a radius make its dispersion (the
     /// width of the interval its particles fill: 6 = ±3σ, 99.7 % of a
-    /// Gaussian cloud). Seed 000 does not say which spread it means; the
+    /// Gaussian cloud). \[Farina\] does not say which spread it means; the
     /// standard deviation alone (1) gives fewer particles than any sensible
     /// floor from the first resampling on, so the count would never move.
     pub dispersion_sigmas: f64,
@@ -113,7 +113,7 @@ impl AdaptiveParams {
         Ok(())
     }
 
-    /// Seed 000's count, `ceil(dispersion / per_particle)` clamped to
+    /// The count of [Farina, Sec. V], `ceil(dispersion / per_particle)` clamped to
     /// [`n_min`, `n_max`], for weighted standard deviations `std_r_right`,
     /// `std_r_left` (m) of the radius particles: the dispersion is
     /// `dispersion_sigmas · (std_r_right + std_r_left)`.
@@ -127,7 +127,7 @@ impl AdaptiveParams {
         }
     }
 
-    /// Fox 2001, eq. 8 with the Wilson–Hilferty approximation of the χ²
+    /// [Fox2001, eq. 8] with the Wilson–Hilferty approximation of the χ²
     /// quantile: `n = (k−1)/(2ε) · (1 − 2/(9(k−1)) + sqrt(2/(9(k−1))) z_{1−δ})³`
     /// for `k` occupied bins, clamped.
     pub fn kld_count(&self, k: usize) -> usize {
@@ -234,7 +234,7 @@ mod tests {
 
     #[test]
     fn kld_count_matches_the_chi_square_table() {
-        // Fox 2001, eq. 8: n = χ²_{k−1, 1−δ} / (2ε). For k − 1 = 100 bins
+        // [Fox2001, eq. 8]: n = χ²_{k−1, 1−δ} / (2ε). For k − 1 = 100 bins
         // and δ = 0.01 the tabulated quantile is 135.807 (Abramowitz and
         // Stegun, Table 26.8), so n = 1358.07 with ε = 0.05; the
         // Wilson–Hilferty form the code uses agrees to 0.1 %.

@@ -1,5 +1,5 @@
 //! Configuration of a calibration run: method, resampling, particles, seed,
-//! initial ranges and noise, with the defaults of seed 000.
+//! initial ranges and noise, with the defaults of \[Farina\].
 
 use super::adaptive::AdaptiveParams;
 use super::change::ChangeParams;
@@ -14,12 +14,12 @@ pub const MAX_PARTICLES: usize = 1_000_000;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
-    /// Seed 000's Adaptive-PF (adaptive particle count and process noise).
+    /// The Adaptive-PF of \[Farina\] (adaptive particle count and process noise).
     #[default]
     AdaptivePf,
     /// Particle filter with a fixed count and fixed process noise.
     Pf,
-    /// Dual Kalman filter (Wan & Nelson).
+    /// Dual Kalman filter \[WanNelson1997\].
     Dkf,
     /// Augmented extended Kalman filter.
     Akf,
@@ -108,11 +108,11 @@ impl Ranges {
 #[serde(default, deny_unknown_fields)]
 pub struct NoiseParams {
     /// σ of the Gaussian random walk on R_R, R_L, D per step (m): the fixed
-    /// PF's process noise (seed 000: 0.0005) and the Adaptive-PF's σ until
+    /// PF's process noise ([Farina]: 0.0005) and the Adaptive-PF's σ until
     /// its first measurement.
     pub param_sigma: f64,
     /// Half-width of the uniform jitter on each particle's V (m/s) and W
-    /// (rad/s) after prediction (seed 000 mentions such jitter without a
+    /// (rad/s) after prediction (\[Farina\] mentions such jitter without a
     /// value; 0 = none, which only removes noise from the weights).
     pub velocity_jitter: f64,
     /// Measurement σ below this (m/s or rad/s), including σ = 0, is clamped
@@ -120,7 +120,7 @@ pub struct NoiseParams {
     pub sigma_floor: f64,
     /// σ of the velocity model itself (m/s): added in quadrature to every V
     /// measurement's σ (encoder quantisation, slip, timing), the analytic
-    /// form of seed 000's jitter on V. The Kalman baselines use the same
+    /// form of the jitter on V of \[Farina\]. The Kalman baselines use the same
     /// model noise: the AKF as the process noise of V, the DKF in its
     /// parameter filter's measurement variance.
     pub model_sigma_v: f64,
@@ -137,8 +137,8 @@ pub struct NoiseParams {
     /// makes the filters robust to outlier velocity measurements (scan
     /// matching failures): each measurement's precision is scaled by the
     /// variational-Bayes weight `min(1, (ν+1)/(ν+ν̃²/S))` of its normalised
-    /// innovation against the filter's prediction (Piché, Särkkä, Hartikainen
-    /// 2012). 0 = the plain Gaussian likelihood.
+    /// innovation against the filter's prediction \[Piche2012\]. 0 = the plain
+    /// Gaussian likelihood.
     pub robust_dof: f64,
     /// Turn rate (rad/s) below which the wheel base is only partly
     /// observable, with `obs = min(1, |W|/observability_turn_rate)`: the
@@ -186,7 +186,7 @@ pub struct CalibParams {
     pub resampler: Scheme,
     /// When the particle filters resample.
     pub trigger: Trigger,
-    /// Initial particle count; `None` = seed 000's 5000 (pf) or 8000 (adaptive-pf).
+    /// Initial particle count; `None` = the 5000 (pf) or 8000 (adaptive-pf) of \[Farina\].
     pub particles: Option<usize>,
     /// Seed of every random draw (same seed, same numbers).
     pub seed: u64,
@@ -198,7 +198,7 @@ pub struct CalibParams {
     pub adaptive: AdaptiveParams,
     /// Adaptive-PF change detector (re-convergence after a radius jump).
     pub change: ChangeParams,
-    /// N_eff trigger threshold as a fraction of N (seed 000: 0.5).
+    /// N_eff trigger threshold as a fraction of N ([Farina]: 0.5).
     pub neff_ratio: f64,
     /// Max-weight trigger threshold as a multiple of 1/N.
     pub max_weight_factor: f64,

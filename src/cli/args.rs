@@ -42,7 +42,7 @@ pub enum Command {
     /// What a recording holds and what odocal would read from it: topics, transforms,
     /// the laser mounting, what each command misses, a proposed robot file.
     Inspect(InspectArgs),
-    /// Regenerate the seeds' tables: resampling, montecarlo, changing, literature,
+    /// Regenerate the papers' tables: resampling, montecarlo, changing, literature,
     /// square, umbmark, heading-pf, tachometer.
     Experiment(ExperimentArgs),
     /// Calibrate a fleet's recordings; per robot the parameter history and its alarms.
@@ -66,7 +66,7 @@ pub struct ExperimentArgs {
     /// Experiment settings (TOML tables: literature, square, umbmark, heading_pf, scans).
     #[arg(long, value_name = "FILE.toml")]
     pub settings: Option<PathBuf>,
-    /// Folder with the seed tables (square_path.csv, encoder_vs_tachometer.csv, ...).
+    /// Folder with the papers' published tables (square_path.csv, encoder_vs_tachometer.csv, ...).
     #[arg(long, value_name = "DIR")]
     pub tables: Option<PathBuf>,
     /// Print one JSON object on stdout.

@@ -7,8 +7,8 @@
 //!
 //! Scan matching errors are not white: consecutive pairs share a scan (their
 //! errors are anti-correlated) and a place's geometry biases every pair
-//! matched there (errors correlated over seconds). Newey & West (1987,
-//! Econometrica 55(3) 703–708, Eq. 2, Bartlett weights) make each test valid
+//! matched there (errors correlated over seconds). Newey–West standard errors
+//! ([NeweyWest1987, eq. 2], Bartlett weights) make each test valid
 //! under that serial correlation, and a structure is only reported when its
 //! size also exceeds what scan matching leaves on recordings without any
 //! effect ([`Floors`], measured on null runs through the simulator and ICP).

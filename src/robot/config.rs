@@ -92,7 +92,7 @@ pub struct RobotConfig {
 }
 
 impl Default for RobotConfig {
-    /// The users' wheelchair (seed 000): R = 0.32 m, D = 0.65 m, 8800 ticks/rev.
+    /// The wheelchair of [Farina]: R = 0.32 m, D = 0.65 m, 8800 ticks/rev.
     fn default() -> Self {
         Self {
             name: "wheelchair".into(),

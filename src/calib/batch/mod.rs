@@ -1,5 +1,5 @@
 //! Joint maximum-likelihood batch calibration of a differential drive and
-//! its laser (Censi, Franchi, Marchionni, Oriolo, "Simultaneous calibration
+//! its laser \[Censi2013\] (Censi, Franchi, Marchionni, Oriolo, "Simultaneous calibration
 //! of odometry and sensor parameters for mobile robots", IEEE T-RO 29(2),
 //! 2013): the wheel radii r_R, r_L, the wheel base b, the laser mounting
 //! ℓ = `base_from_laser` and, when the wheel samples carry time, the time

@@ -1,4 +1,4 @@
-//! Outlier rejection as Censi et al.'s solver does it (`solver2.cpp`): after
+//! Outlier rejection as the solver of \[Censi2013\] does it (`solver2.cpp`): after
 //! each fit, an interval is dropped when its translation residual or its
 //! rotation residual lies above that residual's (1 − f) quantile; four
 //! rounds of f = 1 % by default. Here the residuals are normalised by their
