@@ -308,7 +308,7 @@ fn bundled_calibration(d: &std::path::Path, name: &str, icp: &str) -> [[f64; 2];
 
 #[test]
 fn thinned_scans_calibrate_the_chair_as_whole_ones_only_less_precisely() {
-    // README ("Speed against thinning"): every second beam of the scans being
+    // docs/performance.md ("Speed against thinning"): every second beam of the scans being
     // matched is a throughput setting whose cost shows in the spread, not in
     // the values. Against the simulator's final radii and wheel base.
     let d = crate::support::scratch("calib_thinned");

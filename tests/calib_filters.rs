@@ -291,7 +291,7 @@ fn wheel_base_holds_still_where_it_is_unobservable() {
 /// and systematic + N_eff is as accurate as the best configuration within
 /// the run-to-run spread (its median radius error within 1.5× the best
 /// median). That systematic + N_eff is strictly the best does not hold on
-/// our data: the schemes tie (README, Table I).
+/// our data: the schemes tie (docs/results.md, "Resampling").
 #[test]
 fn a_small_table_i_keeps_the_seeds_findings() {
     use odocal::experiments::{montecarlo, table1_configs, MonteCarloParams};

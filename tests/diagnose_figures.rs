@@ -9,7 +9,7 @@ use odocal::effects::EFFECT_NAMES;
 use rand::{RngExt, SeedableRng};
 
 #[test]
-#[ignore = "long sweep; prints the README figures"]
+#[ignore = "long sweep; prints the figures of docs/results.md"]
 fn diagnose_figures() {
     let seeds = 10u64;
     let mut rng = rand::rngs::StdRng::seed_from_u64(31337);
