@@ -132,7 +132,7 @@ impl Evidence {
     }
 
     /// Reduced χ² of V and of W against the best fixed linear law of the
-    /// wheel rates (see [`Normal2::reduced_chi2`]).
+    /// wheel rates (see `Normal2::reduced_chi2`).
     pub fn fit_chi2(&self) -> [Option<f64>; 2] {
         [self.v.reduced_chi2(), self.w.reduced_chi2()]
     }

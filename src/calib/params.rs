@@ -108,7 +108,7 @@ impl Ranges {
 #[serde(default, deny_unknown_fields)]
 pub struct NoiseParams {
     /// σ of the Gaussian random walk on R_R, R_L, D per step (m): the fixed
-    /// PF's process noise ([Farina]: 0.0005) and the Adaptive-PF's σ until
+    /// PF's process noise (\[Farina\]: 0.0005) and the Adaptive-PF's σ until
     /// its first measurement.
     pub param_sigma: f64,
     /// Half-width of the uniform jitter on each particle's V (m/s) and W
@@ -198,7 +198,7 @@ pub struct CalibParams {
     pub adaptive: AdaptiveParams,
     /// Adaptive-PF change detector (re-convergence after a radius jump).
     pub change: ChangeParams,
-    /// N_eff trigger threshold as a fraction of N ([Farina]: 0.5).
+    /// N_eff trigger threshold as a fraction of N (\[Farina\]: 0.5).
     pub neff_ratio: f64,
     /// Max-weight trigger threshold as a multiple of 1/N.
     pub max_weight_factor: f64,

@@ -1,4 +1,4 @@
-//! The offline calibration of [GAHeading]: a genetic algorithm fits `[k1, k2, b]`
+//! The offline calibration of \[GAHeading\]: a genetic algorithm fits `[k1, k2, b]`
 //! (metres per encoder pulse of the left and right rear wheel, wheel base) so
 //! that short runs (1.5–3 m), replayed from their pulse counts, end where they
 //! were measured to end. The rear-axle model is the same for a differential
@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
-/// The parameters of [GAHeading]: metres per pulse of each wheel and the wheel base.
+/// The parameters of \[GAHeading\]: metres per pulse of each wheel and the wheel base.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TickParams {
     /// k1: left wheel travel per pulse (m).

@@ -1,4 +1,4 @@
-//! The heading gain of [Paryanto]: turn the robot by a known angle several times,
+//! The heading gain of \[Paryanto\]: turn the robot by a known angle several times,
 //! compare with the heading its odometry estimates, and scale the estimated
 //! heading change by `gain`. Equivalent to dividing the wheel base by `gain`.
 //!

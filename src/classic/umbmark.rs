@@ -1,4 +1,4 @@
-//! UMBmark [Borenstein1996]: five clockwise and five counter-clockwise
+//! UMBmark \[Borenstein1996\]: five clockwise and five counter-clockwise
 //! square runs of side L, driven by odometry; the end-position errors separate
 //! a wheel-base error (type A, same in both directions) from unequal wheel
 //! diameters (type B, opposite), and give correction factors for both.

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 
 /// The sizes below which a structure is not reported, whatever its
 /// p-value: what scan matching itself leaves on null recordings, as a
-/// fraction of the motion (see [`relative`]). Measured with `odocal
+/// fraction of the motion (see `relative`). Measured with `odocal
 /// experiment diagnose` on null runs of every scenario (ICP scan to scan on
 /// the LMS111 wheelchair): the largest seen there, with a margin of about
 /// half as much again. ICP's forward velocity is the least trustworthy

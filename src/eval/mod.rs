@@ -4,7 +4,7 @@
 //! drift in % of distance travelled, final-position error) and the relation
 //! metric of \[Kummerle2009\].
 //!
-//! Layers as in evo: [`sync`] pairs poses by time, [`align()`] fits the
+//! Layers as in evo: [`sync`](mod@sync) pairs poses by time, [`align()`] fits the
 //! estimate onto the reference, [`ape()`] / [`rpe()`] / [`relations()`] measure,
 //! [`evaluate`] runs them all for the command line. Pure functions over
 //! trajectories; reading files is `io`'s job.

@@ -76,7 +76,7 @@ pub struct PfExperimentParams {
 }
 
 impl Default for PfExperimentParams {
-    /// The AGV of [GAHeading]: true k1, k2, b = its GA result; believed k = 3.75e-4
+    /// The AGV of \[GAHeading\]: true k1, k2, b = its GA result; believed k = 3.75e-4
     /// m/pulse (mid-box), b = 0.37 m; 1000 pulses/rev; 0.5 % wheel slip per
     /// 50 ms step (the level at which calibrated odometry comes nearest the paper's).
     fn default() -> Self {

@@ -8,10 +8,10 @@
 //! Input: intervals, each with the laser's displacement `s_k` in the laser
 //! frame at its start (with a covariance, or none: then σ's are estimated
 //! from the residuals as Censi's solver does) and the wheels' motion over
-//! it. Steps: a closed-form start ([`closed_form`], Sec. IV), then
-//! Levenberg–Marquardt on the likelihood ([`solve`], Sec. V) with Censi's
-//! outlier rejection ([`outliers`]), the covariance as the inverse Fisher
-//! information, and observability and sanity checks ([`report`]).
+//! it. Steps: a closed-form start (`closed_form`, Sec. IV), then
+//! Levenberg–Marquardt on the likelihood (`solve`, Sec. V) with Censi's
+//! outlier rejection (`outliers`), the covariance as the inverse Fisher
+//! information, and observability and sanity checks (`report`).
 
 mod closed_form;
 mod estimate;

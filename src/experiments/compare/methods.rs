@@ -57,7 +57,7 @@ struct Calibrations<'a> {
 }
 
 impl Calibrations<'_> {
-    /// [Paryanto]: tachometer correction (if a table is given) and heading gain
+    /// \[Paryanto\]: tachometer correction (if a table is given) and heading gain
     /// from the square runs' total turns (actual vs estimated).
     fn tacho_heading(&mut self, eval: &Evaluation<'_>) -> Result<ClassicResult, ClassicError> {
         let t0 = Instant::now();

@@ -30,7 +30,7 @@ use std::fmt::Write;
 pub enum ClassicMethod {
     /// Nominal parameters.
     None,
-    /// [Paryanto]: tachometer rpm correction and heading gain.
+    /// \[Paryanto\]: tachometer rpm correction and heading gain.
     TachoHeading,
     /// The UMBmark correction \[Borenstein1996\].
     Umbmark,
