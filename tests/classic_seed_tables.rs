@@ -15,9 +15,9 @@ fn table(test: &str, name: &str) -> Option<odocal::io::seed_tables::SeedTable> {
 }
 
 #[test]
-fn tachometer_fit_on_seed_001_table() {
+fn tachometer_fit_on_the_wheelchair_papers_table() {
     let Some(t) = table(
-        "tachometer_fit_on_seed_001_table",
+        "tachometer_fit_on_the_wheelchair_papers_table",
         "encoder_vs_tachometer.csv",
     ) else {
         return;
@@ -62,8 +62,11 @@ fn tachometer_fit_on_seed_001_table() {
 }
 
 #[test]
-fn heading_gain_on_seed_001_trials() {
-    let Some(t) = table("heading_gain_on_seed_001_trials", "heading_trials.csv") else {
+fn heading_gain_on_the_wheelchair_papers_trials() {
+    let Some(t) = table(
+        "heading_gain_on_the_wheelchair_papers_trials",
+        "heading_trials.csv",
+    ) else {
         return;
     };
     let g = fit_heading_gain(&heading_trials(&t).unwrap()).unwrap();
@@ -78,8 +81,11 @@ fn heading_gain_on_seed_001_trials() {
 }
 
 #[test]
-fn square_report_on_seed_001_table_iii() {
-    let Some(t) = table("square_report_on_seed_001_table_iii", "square_path.csv") else {
+fn square_report_on_the_wheelchair_papers_table_iii() {
+    let Some(t) = table(
+        "square_report_on_the_wheelchair_papers_table_iii",
+        "square_path.csv",
+    ) else {
         return;
     };
     let r = square_report(&square_corners(&t).unwrap()).unwrap();
@@ -117,8 +123,11 @@ fn square_report_on_seed_001_table_iii() {
 }
 
 #[test]
-fn seed_002_path_errors_parse_with_gaps() {
-    let Some(t) = table("seed_002_path_errors_parse_with_gaps", "ga_path_errors.csv") else {
+fn ga_heading_path_errors_parse_with_gaps() {
+    let Some(t) = table(
+        "ga_heading_path_errors_parse_with_gaps",
+        "ga_path_errors.csv",
+    ) else {
         return;
     };
     let rows = ga_path_errors(&t).unwrap();

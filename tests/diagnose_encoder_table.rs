@@ -7,8 +7,8 @@ use crate::support::shared_data;
 use odocal::diagnose::encoder_table::{fit_table, parse_table};
 
 #[test]
-fn seed_001_encoder_table_right_wheel_prefers_speed_dependent_gain_left_a_constant_scale() {
-    let Some(dir) = shared_data("seed_001_encoder_table") else {
+fn wheelchair_encoder_table_right_wheel_prefers_speed_dependent_gain_left_a_constant_scale() {
+    let Some(dir) = shared_data("wheelchair_encoder_table") else {
         return;
     };
     let text = std::fs::read_to_string(dir.join("seed-tables/encoder_vs_tachometer.csv")).unwrap();
