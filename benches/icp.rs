@@ -94,7 +94,7 @@ fn logs(c: &mut Criterion) {
         }
         let mount = rec.base_from_laser.unwrap_or_else(Pose2::identity);
         g.throughput(Throughput::Elements(scans.len() as u64 - 1));
-        // The default, and the thinned sources of README's "Speed against
+        // The default, and the thinned sources of docs/performance.md's "Speed against
         // thinning": every second beam, and that with one point per 10 cm cell.
         let thinned = |beam_stride, voxel_size| IcpParams {
             beam_stride,

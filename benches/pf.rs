@@ -1,6 +1,6 @@
 //! One particle-filter step with 8,000 particles (design.md: ≤ 0.1 ms), and
 //! the Adaptive-PF's step at the particle counts its dispersion rule takes
-//! over a run (seed 000, Fig. 5: time per iteration falls with N).
+//! over a run ([Farina, Fig. 5]: time per iteration falls with N).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use odocal::calib::{CalibParams, CalibStep, Calibrator, Kind, Method, ParticleFilter, Trigger};

@@ -7,7 +7,7 @@ use std::fmt;
 /// The binary maps it to exit code 2.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub struct InputError {
-    /// The file (or "<memory>").
+    /// The file (or `<memory>`).
     pub file: String,
     /// Topic, record kind or section, when known.
     pub topic: Option<String>,

@@ -52,7 +52,7 @@ pub fn inverse(a: &Pose2) -> Pose2 {
 }
 
 /// Relative motion `inv(a) ⊕ b`: pose `b` expressed in the frame of `a`.
-/// This is the Kümmerle et al. relation convention (`delta = inv(x_t1) * x_t2`).
+/// This is the relation convention of \[Kummerle2009\] (`delta = inv(x_t1) * x_t2`).
 pub fn between(a: &Pose2, b: &Pose2) -> Pose2 {
     a.inv_mul(b)
 }

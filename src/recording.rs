@@ -65,7 +65,7 @@ pub struct WheelSource {
 
 impl WheelSource {
     /// One line for the human output, e.g. "wheels from /odom twist
-    /// (nav_msgs/msg/Odometry), robot file [wheels] source".
+    /// (nav_msgs/msg/Odometry), robot file \[wheels\] source".
     pub fn sentence(&self) -> String {
         let what = match self.values {
             Some(WheelValues::Positions) => "joint positions",

@@ -27,14 +27,8 @@ struct Source {
 }
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            rust_files(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
-        }
-    }
+    let rs = |p: &Path| p.extension().is_some_and(|x| x == "rs");
+    out.extend(crate::support::files_below(dir, &rs));
 }
 
 /// The module path of a file under `src/` (`calib/mod.rs` → `calib`).

@@ -1,4 +1,4 @@
-//! Calibration on Censi et al.'s Khepera tuples (real data) against the
+//! Calibration on the Khepera tuples of \[Censi2013\] (real data) against the
 //! authors' maximum-likelihood estimates.
 
 use odocal::calib::{build, run, steps, CalibParams, Method, Ranges};

@@ -377,7 +377,7 @@ fn the_wheel_prior_with_the_robots_own_kinematics_fails_fewer_pairs() {
 
 /// A CARMEN log states its mounting in its laser lines (MIT-CSAIL: the laser
 /// pose is the odometry pose), so the log matches as well as its MCAP
-/// conversion with its identity /tf_static (relations, Kümmerle et al. 2009).
+/// conversion with its identity /tf_static (relations, \[Kummerle2009\]).
 #[test]
 fn a_carmen_log_states_its_own_mounting() {
     let Some(data) = shared_data("a_carmen_log_states_its_own_mounting") else {

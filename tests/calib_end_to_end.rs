@@ -11,7 +11,7 @@ use odocal::sim::{self, SimConfig};
 #[test]
 fn adaptive_pf_learns_radii_and_wheel_base_from_simulated_scans() {
     // One run per scenario, 120 s each as in `experiment montecarlo-scans`,
-    // true parameters drawn in seed 000's ranges (radii 0.305–0.335 m, wheel
+    // true parameters drawn in the ranges of [Farina] (radii 0.305–0.335 m, wheel
     // base 0.60–0.70 m).
     let settings = ScanMonteCarloParams::default();
     let configs: Vec<_> = table2_configs(&CalibParams::default())
@@ -250,7 +250,7 @@ fn experiment_changing_draws_run_0_over_time_with_the_particle_count() {
     fig5_fixed_count_baseline(&out.markdown, &v);
 }
 
-/// Seed 000's Fig. 5 baseline in `experiment changing`: the same filter with
+/// The baseline of [Farina, Fig. 5] in `experiment changing`: the same filter with
 /// N held at the paper's 3000 through the detector's restart, re-converged
 /// after the step, and the run drawn is the table's run 0.
 fn fig5_fixed_count_baseline(md: &str, v: &serde_json::Value) {
@@ -324,7 +324,7 @@ fn bundled_calibration(d: &std::path::Path, name: &str, icp: &str) -> [[f64; 2];
 
 #[test]
 fn thinned_scans_calibrate_the_chair_as_whole_ones_only_less_precisely() {
-    // README ("Speed against thinning"): every second beam of the scans being
+    // docs/performance.md ("Speed against thinning"): every second beam of the scans being
     // matched is a throughput setting whose cost shows in the spread, not in
     // the values. Against the simulator's final radii and wheel base.
     let d = crate::support::scratch("calib_thinned");

@@ -306,7 +306,7 @@ fn wheel_base_holds_still_where_it_is_unobservable() {
             d.truth.wheel_base,
             wander * 1e3
         );
-        // The fixed-noise `pf` (seed 000's σ = 0.5 mm per step on every
+        // The fixed-noise `pf` (σ = 0.5 mm of [Farina] per step on every
         // parameter) never settles D even while turning; it is held to a
         // looser bound than the filters that converge.
         let bound = if m == Method::Pf { 0.03 } else { 5e-3 };
@@ -317,15 +317,15 @@ fn wheel_base_holds_still_where_it_is_unobservable() {
     assert!(failed.is_empty(), "{failed:?}");
 }
 
-/// Seed 000's Table I on our data, small: the fixed PF with every
-/// resampling scheme and trigger on the same synthetic runs. The seed finds
+/// [Farina, Table I] on our data, small: the fixed PF with every
+/// resampling scheme and trigger on the same synthetic runs. \[Farina\] finds
 /// the four schemes close, the max-weight trigger the least accurate, and
 /// picks systematic + N_eff. Checked here: max-weight is the least accurate
 /// trigger for every scheme (its median radius error above both others'),
 /// and systematic + N_eff is as accurate as the best configuration within
 /// the run-to-run spread (its median radius error within 1.5× the best
 /// median). That systematic + N_eff is strictly the best does not hold on
-/// our data: the schemes tie (README, Table I).
+/// our data: the schemes tie (docs/results.md, "Resampling").
 #[test]
 fn a_small_table_i_keeps_the_seeds_findings() {
     use odocal::experiments::{montecarlo, table1_configs, MonteCarloParams};

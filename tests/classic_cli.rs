@@ -1,4 +1,4 @@
-//! `odocal experiment` for the literature comparison and the seed tables:
+//! `odocal experiment` for the literature comparison and the papers' published tables:
 //! files written, JSON keys, exit codes, determinism.
 
 use crate::support::{odocal, ok_json, scratch, shared_data};
@@ -141,7 +141,7 @@ fn experiment_literature_writes_every_method_side_by_side() {
             let e = none["param_errors"][k].as_f64().unwrap();
             assert!((e - (t - n).abs()).abs() < 1e-12, "{k}: {e}");
         }
-        // Seed 001's row applies an rpm correction fitted to its tachometer
+        // The row of [Paryanto] applies an rpm correction fitted to its tachometer
         // session: a line per wheel, close to 1 (these encoders count true
         // rotation) but not exactly (the tachometer has its own error).
         let tacho = &run["rows"][1]["details"]["tachometer"]["right"];
@@ -239,7 +239,7 @@ fn experiment_seed_tables_square_and_tachometer() {
     );
     assert!(after < 0.5 * before, "{before} -> {after}");
     // The square simulated with the fitted errors against its closed form:
-    // the chair driven exactly along the seed's 6 m square (left turns),
+    // the chair driven exactly along the 6 m square of [Paryanto] (left turns),
     // odometry with the nominal model (r 0.15 m, D 0.55 m).
     let fx = &v["fit"]["effects"];
     let (a, b, c) = (
@@ -284,7 +284,7 @@ fn experiment_seed_tables_square_and_tachometer() {
         "--json",
     ]));
     files(&out, "tachometer");
-    // Seed 001 publishes the gain rounded to one decimal: "a proportional
+    // [Paryanto] publishes the gain rounded to one decimal: "a proportional
     // gain of 3.2" (from its five 90° trials).
     let gain = v["heading_gain"]["gain"].as_f64().unwrap();
     assert!((gain - 3.2).abs() <= 0.05, "heading gain {gain}");

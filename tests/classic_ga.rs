@@ -20,7 +20,7 @@ fn recovered(what: &str, got: &TickParams, truth: &TickParams, believed: &TickPa
 #[test]
 fn ga_recovers_known_parameters_and_is_deterministic() {
     let tpr = 1000.0;
-    // The seed's AGV: its calibrated values as the hidden truth, believed mid-box.
+    // The AGV of [GAHeading]: its calibrated values as the hidden truth, believed mid-box.
     let truth = TickParams {
         k_left: 3.9447008587e-4,
         k_right: 3.9698427203e-4,

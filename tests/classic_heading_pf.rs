@@ -1,4 +1,4 @@
-//! Seed 002's heading-fusion particle filter on simulated irregular paths.
+//! The heading-fusion particle filter of \[GAHeading\] on simulated irregular paths.
 
 use odocal::classic::{
     drive_segments, heading_pf, irregular_path, simulate_heading, DriveParams, HeadingPfParams,

@@ -100,7 +100,7 @@ fn literature_methods_beat_no_calibration_and_filters_follow_a_load_change() {
         assert!(e.wheel_base < e0.wheel_base, "{m:?}: {e:?} vs {e0:?}");
         assert!(x.rmse_theta < none.rmse_theta, "{m:?}");
     }
-    // The Adaptive-PF ends within 0.4 mm of each true radius (seed 000:
+    // The Adaptive-PF ends within 0.4 mm of each true radius ([Farina, Table II]:
     // 1.9 mm; measured 0.08 and 0.06 mm), where the nominal ones are off
     // by 2.0 and 1.3 mm and fail the same check.
     let f = apf.final_params;

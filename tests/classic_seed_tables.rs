@@ -1,4 +1,5 @@
-//! Seed 001/002 tables through the seed-table reader and the classic methods.
+//! The published tables of \[Paryanto\] and \[GAHeading\] through the table
+//! reader and the classic methods.
 
 use crate::support::shared_data;
 use odocal::classic::{
@@ -14,9 +15,9 @@ fn table(test: &str, name: &str) -> Option<odocal::io::seed_tables::SeedTable> {
 }
 
 #[test]
-fn tachometer_fit_on_seed_001_table() {
+fn tachometer_fit_on_the_wheelchair_papers_table() {
     let Some(t) = table(
-        "tachometer_fit_on_seed_001_table",
+        "tachometer_fit_on_the_wheelchair_papers_table",
         "encoder_vs_tachometer.csv",
     ) else {
         return;
@@ -55,14 +56,17 @@ fn tachometer_fit_on_seed_001_table() {
                 <= c.right.residuals.iter().fold(0.0f64, |m, v| m.max(v.abs())) + 1e-9
         );
     }
-    // The seed's encoder chain resolves 0.02 rpm per 1 s period: quantisation
+    // The encoder chain of [Paryanto] resolves 0.02 rpm per 1 s period: quantisation
     // is far below the discrepancies in the table.
     assert!(EncoderChain::default().rpm_resolution() < 0.05);
 }
 
 #[test]
-fn heading_gain_on_seed_001_trials() {
-    let Some(t) = table("heading_gain_on_seed_001_trials", "heading_trials.csv") else {
+fn heading_gain_on_the_wheelchair_papers_trials() {
+    let Some(t) = table(
+        "heading_gain_on_the_wheelchair_papers_trials",
+        "heading_trials.csv",
+    ) else {
         return;
     };
     let g = fit_heading_gain(&heading_trials(&t).unwrap()).unwrap();
@@ -71,19 +75,22 @@ fn heading_gain_on_seed_001_trials() {
         g.gain, g.gain_stderr, g.gain_least_squares, g.per_trial, g.per_trial_std, g.max_abs_residual_deg
     );
     assert!((g.gain - 90.0 / 28.0).abs() < 1e-12);
-    assert!((g.gain - 3.2).abs() < 0.05, "the seed rounded to 3.2");
+    assert!((g.gain - 3.2).abs() < 0.05, "the paper rounded to 3.2");
     assert!((g.gain_least_squares - 90.0 * 140.0 / 4104.0).abs() < 1e-12);
     assert_eq!(g.trials, 5);
 }
 
 #[test]
-fn square_report_on_seed_001_table_iii() {
-    let Some(t) = table("square_report_on_seed_001_table_iii", "square_path.csv") else {
+fn square_report_on_the_wheelchair_papers_table_iii() {
+    let Some(t) = table(
+        "square_report_on_the_wheelchair_papers_table_iii",
+        "square_path.csv",
+    ) else {
         return;
     };
     let r = square_report(&square_corners(&t).unwrap()).unwrap();
     println!("{}", r.markdown());
-    // The seed's text: x error 0.47 m, y error 0.38 m at the return.
+    // The text of [Paryanto]: x error 0.47 m, y error 0.38 m at the return.
     assert!((r.closure_dx + 0.47).abs() < 1e-12 && (r.closure_dy - 0.38).abs() < 1e-12);
     assert!((r.closure_error - 0.47f64.hypot(0.38)).abs() < 1e-12);
     assert_eq!(r.actual_sides, vec![6.0; 4]);
@@ -91,7 +98,7 @@ fn square_report_on_seed_001_table_iii() {
     // The (6, 6) corner read (5.55, 5.5).
     assert!((r.corners[2].error - 0.45f64.hypot(0.5)).abs() < 1e-12);
 
-    // Which radius and wheel-base errors reproduce it? Seed 001's chair: 30 cm
+    // Which radius and wheel-base errors reproduce it? The chair of [Paryanto]: 30 cm
     // wheels; its wheel base is not stated, 0.55 m is assumed.
     let nominal = DiffDrive {
         r_right: 0.15,
@@ -116,8 +123,11 @@ fn square_report_on_seed_001_table_iii() {
 }
 
 #[test]
-fn seed_002_path_errors_parse_with_gaps() {
-    let Some(t) = table("seed_002_path_errors_parse_with_gaps", "ga_path_errors.csv") else {
+fn ga_heading_path_errors_parse_with_gaps() {
+    let Some(t) = table(
+        "ga_heading_path_errors_parse_with_gaps",
+        "ga_path_errors.csv",
+    ) else {
         return;
     };
     let rows = ga_path_errors(&t).unwrap();

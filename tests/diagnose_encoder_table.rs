@@ -1,4 +1,4 @@
-//! Seed 001's encoder-versus-tachometer table (Table I): a constant scale
+//! The encoder-versus-tachometer table of [Paryanto, Table I]: a constant scale
 //! against the speed-dependent encoder gain ω_meas = ω (1 + k |ω|), per wheel,
 //! by BIC. The numbers are checked against an independent closed-form
 //! computation of the same data (`tools/encoder_table_check.py`: numpy,
@@ -39,8 +39,8 @@ fn disagreements(ours: &Value, theirs: &Value) -> Vec<String> {
 }
 
 #[test]
-fn seed_001_encoder_table_right_wheel_prefers_speed_dependent_gain_left_a_constant_scale() {
-    let test = "seed_001_encoder_table";
+fn wheelchair_encoder_table_right_wheel_prefers_speed_dependent_gain_left_a_constant_scale() {
+    let test = "wheelchair_encoder_table";
     let Some(dir) = shared_data(test) else {
         return;
     };

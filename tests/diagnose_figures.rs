@@ -18,7 +18,7 @@ const SEEDS: u64 = 10;
 const MEDIAN_ERROR: f64 = 0.1;
 
 #[test]
-#[ignore = "long sweep; prints the README figures"]
+#[ignore = "long sweep; prints the figures of docs/results.md"]
 fn diagnose_figures() {
     let seeds = SEEDS;
     let mut rng = rand::rngs::StdRng::seed_from_u64(31337);

@@ -1,4 +1,4 @@
-//! The relation metric (Kümmerle et al. 2009) on the raw odometry of the
+//! The relation metric \[Kummerle2009\] on the raw odometry of the
 //! Freiburg SLAM benchmark logs reproduces the figures measured for it
 //! (/work/shared/data/slam-benchmark/reference.md, "raw odometry"), to the
 //! precision they are reported with.

@@ -1,6 +1,6 @@
 //! ICP on the Freiburg SLAM benchmark logs (shared real data), judged by the
-//! relation metric of Kümmerle et al. 2009 like the `odocal icp` + `odocal
-//! eval --relations` commands, against Censi's CSM (PL-ICP, scan to scan,
+//! relation metric of \[Kummerle2009\] like the `odocal icp` + `odocal
+//! eval --relations` commands, against Censi's CSM (PL-ICP \[Censi2008\], scan to scan,
 //! odometry as initial guess) and the raw odometry as measured on the same
 //! bags (/work/shared/data/slam-benchmark/reference.md): on the local
 //! relations (< 10 s apart) in translation and rotation, and on all of them.

@@ -25,6 +25,7 @@ mod diagnose_figures;
 mod diagnose_real;
 mod diagnose_sim;
 mod diagnose_synthetic;
+mod docs;
 mod eval_align;
 mod eval_evo;
 mod eval_inputs;

@@ -1,7 +1,7 @@
 //! Shared helpers for the integration tests.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The shared real-data folder: `$ODOCAL_DATA`, else `../shared/data` beside
 /// the crate. Outside CI a missing folder makes the calling test skip (and say
@@ -136,7 +136,7 @@ pub const CONVERGENCE_FACTORS: [f64; 5] = [0.8, 0.9, 1.0, 1.1, 1.2];
 /// what counts as measured) such differences decide between two outcomes.
 /// A figure that follows those pairs (long relations, a calibration from
 /// the door pairs of a corridor) then moves by far more than its members'
-/// differences (README, "Run to run"): asserted on one member it asserts
+/// differences (docs/results.md, "Run to run"): asserted on one member it asserts
 /// that draw, and any harmless change of the numerics flips it. Over the
 /// ensemble, its median (or mean) is what the method gives.
 pub fn convergence_ensemble() -> Vec<odocal::icp::IcpParams> {
@@ -148,4 +148,26 @@ pub fn convergence_ensemble() -> Vec<odocal::icp::IcpParams> {
             ..base.clone()
         })
         .collect()
+}
+
+/// Every file below `dir` (recursively) whose path `keep` accepts, skipping
+/// folders named `target`, `__pycache__` or starting with a dot; sorted.
+pub fn files_below(dir: &Path, keep: &dyn Fn(&Path) -> bool) -> Vec<PathBuf> {
+    fn walk(dir: &Path, keep: &dyn Fn(&Path) -> bool, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy();
+            if p.is_dir() {
+                if name != "target" && name != "__pycache__" && !name.starts_with('.') {
+                    walk(&p, keep, out);
+                }
+            } else if keep(&p) {
+                out.push(p);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(dir, keep, &mut out);
+    out.sort();
+    out
 }

@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
-"""README's generated tables, recomputed from odocal's own commands.
+"""The generated tables of docs/results/, recomputed from odocal's own commands.
 
-Each block of README.md between a line `<!-- figures: NAME -->` and the next
-`<!-- /figures -->` is what this script computes from the release binary, the
-bundled recording, the simulator and the real logs of the shared data folder:
+Each page docs/results/NAME.md is generated whole (its title, how the table is
+computed, the table between `<!-- figures: NAME -->` and `<!-- /figures -->`)
+from the release binary, the bundled recording, the simulator and the real logs
+of the shared data folder:
 
-  figures.py --check   exit 1 when a block differs from what the binary gives
+  figures.py --check   exit 1 when a page differs from what the binary gives
                        (the difference shown); the test command runs this
-  figures.py --write   rewrite the blocks in README.md (atomically)
-  figures.py --print   print the blocks
+  figures.py --write   rewrite the pages (atomically)
+  figures.py --print   print the pages
 
 Blocks (tools/figlib/; about 2 minutes on 2 cores, the slow ones only with --all
 or --only):
@@ -21,13 +22,13 @@ or --only):
   what-changed      the changes named at each firing on 25 simulated runs
   real-diagnosis    the diagnosis of the real recordings
   real-firings      the firings of the real recordings and the bundled one
-  table-ii-scans    seed 000's Table II on simulated scans through ICP, 30 runs
+  table-ii-scans    [Farina, Table II] on simulated scans through ICP, 30 runs
                     (slow: ~1.5 min; its time per step is not compared)
   blind-suite       the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
   fleet             a simulated fleet, 12 chairs over 10 days (slow: ~3 min)
 
 CSM's figures are recorded measurements (tools/figures_csm.json: Censi's
-PL-ICP built and run by tools/csm/, as README's Performance section says);
+PL-ICP built and run by tools/csm/, as docs/performance.md says);
 `--csm DIR` scores its trajectories DIR/LOG-F.tum (F = each bound's factor)
 with `odocal eval --relations` and records them again. odocal's figures are always
 computed afresh. Blocks that need the shared data (ODOCAL_DATA, default
@@ -35,24 +36,21 @@ computed afresh. Blocks that need the shared data (ODOCAL_DATA, default
 
 Options: --odocal BIN (default $ODOCAL_BIN or $CARGO_TARGET_DIR/release/odocal
 or target/release/odocal), --data DIR, --only NAME (repeatable), --jobs N.
-Prose that quotes these figures is not generated: --write says which blocks
-changed, so that the text around them can be read again.
+The manual's prose refers to these pages rather than quoting their numbers:
+--write says which pages changed.
 """
 import argparse
 import concurrent.futures
 import difflib
 import json
 import os
-import re
 import sys
 import tempfile
 
-from figlib import calibration, changes, diagnosis, scan_matching
+from figlib import calibration, changes, diagnosis, pages, scan_matching
 from figlib.common import ROOT, Runner, Skip, write_atomically
 
-README = os.path.join(ROOT, "README.md")
-BEGIN = re.compile(r"^<!-- figures: ([a-z0-9-]+) -->$")
-END = "<!-- /figures -->"
+RESULTS = os.path.join(ROOT, "docs", "results")
 
 # name: (how it is computed, whether it is slow: computed only with --all).
 BLOCKS = {
@@ -72,7 +70,7 @@ BLOCKS = {
 
 
 def volatile(row):
-    """Rows of timings: measured on a quiet machine (README says which), so
+    """Rows of timings: measured on a quiet machine (the page says so), so
     neither compared nor rewritten here."""
     return row.startswith("| time per step")
 
@@ -83,22 +81,6 @@ def merged(old, new):
     first = lambda row: row.split("|")[1].strip() if row.count("|") > 1 else row
     kept = {first(r): r for r in old if volatile(r)}
     return [kept.get(first(r), r) if volatile(r) else r for r in new]
-
-
-def blocks_of(text):
-    """{name: (first line index inside, end marker's index)} of README's
-    generated blocks; an unterminated or repeated block is an error."""
-    lines, found, i = text.split("\n"), {}, 0
-    while i < len(lines):
-        m = BEGIN.match(lines[i])
-        if m:
-            end = next((j for j in range(i + 1, len(lines)) if lines[j] == END), None)
-            if end is None or m.group(1) in found:
-                raise SystemExit(f"README.md line {i + 1}: block {m.group(1)} unterminated or repeated")
-            found[m.group(1)] = (i + 1, end)
-            i = end
-        i += 1
-    return lines, found
 
 
 def default_odocal():
@@ -132,42 +114,50 @@ def main():
         return regenerate(runner, a)
 
 
+def page_path(name):
+    return os.path.join(RESULTS, f"{name}.md")
+
+
+def read_page(name):
+    """The page's text, or "" when it does not exist yet."""
+    try:
+        with open(page_path(name)) as f:
+            return f.read()
+    except FileNotFoundError:
+        return ""
+
+
 def regenerate(runner, a):
-    with open(README) as f:
-        text = f.read()
-    lines, found = blocks_of(text)
     names = list(dict.fromkeys(a.only or sorted(n for n, (_, slow) in BLOCKS.items() if a.all or not slow)))
-    missing = [n for n in names if n not in found]
-    if missing:
-        raise SystemExit(f"README.md has no block {', '.join(missing)}")
     with open(scan_matching.CSM_FILE) as f:
         csm = json.load(f)
     changed, skipped = [], []
     # Every block started at once (each waits on its own runs in the pool).
     with concurrent.futures.ThreadPoolExecutor(max_workers=len(names)) as blocks:
         results = {n: blocks.submit(BLOCKS[n][0], runner, csm) for n in names}
-    for name in sorted(names, key=lambda n: -found[n][0]):
-        start, end = found[name]
+    for name in names:
         try:
-            new = results[name].result()
+            rows = results[name].result()
         except RuntimeError as e:
             raise SystemExit(f"figures {name}: {e}")
         except Skip as s:
             print(f"SKIP figures {name}: {s}", file=sys.stderr)
             skipped.append(name)
             continue
-        old = lines[start:end]
-        new = merged(old, new)
+        old = read_page(name)
+        rows = merged(pages.table_of(old, name) or [], rows)
+        new = pages.render(name, rows, BLOCKS[name][1])
         if a.print:
-            print(f"<!-- figures: {name} -->\n" + "\n".join(new) + f"\n{END}")
+            print(new)
         if new != old:
             changed.append(name)
+            rel = os.path.relpath(page_path(name), ROOT)
             sys.stderr.writelines(difflib.unified_diff(
-                [l + "\n" for l in old], [l + "\n" for l in new],
-                f"README.md ({name})", f"odocal ({name})"))
-            lines[start:end] = new
-    if a.write and changed:
-        write_atomically(README, "\n".join(lines))
+                old.splitlines(keepends=True), new.splitlines(keepends=True),
+                f"{rel} (as committed)", f"{rel} (odocal)"))
+            if a.write:
+                os.makedirs(RESULTS, exist_ok=True)
+                write_atomically(page_path(name), new)
     verdict = "differ" if a.check else "changed"
     print(f"figures: {len(names) - len(skipped)} blocks computed, {len(skipped)} skipped; "
           f"{verdict}: {', '.join(sorted(changed)) or 'none'}", file=sys.stderr)

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Every test suite: the Rust tests (`cargo test --release`), README's generated
-# tables recomputed with the release binary just built and
-# compared (tools/figures.py --check), then the Python package built from
-# python/ and installed into this Python, and its pytest suite (which compares
-# the package with that binary).
+# Every test suite: the Rust tests (`cargo test --release`), the generated
+# tables of docs/results/ recomputed with the release binary just built and
+# compared (tools/figures.py --check), the API documentation built with
+# warnings as errors (cargo doc), then the Python package built from python/
+# and installed into this Python, and its pytest suite (which compares the
+# package with that binary).
 # Extra arguments go to `cargo test`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,9 +13,17 @@ PY="${ODOCAL_PYTHON:-python3}"
 echo "== Rust: cargo test --release $*"
 cargo test --release "$@"
 
-echo "== README's generated tables against this build (tools/figures.py --check)"
+echo "== docs/results/ generated tables against this build (tools/figures.py --check)"
 export ODOCAL_BIN="${CARGO_TARGET_DIR:-target}/release/odocal"
 "$PY" tools/figures.py --check --odocal "$ODOCAL_BIN"
+
+echo "== API documentation: cargo doc --no-deps (warnings are errors)"
+# The same features as the tests above (a --no-default-features run documents without Rerun).
+DOC_FEATURES=()
+for a in "$@"; do
+  case "$a" in --no-default-features | --all-features | --features=*) DOC_FEATURES+=("$a") ;; esac
+done
+RUSTDOCFLAGS="${RUSTDOCFLAGS:-} -Dwarnings" cargo doc --no-deps "${DOC_FEATURES[@]}"
 
 echo "== Python package: build and install python/ (maturin)"
 "$PY" -m pip --version >/dev/null

@@ -1,4 +1,4 @@
-//! The Adaptive-PF rules (seed 000, section V): the particle count follows the
+//! The Adaptive-PF rules [Farina, Sec. V]: the particle count follows the
 //! dispersion of the radius particles, and the process noise follows the
 //! disagreement between measured and predicted velocities. KLD-sampling
 //! (Fox 2001) is offered as a second count rule.
@@ -33,7 +33,7 @@ pub enum CountRule {
 pub struct AdaptiveParams {
     /// Count rule used by the `adaptive-pf` method.
     pub rule: CountRule,
-    /// Radius dispersion per particle, in wheel radii: [Farina]'s "one
+    /// Radius dispersion per particle, in wheel radii: \[Farina\]'s "one
     /// particle per 0.01 mm" on its 0.32 m wheels (3.125·10⁻⁵).
     pub per_particle: f64,
     /// How many standard deviations of a radius make its dispersion (the

@@ -87,7 +87,7 @@ impl Calibrator for AugmentedKf {
             let pt = self.p.fixed_view::<3, 3>(2, 2).into_owned();
             c.observe(s, &theta, &pt, obs, (self.floor, self.dof), model_var);
         }
-        // Update: one scalar update per usable measurement (Joseph form).
+        // Update: one scalar update per usable measurement (Joseph form [BucyJoseph1968]).
         for m in s.measurements().iter().filter(|m| usable(m)) {
             let k = match m.kind {
                 Kind::V => 0,

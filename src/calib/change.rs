@@ -1,7 +1,7 @@
 //! Change detection for the online filters: a windowed score test (Rao's
 //! test) that the velocity measurements of the last few seconds still agree
-//! with the filter's parameter belief. When a new user boards (seed 000, Fig. 6b) the
-//! radii jump by millimetres; seed 000's process-noise rule (eq. 11, with
+//! with the filter's parameter belief. When a new user boards ([Farina, Fig. 6b]) the
+//! radii jump by millimetres; the process-noise rule of [Farina, eq. 11] (with
 //! α = 1e-4) then grows only to micrometres per step and cannot follow. The
 //! test turns the same disagreement into a decision: when it fires, the
 //! particle filter re-inflates the spread and count of its particles, and
@@ -31,12 +31,12 @@ use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Settings of the change detector (used by `adaptive-pf`, and by `dkf` and
-/// `akf` when `kalman` is set; the fixed `pf` is seed 000's plain filter and
+/// `akf` when `kalman` is set; the fixed `pf` is the plain filter of \[Farina\] and
 /// has none).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ChangeParams {
-    /// Whether the detector runs (false: seed 000's rules alone).
+    /// Whether the detector runs (false: the rules of \[Farina\] alone).
     pub enabled: bool,
     /// Whether the Kalman filters (`dkf`, `akf`) run it too (default: the
     /// same detector for every method). Their robust likelihood takes a

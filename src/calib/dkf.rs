@@ -1,4 +1,4 @@
-//! Dual Kalman filter (Wan & Nelson): a state filter on [V, W] that predicts
+//! Dual Kalman filter \[WanNelson1997\]: a state filter on [V, W] that predicts
 //! with the parameter filter's latest estimate, and a parameter filter on
 //! [R_R, R_L, D] that takes the state filter's latest estimate as its
 //! measurement, with the state's variance plus the velocity model's own

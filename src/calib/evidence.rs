@@ -5,8 +5,8 @@
 //!
 //! The wiring test regresses the measured W on the wheel rates,
 //! W ≈ a·ω_R + b·ω_L, and the measured V likewise, V ≈ c·ω_R + d·ω_L. The
-//! model W = (R_R ω_R − R_L ω_L)/D, V = (R_R ω_R + R_L ω_L)/2 (seed 000,
-//! Eq. 1) wants a > 0 > b and c, d > 0; swapped joints flip a and b, an
+//! model W = (R_R ω_R − R_L ω_L)/D, V = (R_R ω_R + R_L ω_L)/2 ([Farina,
+//! eq. 3]) wants a > 0 > b and c, d > 0; swapped joints flip a and b, an
 //! encoder counting backwards flips its own wheel's pair.
 
 use super::steps::{CalibStep, Kind};
@@ -132,7 +132,7 @@ impl Evidence {
     }
 
     /// Reduced χ² of V and of W against the best fixed linear law of the
-    /// wheel rates (see [`Normal2::reduced_chi2`]).
+    /// wheel rates (see `Normal2::reduced_chi2`).
     pub fn fit_chi2(&self) -> [Option<f64>; 2] {
         [self.v.reduced_chi2(), self.w.reduced_chi2()]
     }

@@ -13,7 +13,7 @@ const LANES: usize = 4;
 /// Smallest value a radius or wheel base may take (m).
 pub(crate) const MIN_LENGTH: f64 = 1e-6;
 
-/// Inputs of the fused predict-and-weigh pass (seed 000, eq. 2–4).
+/// Inputs of the fused predict-and-weigh pass [Farina, eqs. 2–4].
 pub(crate) struct Predict<'a> {
     pub rr: &'a mut [f64],
     pub rl: &'a mut [f64],
@@ -331,7 +331,7 @@ fn summarize_impl(a: Summarize<'_>) -> Sums {
 }
 
 /// Inputs of the resampling move: particle k takes ancestor `anc[k]`'s
-/// parameters θ and becomes `max(a·θ + c + L·ε_k, MIN_LENGTH)` (Liu–West;
+/// parameters θ and becomes `max(a·θ + c + L·ε_k, MIN_LENGTH)` (\[LiuWest2001\];
 /// `l` = the lower triangle of L row by row, `ε_k` from `e`).
 pub(crate) struct GatherMove<'a> {
     pub anc: &'a [usize],

@@ -1,6 +1,6 @@
 //! Online odometry calibration: estimate the wheel radii R_R, R_L and the
 //! wheel base D of a differential drive from wheel rates and measured body
-//! velocities (ICP, gyro). Seed 000's Adaptive-PF, a fixed particle filter,
+//! velocities (ICP, gyro). The Adaptive-PF of \[Farina\], a fixed particle filter,
 //! Kalman baselines (dual and augmented) and the nominal model share one
 //! [`Calibrator`] trait; [`run`] drives any of them over aligned [`steps`].
 

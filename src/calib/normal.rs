@@ -1,9 +1,9 @@
 //! The inverse of the standard normal CDF (quantile function), for
-//! KLD-sampling's `z_{1−δ}` (Fox 2001). Acklam's rational approximation
-//! (relative error < 1.2e-9) refined by one Halley step on an accurate
+//! KLD-sampling's `z_{1−δ}` \[Fox2001\]. Acklam's rational approximation
+//! \[Acklam2003\] (relative error < 1.2e-9) refined by one Halley step on an accurate
 //! complementary error function, giving about 1e-15.
 
-// Coefficients as published (Acklam, Cody).
+// Coefficients as published [Acklam2003; Cody1969].
 #![allow(clippy::excessive_precision)]
 
 /// `Φ⁻¹(p)` for `p ∈ (0, 1)`; −∞ at 0, +∞ at 1, NaN outside.

@@ -1,5 +1,5 @@
 //! Configuration of a calibration run: method, resampling, particles, seed,
-//! initial ranges and noise, with the defaults of [Farina]; and what each
+//! initial ranges and noise, with the defaults of \[Farina\]; and what each
 //! filter is built from ([`PfSettings`], [`KalmanSettings`]): only its own
 //! settings, in the robot's units.
 //!
@@ -8,7 +8,7 @@
 //! forward speed's model σ) are configured in wheel radii: a filter built
 //! for a robot multiplies them by the mean radius it starts from, so the
 //! same settings serve a 20 mm and a 320 mm wheel. The defaults are
-//! [Farina]'s metres on its 0.32 m wheels, divided by 0.32.
+//! \[Farina\]'s metres on its 0.32 m wheels, divided by 0.32.
 
 use super::adaptive::AdaptiveParams;
 use super::change::{ChangeParams, DetectorParams};
@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 /// Most particles a filter may be asked for (`--particles`, `adaptive.n_max`).
 pub const MAX_PARTICLES: usize = 1_000_000;
 
-/// The wheel radius (m) of [Farina]'s wheelchair, the unit its printed
+/// The wheel radius (m) of \[Farina\]'s wheelchair, the unit its printed
 /// noise values are in.
 pub const PAPER_RADIUS_M: f64 = 0.32;
 
@@ -37,7 +37,7 @@ pub enum Preset {
     /// odocal's filters: the settings as configured.
     #[default]
     Odocal,
-    /// [Farina]'s Adaptive-PF as published: no Liu–West move
+    /// \[Farina\]'s Adaptive-PF as published: no Liu–West move
     /// (`kernel_shrink` = 1), no model σ, no Student-t likelihood, no change
     /// detector, no observability scaling of D's noise, eq. 11 on the
     /// instantaneous residuals in its printed form (m/s and rad/s added),
@@ -145,12 +145,12 @@ impl Ranges {
 #[serde(default, deny_unknown_fields)]
 pub struct NoiseParams {
     /// σ of the Gaussian random walk on R_R, R_L, D, in wheel radii per √s
-    /// (a step of dt draws σ·√dt): the fixed PF's process noise ([Farina]:
+    /// (a step of dt draws σ·√dt): the fixed PF's process noise (\[Farina\]:
     /// 0.0005 m per 0.02 s iteration on 0.32 m wheels) and the Adaptive-PF's
     /// σ until its first measurement.
     pub param_sigma: f64,
     /// Half-width of the uniform jitter on each particle's V (m/s) and W
-    /// (rad/s) after prediction (seed 000 mentions such jitter without a
+    /// (rad/s) after prediction ([Farina, Sec. III] mentions such jitter without a
     /// value; 0 = none, which only removes noise from the weights).
     pub velocity_jitter: f64,
     /// Measurement σ below this (m/s or rad/s), including σ = 0, is clamped
@@ -159,7 +159,7 @@ pub struct NoiseParams {
     /// σ of the velocity model itself, in wheel radii per second (× the
     /// radius: m/s): added in quadrature to every V measurement's σ
     /// (encoder quantisation, slip, timing), the analytic form of
-    /// [Farina]'s jitter on V. The Kalman baselines use the same model
+    /// \[Farina\]'s jitter on V. The Kalman baselines use the same model
     /// noise: the AKF as the process noise of V, the DKF in its parameter
     /// filter's measurement variance.
     pub model_sigma_v: f64,
@@ -245,13 +245,13 @@ pub struct CalibParams {
     pub resampler: Scheme,
     /// When the particle filters resample.
     pub trigger: Trigger,
-    /// Initial particle count; `None` = seed 000's 5000 (pf) or 8000 (adaptive-pf).
+    /// Initial particle count; `None` = the 5000 (pf) or 8000 (adaptive-pf) of \[Farina\].
     pub particles: Option<usize>,
     /// Seed of every random draw (same seed, same numbers).
     pub seed: u64,
     /// Which form of the filters runs.
     pub preset: Preset,
-    /// Initial uniform ranges of R_R, R_L, D; `None`: [Farina]'s
+    /// Initial uniform ranges of R_R, R_L, D; `None`: \[Farina\]'s
     /// wheelchair ranges for a filter built alone, and for `calibrate`
     /// where the online front end starts the filters ([`super::online`]).
     pub ranges: Option<Ranges>,
@@ -261,7 +261,7 @@ pub struct CalibParams {
     pub adaptive: AdaptiveParams,
     /// Adaptive-PF change detector (re-convergence after a radius jump).
     pub change: ChangeParams,
-    /// N_eff trigger threshold as a fraction of N (seed 000: 0.5).
+    /// N_eff trigger threshold as a fraction of N ([Farina, Sec. IV]: 0.5).
     pub neff_ratio: f64,
     /// Max-weight trigger threshold as a multiple of 1/N.
     pub max_weight_factor: f64,
@@ -297,13 +297,13 @@ impl Default for CalibParams {
 }
 
 impl CalibParams {
-    /// The initial ranges: as configured, else [Farina]'s wheelchair's.
+    /// The initial ranges: as configured, else \[Farina\]'s wheelchair's.
     pub fn ranges(&self) -> Ranges {
         self.ranges.clone().unwrap_or_default()
     }
 
     /// These settings with the preset applied: [`Preset::Published`]
-    /// switches every departure from [Farina] off.
+    /// switches every departure from \[Farina\] off.
     pub fn with_preset(&self) -> Self {
         let mut p = self.clone();
         if p.preset == Preset::Published {

@@ -1,4 +1,4 @@
-//! The particle-filter calibrator (seed 000, section III), optionally with the
+//! The particle-filter calibrator [Farina, Sec. III], optionally with the
 //! Adaptive-PF rules of section V and a change detector. Particles are stored
 //! as a structure of arrays; one step is a fused predict-and-reweight pass,
 //! two normalise-and-summarise passes (register-sized, so they stay
@@ -290,7 +290,7 @@ impl ParticleFilter {
         });
         let mut mx = out.max;
         if self.jitter > 0.0 {
-            // Seed 000's uniform jitter on V and W (off by default), applied
+            // The uniform jitter on V and W of [Farina] (off by default), applied
             // before the likelihood, which the loop above then left out.
             let j = self.jitter;
             let (lw, _) = self.weights.parts_mut();
@@ -408,7 +408,7 @@ impl ParticleFilter {
 
     /// Resamples `n_new` particles and moves their parameters in the same
     /// pass: with `spread` (a detected change) by independent Gaussian
-    /// jitter of those σ (m); otherwise by the Liu–West kernel (see
+    /// jitter of those σ (m); otherwise by the Liu–West kernel \[LiuWest2001\] (see
     /// `NoiseParams::kernel_shrink`) around the pre-resampling belief, whose
     /// mean and covariance it preserves.
     fn resample(&mut self, n_new: usize, spread: Option<[f64; 3]>) {

@@ -1,6 +1,6 @@
 //! Resampling schemes with one contract: normalised weights in, ancestor
 //! indices out. All four end in one shared inverse CDF over sorted uniforms,
-//! so each is O(N) (seed 000, section IV.B; Chopin's `particles` layout).
+//! so each is O(N) ([Farina, Sec. IV.B]; the layout of Chopin's `particles` \[Chopin2020\]).
 
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, Exp1};

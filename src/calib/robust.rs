@@ -6,7 +6,7 @@
 /// Precision scale of one measurement under a Student-t likelihood with `dof`
 /// degrees of freedom, given its normalised innovation squared `nis = ν²/S`
 /// against the filter's prediction: the variational-Bayes weight
-/// `(dof + 1)/(dof + nis)` (Piché, Särkkä, Hartikainen 2012), capped at 1 so
+/// `(dof + 1)/(dof + nis)` \[Piche2012\], capped at 1 so
 /// that inliers keep the full Gaussian precision and only outliers (scan
 /// matching failures) lose weight. `dof = 0` (or a non-finite `nis`) gives 1.
 pub fn student_t_weight(nis: f64, dof: f64) -> f64 {

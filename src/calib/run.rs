@@ -100,7 +100,7 @@ pub struct CalibSummary {
     pub changes: Vec<crate::diagnose::onset::NamedChange>,
 }
 
-/// Result of [`run`].
+/// Result of [`crate::calib::run()`].
 #[derive(Debug, Clone)]
 pub struct CalibrationRun {
     /// Summary (serialises to design.md's keys).

@@ -135,7 +135,7 @@ fn gaps(ev: &Evidence, d0: f64, p: &CheckParams) -> Gaps {
 /// When V (for the radii) or V and W (for the wheel base) scatter about the
 /// best fixed law of the wheel rates far more than their σ allow, the
 /// filters' std, which trusts those σ, is too small: it is widened by
-/// √χ² (the Birge ratio of a least-squares fit) and the reason stated.
+/// √χ² (the Birge ratio \[Birge1932\] of a least-squares fit) and the reason stated.
 fn misfit(ev: &Evidence, p: &CheckParams) -> [Option<(String, f64)>; 2] {
     let [v, w] = ev.fit_chi2().map(|c| c.unwrap_or(1.0));
     let why = |what: &str, chi2: f64| {

@@ -127,7 +127,7 @@ impl SynthData {
     }
 }
 
-/// Draws true parameters: radii uniform in seed 000's [0.305, 0.335] m, wheel
+/// Draws true parameters: radii uniform in the [0.305, 0.335] m of \[Farina\], wheel
 /// base uniform in [0.60, 0.70] m.
 pub fn draw_truth(seed: u64) -> DiffDrive {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x7275_7468);

@@ -1,4 +1,4 @@
-//! When to resample, kept apart from how (seed 000, section IV.C).
+//! When to resample, kept apart from how [Farina, Sec. IV.C].
 
 use super::weights::Weights;
 use serde::{Deserialize, Serialize};

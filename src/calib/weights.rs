@@ -136,7 +136,7 @@ impl Weights {
         &self.norm
     }
 
-    /// Effective sample size `N_eff = 1 / Σ ρ_i²` (seed 000, eq. 10).
+    /// Effective sample size `N_eff = 1 / Σ ρ_i²` [Farina, eq. 10].
     pub fn ess(&self) -> f64 {
         self.ess
     }

@@ -1,4 +1,4 @@
-//! Seed 001's encoder chain: an incremental encoder (600 pulses/rev) driven by
+//! The encoder chain of \[Paryanto\]: an incremental encoder (600 pulses/rev) driven by
 //! the wheel through a 20:100 timing belt, read once per update period; the
 //! microcontroller turns the pulse count of a period into an rpm reading.
 
@@ -21,7 +21,7 @@ pub struct EncoderChain {
 }
 
 impl Default for EncoderChain {
-    /// Seed 001: 600 pulses/rev, 20-tooth encoder pulley, 100-tooth wheel
+    /// \[Paryanto\]: 600 pulses/rev, 20-tooth encoder pulley, 100-tooth wheel
     /// pulley (encoder turns 5× per wheel turn), 1 s update period.
     fn default() -> Self {
         Self {

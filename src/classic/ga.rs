@@ -1,10 +1,10 @@
-//! Seed 002's offline calibration: a genetic algorithm fits `[k1, k2, b]`
+//! The offline calibration of \[GAHeading\]: a genetic algorithm fits `[k1, k2, b]`
 //! (metres per encoder pulse of the left and right rear wheel, wheel base) so
 //! that short runs (1.5–3 m), replayed from their pulse counts, end where they
 //! were measured to end. The rear-axle model is the same for a differential
 //! drive and for a tricycle whose rear wheels carry the encoders.
 //!
-//! The GA follows the seed's Table 1 with MATLAB `ga` semantics: population 50,
+//! The GA follows [GAHeading, Table 1] with MATLAB `ga` semantics: population 50,
 //! rank fitness scaling, roulette selection, 2 elites, crossover fraction 0.8
 //! with scattered crossover, Gaussian mutation whose σ shrinks linearly to 0
 //! over the generations, 150 generations, bounds enforced by clamping.
@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
-/// The seed's parameters: metres per pulse of each wheel and the wheel base.
+/// The parameters of \[GAHeading\]: metres per pulse of each wheel and the wheel base.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TickParams {
     /// k1: left wheel travel per pulse (m).
@@ -76,7 +76,7 @@ pub struct GaBounds {
 }
 
 impl Default for GaBounds {
-    /// Seed 002's restrictions: 3.0e-4 < k < 4.5e-4 m/pulse, 0.35 < b < 0.39 m.
+    /// The restrictions of [GAHeading, Table 1]: 3.0e-4 < k < 4.5e-4 m/pulse, 0.35 < b < 0.39 m.
     fn default() -> Self {
         Self {
             k_min: 3.0e-4,
@@ -107,7 +107,7 @@ impl GaBounds {
     }
 }
 
-/// GA settings (seed 002, Table 1).
+/// GA settings ([GAHeading, Table 1]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct GaParams {
@@ -134,7 +134,7 @@ pub struct GaParams {
 impl Default for GaParams {
     /// 50 individuals, 2 elites, 0.8 crossover, 150 generations, mutation σ
     /// 0.1 × the bound range shrinking to 0, heading weight 1 m/rad, seed 1.
-    /// The seed does not state σ; MATLAB's default (1 × range) leaves 0.2–1 %
+    /// \[GAHeading\] does not state σ; MATLAB's default (1 × range) leaves 0.2–1 %
     /// parameter errors on noise-free runs, 0.1 × range about 0.01–0.03 %.
     fn default() -> Self {
         Self {
@@ -186,9 +186,9 @@ impl GaRun {
     }
 }
 
-/// Replays pulse increments with the seed's model (eqs. 1–7): Δs = pulses · k,
+/// Replays pulse increments with the model of [GAHeading, eqs. 1–7]: Δs = pulses · k,
 /// Δθ = (Δs_r − Δs_l)/b, advance (Δs_r + Δs_l)/2 along the mid-step heading.
-/// The seed measures θ from the y axis; this is the same model in REP 103.
+/// \[GAHeading\] measures θ from the y axis; this is the same model in REP 103.
 pub fn replay_ticks(p: &TickParams, ticks: &[(f64, f64)], start: &Pose2) -> Pose2 {
     let [mut x, mut y, mut th] = geom::xyt(start);
     for &(pl, pr) in ticks {

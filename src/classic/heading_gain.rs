@@ -1,8 +1,8 @@
-//! Seed 001's heading gain: turn the robot by a known angle several times,
+//! The heading gain of \[Paryanto\]: turn the robot by a known angle several times,
 //! compare with the heading its odometry estimates, and scale the estimated
 //! heading change by `gain`. Equivalent to dividing the wheel base by `gain`.
 //!
-//! Two estimators: the seed's ratio of means, `mean(actual)/mean(estimated)`
+//! Two estimators: the ratio of means of \[Paryanto\], `mean(actual)/mean(estimated)`
 //! (90/28 = 3.21 on its data, rounded to 3.2), and least squares through the
 //! origin, `Σ a·e / Σ e²`, which weights the larger estimates more.
 
@@ -23,7 +23,7 @@ pub struct HeadingTrial {
 pub struct HeadingGain {
     /// Number of trials.
     pub trials: usize,
-    /// mean(actual)/mean(estimated): the seed's estimator and the one applied.
+    /// mean(actual)/mean(estimated): the estimator of \[Paryanto\] and the one applied.
     pub gain: f64,
     /// Least squares through the origin: Σ a·e / Σ e².
     pub gain_least_squares: f64,

@@ -1,4 +1,4 @@
-//! Seed 002's operation stage: a particle filter over the pose (x, y, θ)
+//! The operation stage of \[GAHeading\]: a particle filter over the pose (x, y, θ)
 //! propagated with calibrated odometry increments and weighted by an absolute
 //! heading source (a camera's yaw, an IMU's integrated heading). Its figure of
 //! merit is the end-position error as a percentage of the path length.

@@ -1,4 +1,4 @@
-//! What seed 000's filters measure on a simulated run: scan-matching-like body
+//! What the filters of \[Farina\] measure on a simulated run: scan-matching-like body
 //! velocities with a per-pair σ (the noise level of odocal's ICP on the
 //! LMS111) and a gyro, derived from the true motion. The classic runs carry
 //! only wheels and truth; these streams let the Adaptive-PF and the DKF

@@ -1,7 +1,7 @@
 //! The calibration systems of the literature that odocal compares against:
-//! the encoder/tachometer chain and heading gain of seed 001, the 6 m square
-//! test, UMBmark (Borenstein & Feng 1996), the genetic-algorithm calibration
-//! and heading-fusion particle filter of seed 002, and the robot that drives
+//! the encoder/tachometer chain and heading gain of \[Paryanto\], the 6 m square
+//! test, UMBmark \[Borenstein1996\], the genetic-algorithm calibration
+//! and heading-fusion particle filter of \[GAHeading\], and the robot that drives
 //! their runs by its own odometry.
 //!
 //! Pure math on the core robot model: nothing here reads or writes files.

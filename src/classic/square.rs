@@ -1,4 +1,4 @@
-//! Seed 001's square test (its Table III): the corners of a square path as
+//! The square test of [Paryanto, Table III]: the corners of a square path as
 //! estimated by odometry next to the actual corners; corner errors and the
 //! closure error at the return to the start.
 
@@ -113,7 +113,7 @@ pub fn square_report(corners: &[SquareCorner]) -> Result<SquareReport, ClassicEr
 }
 
 impl SquareReport {
-    /// The report as a markdown table in the layout of seed 001's Table III,
+    /// The report as a markdown table in the layout of [Paryanto, Table III],
     /// with the errors added.
     pub fn markdown(&self) -> String {
         let mut s = String::from(

@@ -1,5 +1,5 @@
-//! Which effects reproduce a measured square (seed 001's Table III)? The
-//! robot is taken to have driven the actual square exactly (the seed's chair
+//! Which effects reproduce a measured square ([Paryanto, Table III])? The
+//! robot is taken to have driven the actual square exactly (the chair of \[Paryanto\]
 //! was guided along it), while its odometry used the nominal model; the
 //! `radius_scale` and `wheel_base_scale` magnitudes whose simulated odometry
 //! corners best match the measured ones are found by least squares

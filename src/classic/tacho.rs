@@ -1,4 +1,4 @@
-//! Seed 001's tachometer calibration: each wheel's encoder rpm against a laser
+//! The tachometer calibration of \[Paryanto\]: each wheel's encoder rpm against a laser
 //! tachometer, fitted per wheel as `true = slope · encoder + intercept`
 //! (least squares, encoder reading as regressor), then applied to encoder rates.
 

@@ -1,4 +1,4 @@
-//! Seed 001's tachometer session, simulated: the chair's wheels are spun at a
+//! The tachometer session of \[Paryanto\], simulated: the chair's wheels are spun at a
 //! few steady speeds, the encoder chain's rpm reading is written down beside a
 //! laser tachometer's. The tachometer is an independent instrument with its
 //! own error — a scale error drawn once per session (its calibration), a

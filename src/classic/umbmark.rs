@@ -1,4 +1,4 @@
-//! UMBmark (Borenstein & Feng 1996): five clockwise and five counter-clockwise
+//! UMBmark \[Borenstein1996\]: five clockwise and five counter-clockwise
 //! square runs of side L, driven by odometry; the end-position errors separate
 //! a wheel-base error (type A, same in both directions) from unequal wheel
 //! diameters (type B, opposite), and give correction factors for both.
@@ -136,7 +136,7 @@ pub fn umbmark(
     let r_ccw = cg_ccw[0].hypot(cg_ccw[1]);
     let l = side;
     let b = model.wheel_base;
-    // Borenstein & Feng eqs. 6.1, 6.2 (radians here).
+    // [Borenstein1996, eqs. 6.1, 6.2] (radians here).
     let alpha = (cg_cw[0] + cg_ccw[0]) / (-4.0 * l);
     let beta = (cg_cw[0] - cg_ccw[0]) / (-4.0 * l);
     let (radius, e_d) = if beta.abs() < 1e-12 {

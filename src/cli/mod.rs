@@ -25,6 +25,10 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Experiment(a) => experiment(a),
         Command::Inspect(a) => inspect(a),
         Command::Fleet(a) => fleet::run(a),
+        Command::HelpMarkdown => {
+            print!("{}", args::reference_markdown());
+            Ok(())
+        }
     }
 }
 

@@ -1,4 +1,4 @@
-//! Encoder-versus-tachometer tables (seed 001, Table I): per wheel, does a
+//! Encoder-versus-tachometer tables ([Paryanto, Table I]): per wheel, does a
 //! constant scale (ω_meas = s ω) or the speed-dependent gain of the effect
 //! table (ω_meas = ω (1 + k |ω|)) explain the readings better, by BIC?
 

@@ -1,6 +1,7 @@
-//! Weighted nonlinear least squares (Levenberg–Marquardt, central-difference
-//! Jacobian) of the free parameters of a set of effects, with per-stream σ
-//! scales profiled out, parameter standard errors from (JᵀWJ)⁻¹ and BIC.
+//! Weighted nonlinear least squares (Levenberg–Marquardt [Levenberg1944;
+//! Marquardt1963], central-difference Jacobian) of the free parameters of a
+//! set of effects, with per-stream σ scales profiled out, parameter standard
+//! errors from (JᵀWJ)⁻¹ and BIC \[Schwarz1978\].
 
 use super::data::Part;
 use super::free::{dof, free_params, free_steps, with_free};
@@ -21,7 +22,7 @@ pub struct Fit {
     /// Profiled σ scale per group: √(rss/n), the factor by which the given σ
     /// under- (>1) or over-states (<1) the residual noise.
     pub scale: [f64; 4],
-    /// Bayesian information criterion (profiled per-group σ).
+    /// Bayesian information criterion \[Schwarz1978\] (profiled per-group σ).
     pub bic: f64,
     /// Whether JᵀWJ was well conditioned (every parameter identifiable).
     pub identifiable: bool,

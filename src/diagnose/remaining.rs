@@ -7,8 +7,8 @@
 //!
 //! Scan matching errors are not white: consecutive pairs share a scan (their
 //! errors are anti-correlated) and a place's geometry biases every pair
-//! matched there (errors correlated over seconds). Newey & West (1987,
-//! Econometrica 55(3) 703–708, Eq. 2, Bartlett weights) make each test valid
+//! matched there (errors correlated over seconds). Newey–West standard errors
+//! ([NeweyWest1987, eq. 2], Bartlett weights) make each test valid
 //! under that serial correlation, and a structure is only reported when its
 //! size also exceeds what scan matching leaves on recordings without any
 //! effect ([`Floors`], measured on null runs through the simulator and ICP).
@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 
 /// The sizes below which a structure is not reported, whatever its
 /// p-value: what scan matching itself leaves on null recordings, as a
-/// fraction of the motion (see [`relative`]). Measured with `odocal
+/// fraction of the motion (see `relative`). Measured with `odocal
 /// experiment diagnose` on null runs of every scenario (ICP scan to scan on
 /// the LMS111 wheelchair): the largest seen there, with a margin of about
 /// half as much again. ICP's forward velocity is the least trustworthy

@@ -1,5 +1,5 @@
 //! Small statistics used by the diagnosis: normal and χ² tail probabilities,
-//! the Ljung–Box whiteness test, a linear trend test, cross-correlation and
+//! the Ljung–Box whiteness test \[LjungBox1978\], a linear trend test, cross-correlation and
 //! robust centre and scale.
 
 use serde::Serialize;
@@ -30,7 +30,7 @@ pub fn normal_two_sided(z: f64) -> f64 {
     erfc(z.abs() / std::f64::consts::SQRT_2).min(1.0)
 }
 
-/// Upper tail P(χ²_k > q) by the Wilson–Hilferty cube-root approximation
+/// Upper tail P(χ²_k > q) by the Wilson–Hilferty cube-root approximation \[WilsonHilferty1931\]
 /// (accurate to a few per cent of the p-value for k ≥ 1 in the far tail).
 pub fn chi2_sf(q: f64, k: usize) -> f64 {
     if q.is_nan() || q <= 0.0 || k == 0 {

@@ -1,6 +1,6 @@
 //! Absolute pose error, as evo's `metrics.APE`: translation part ‖t_est − t_ref‖
 //! (m) and rotation angle of inv(est) ⊕ ref (rad, deg), each summarised by
-//! [`Stats`]; also the seed-000 RMSE x,y and RMSE θ.
+//! [`Stats`]; also the RMSE x,y and RMSE θ of [Farina, Table II].
 
 use super::stats::Stats;
 use super::sync::Matched;
@@ -24,9 +24,9 @@ pub struct Ape {
     pub rot_rad: Stats,
     /// Rotation angle statistics (deg), evo `-r angle_deg`.
     pub rot_deg: Stats,
-    /// sqrt(mean(Δx² + Δy²)) (m): seed 000's RMSE x,y.
+    /// sqrt(mean(Δx² + Δy²)) (m): the RMSE x,y of [Farina, Table II].
     pub rmse_xy: f64,
-    /// sqrt(mean(wrap(yaw_est − yaw_ref)²)) (rad): seed 000's RMSE θ.
+    /// sqrt(mean(wrap(yaw_est − yaw_ref)²)) (rad): the RMSE θ of [Farina, Table II].
     pub rmse_theta: f64,
     /// Per-pair translation error (m), in pair order.
     pub trans_errors: Vec<f64>,

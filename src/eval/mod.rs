@@ -1,10 +1,10 @@
 //! Trajectory evaluation against a reference, with evo's definitions
-//! (github.com/MichaelGrupp/evo, 1.38): time association, Umeyama alignment,
+//! (\[Grupp2017\], github.com/MichaelGrupp/evo, 1.38): time association, Umeyama alignment,
 //! absolute and relative pose errors; plus the papers' figures (RMSE x,y and θ,
 //! drift in % of distance travelled, final-position error) and the relation
-//! metric of Kümmerle et al. 2009.
+//! metric of \[Kummerle2009\].
 //!
-//! Layers as in evo: [`sync`] pairs poses by time, [`align()`] fits the
+//! Layers as in evo: [`sync`](mod@sync) pairs poses by time, [`align()`] fits the
 //! estimate onto the reference, [`ape()`] / [`rpe()`] / [`relations()`] measure,
 //! [`evaluate`] runs them all for the command line. Pure functions over
 //! trajectories; reading files is `io`'s job.

@@ -1,5 +1,5 @@
-//! The relation metric of Kümmerle et al., "On measuring the accuracy of SLAM
-//! algorithms" (Autonomous Robots 27(4), 2009): a trajectory is judged by the
+//! The relation metric of \[Kummerle2009\] ("On measuring the accuracy of SLAM
+//! algorithms", Autonomous Robots 27(4), 2009): a trajectory is judged by the
 //! relative motions it implies between pairs of instants, compared with
 //! reference relative motions.
 //!
@@ -108,7 +108,7 @@ pub fn relation_error(traj: &Trajectory, rel: &Relation) -> Option<RelationError
     })
 }
 
-/// Evaluates `traj` on the reference relations `rels` (Kümmerle et al. 2009).
+/// Evaluates `traj` on the reference relations `rels` \[Kummerle2009\].
 /// Relations with an endpoint outside the trajectory's time span are skipped
 /// and counted; an error if none remains or a pose is not finite.
 pub fn relations(traj: &Trajectory, rels: &[Relation]) -> Result<RelationStats, EvalError> {

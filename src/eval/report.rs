@@ -85,11 +85,11 @@ pub struct TrajectoryMetrics {
     pub rpe: Stats,
     /// RPE rotation angle (deg); null for a position-only reference.
     pub rpe_rot_deg: Option<Stats>,
-    /// Seed 000's RMSE x,y (m) after alignment.
+    /// The RMSE x,y (m) of [Farina, Table II] after alignment.
     pub rmse_xy: f64,
-    /// Seed 000's RMSE θ (rad) after alignment; null for a position-only reference.
+    /// The RMSE θ (rad) of [Farina, Table II] after alignment; null for a position-only reference.
     pub rmse_theta: Option<f64>,
-    /// Final position error over reference path length, in % (seed 002's path
+    /// Final position error over reference path length, in % (the path
     /// error); null when the reference does not move.
     pub drift_percent: Option<f64>,
     /// Distance (m) between the last matched estimate and reference positions.
@@ -105,7 +105,7 @@ pub struct EvalReport {
     /// Figures against the reference trajectory, flattened into the top level.
     #[serde(flatten)]
     pub trajectory: Option<TrajectoryMetrics>,
-    /// Relation metric (Kümmerle et al. 2009).
+    /// Relation metric \[Kummerle2009\].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub relations: Option<RelationStats>,
     /// Per-pose data for plots; not part of the JSON summary.

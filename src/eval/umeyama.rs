@@ -1,6 +1,6 @@
-//! Least-squares similarity between two registered point sets, Umeyama,
-//! "Least-squares estimation of transformation parameters between two point
-//! patterns", IEEE PAMI 13(4), 1991 — as evo's `geometry.umeyama_alignment`:
+//! Least-squares similarity between two registered point sets \[Umeyama1991\]
+//! ("Least-squares estimation of transformation parameters between two point
+//! patterns", IEEE PAMI 13(4), 1991) — as evo's `geometry.umeyama_alignment`:
 //! find R, t, c minimising Σ‖y_i − (c R x_i + t)‖².
 
 use super::EvalError;

@@ -82,7 +82,7 @@ pub struct ExperimentJob {
     pub out: std::path::PathBuf,
     /// The experiment settings (TOML), if any.
     pub settings: Option<std::path::PathBuf>,
-    /// The folder with the seed tables, if any.
+    /// The folder with the papers' published tables, if any.
     pub tables: Option<std::path::PathBuf>,
     /// Configuration and robot files.
     pub common: crate::pipeline::Common,

@@ -1,4 +1,4 @@
-//! Seed 002's Table 2 regenerated on simulated runs: a vehicle calibrated by
+//! [GAHeading, Table 2] regenerated on simulated runs: a vehicle calibrated by
 //! the GA on short runs follows irregular 22, 47 and 100 m paths; the
 //! end-position error of uncalibrated odometry, calibrated odometry and
 //! calibrated odometry fused with a heading source, as % of the path length.
@@ -21,7 +21,7 @@ use rand::{RngExt, SeedableRng};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// One of the seed's Table 2 numbers (empty = the vehicle could not finish).
+/// One of the numbers of [GAHeading, Table 2] (empty = the vehicle could not finish).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SeedPathError {
     /// `uncalibrated`, `calibrated_odometry` or `calibrated_odometry_vo_pf`.
@@ -32,10 +32,10 @@ pub struct SeedPathError {
     pub error_percent: Option<f64>,
 }
 
-/// Our figure next to the seed's.
+/// Our figure next to the paper's.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PathErrorRow {
-    /// Scenario name (the seed's names).
+    /// Scenario name (the paper's names).
     pub scenario: String,
     /// Path length (m).
     pub length_m: f64,
@@ -43,7 +43,7 @@ pub struct PathErrorRow {
     pub error_percent: f64,
     /// Standard deviation over the trials (% of length).
     pub error_std: f64,
-    /// The seed's number for the same cell, when given.
+    /// The paper's number for the same cell, when given.
     pub seed_error_percent: Option<f64>,
 }
 
@@ -76,9 +76,9 @@ pub struct PfExperimentParams {
 }
 
 impl Default for PfExperimentParams {
-    /// The seed's AGV: true k1, k2, b = its GA result; believed k = 3.75e-4
+    /// The AGV of \[GAHeading\]: true k1, k2, b = its GA result; believed k = 3.75e-4
     /// m/pulse (mid-box), b = 0.37 m; 1000 pulses/rev; 0.5 % wheel slip per
-    /// 50 ms step (the level at which calibrated odometry comes nearest the seed's).
+    /// 50 ms step (the level at which calibrated odometry comes nearest the paper's).
     fn default() -> Self {
         Self {
             lengths: vec![22.0, 47.0, 100.0],
@@ -140,16 +140,16 @@ pub fn calibration_runs(
         .collect()
 }
 
-/// The scenarios of seed 002's Table 2, in its order.
+/// The scenarios of [GAHeading, Table 2], in its order.
 const SCENARIOS: [&str; 3] = [
     "uncalibrated",
     "calibrated_odometry",
     "calibrated_odometry_vo_pf",
 ];
 
-/// Regenerates seed 002's Table 2 on simulated runs: the vehicle follows random
+/// Regenerates [GAHeading, Table 2] on simulated runs: the vehicle follows random
 /// irregular paths; each estimator's end-position error is reported as % of
-/// the path length (mean of `trials`), next to the seed's numbers. Returns the
+/// the path length (mean of `trials`), next to the paper's numbers. Returns the
 /// rows and the GA-calibrated parameters.
 pub fn heading_pf_experiment(
     p: &PfExperimentParams,
@@ -236,10 +236,10 @@ fn path_errors(
     Ok(errs)
 }
 
-/// The rows as a markdown table in the layout of seed 002's Table 2, ours
-/// next to the seed's (`*` = the seed's vehicle could not complete the path).
+/// The rows as a markdown table in the layout of [GAHeading, Table 2], ours
+/// next to the paper's (`*` = the paper's vehicle could not complete the path).
 pub fn path_error_markdown(rows: &[PathErrorRow]) -> String {
-    let mut s = String::from("| scenario | length (m) | error (% of length), odocal | ± std | seed 002 |\n|---|---|---|---|---|\n");
+    let mut s = String::from("| scenario | length (m) | error (% of length), odocal | ± std | paper |\n|---|---|---|---|---|\n");
     for r in rows {
         let seed = r
             .seed_error_percent
@@ -269,7 +269,7 @@ pub fn ga_path_errors(t: &SeedTable) -> Result<Vec<SeedPathError>, InputError> {
 }
 
 /// `odocal experiment heading-pf`: Table 2 with `--runs` trials per length,
-/// next to the seed's numbers when `--tables` gives them, drawn into `png`.
+/// next to the paper's numbers when `--tables` gives them, drawn into `png`.
 pub(super) fn heading_pf_output(
     inp: &ExperimentInputs<'_>,
     params: &PfExperimentParams,
@@ -299,14 +299,14 @@ pub(super) fn heading_pf_output(
         path_error_markdown(&rows)
     );
     Ok(ExperimentOutput::titled(
-        "Seed 002 Table 2: GA calibration and heading fusion",
+        "GA calibration and heading fusion, Table 2 of the paper",
         md,
         &serde_json::json!({ "rows": rows, "ga": ga, "params": p }),
     ))
 }
 
 /// Bars per length and scenario: our errors with their spread and, when
-/// `with_seed`, the seed's numbers.
+/// `with_seed`, the paper's numbers.
 fn table_chart(p: &PfExperimentParams, rows: &[PathErrorRow], with_seed: bool) -> BarChart {
     let cats: Vec<String> = p.lengths.iter().map(|l| format!("{l} m")).collect();
     let cell = |n: &str, l: f64, f: &dyn Fn(&PathErrorRow) -> f64| {
@@ -321,7 +321,10 @@ fn table_chart(p: &PfExperimentParams, rows: &[PathErrorRow], with_seed: bool) -
             .collect()
     };
     let mut chart = BarChart::new(
-        format!("Seed 002 Table 2: end-position error ({} trials)", p.trials),
+        format!(
+            "GA and heading fusion, Table 2: end-position error ({} trials)",
+            p.trials
+        ),
         cats,
         SCENARIOS.iter().map(|s| s.to_string()).collect(),
     )
@@ -332,7 +335,7 @@ fn table_chart(p: &PfExperimentParams, rows: &[PathErrorRow], with_seed: bool) -
     );
     if with_seed {
         chart = chart.panel(
-            "seed 002 (0 = not completed)",
+            "paper (0 = not completed)",
             grid(&|r| r.seed_error_percent.unwrap_or(0.0)),
             None,
         );

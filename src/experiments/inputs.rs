@@ -1,5 +1,5 @@
 //! What every experiment runs on besides its own settings: the run count and
-//! seed, the nominal robot, the calibrator and ICP settings, the seed tables.
+//! seed, the nominal robot, the calibrator and ICP settings, the papers' published tables.
 
 use crate::calib::CalibParams;
 use crate::io::seed_tables::{read_seed_table, SeedTable};
@@ -18,7 +18,7 @@ pub struct ExperimentInputs<'a> {
     pub calib: &'a CalibParams,
     /// Nominal robot (`--robot`).
     pub robot: &'a RobotConfig,
-    /// Folder with the seed tables (`--tables`), for square, heading-pf, tachometer.
+    /// Folder with the papers' published tables (`--tables`), for square, heading-pf, tachometer.
     pub tables: Option<&'a Path>,
     /// Scan matching settings (`--config`'s `[icp]`), for montecarlo-scans.
     pub icp: &'a crate::icp::IcpParams,
@@ -27,11 +27,11 @@ pub struct ExperimentInputs<'a> {
 }
 
 impl ExperimentInputs<'_> {
-    /// A seed table from the `--tables` folder.
+    /// A published table from the `--tables` folder.
     pub(crate) fn seed_table(&self, file: &str) -> Result<SeedTable, PipelineError> {
         let dir = self.tables.ok_or_else(|| {
             bad(format!(
-                "this experiment reads the seed tables: give --tables DIR (the folder with {file})"
+                "this experiment reads the papers' published tables: give --tables DIR (the folder with {file})"
             ))
         })?;
         Ok(read_seed_table(&dir.join(file))?)

@@ -1,14 +1,15 @@
-//! The seed papers' tables and figures regenerated on our own data, above
-//! the math modules: Monte Carlo over synthetic and simulated wheelchair runs
-//! (seed 000), every method of the literature side by side, seed 001's square
-//! and tachometer tables, seed 002's GA and heading-fusion table, and UMBmark
-//! on simulated robots. [`run`] is `odocal experiment NAME`: it writes each
-//! experiment as `NAME.md`, `NAME.json` and `NAME.png`. Experiments sit
+//! The implemented papers' tables and figures regenerated on our own data,
+//! above the math modules: Monte Carlo over synthetic and simulated wheelchair
+//! runs (\[Farina\]), every method of the literature side by side, the square
+//! and tachometer tables of \[Paryanto\], the GA and heading-fusion table of
+//! \[GAHeading\], and UMBmark on simulated robots. [`run`] is
+//! `odocal experiment NAME`: it writes each experiment as `NAME.md`,
+//! `NAME.json` and `NAME.png`. Experiments sit
 //! above the pipeline too: they run ICP on simulated scans through it.
 //!
 //! The algorithms live in `calib` and `classic`; this module drives them over
-//! simulated runs, summarises, and turns the seed tables (`io::seed_tables`)
-//! into their inputs.
+//! simulated runs, summarises, and turns the papers' published tables
+//! (`io::seed_tables`) into their inputs.
 
 pub mod blind;
 mod compare;

@@ -1,4 +1,4 @@
-//! Seed 001's Table III as an experiment: the measured square's corner and
+//! [Paryanto, Table III] as an experiment: the measured square's corner and
 //! closure errors, the radius and wheel-base errors that reproduce them, and
 //! the same 6 m square simulated with those errors (noise-free, then with
 //! wheel slip over several runs) to show how much of the table they explain.
@@ -24,7 +24,7 @@ use std::path::Path;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SquareExperimentParams {
-    /// The model the seed's odometry used: 30 cm wheels (r = 0.15 m); its
+    /// The model the odometry of \[Paryanto\] used: 30 cm wheels (r = 0.15 m); its
     /// wheel base is not stated, 0.55 m is assumed.
     pub nominal: DiffDrive,
     /// Driving of the noisy repetitions (slip is the non-systematic error).
@@ -51,7 +51,7 @@ impl Default for SquareExperimentParams {
 /// What the experiment found.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SquareExperiment {
-    /// The measured table (seed 001's Table III).
+    /// The measured table ([Paryanto, Table III]).
     pub measured: SquareReport,
     /// Radius and wheel-base errors fitted to the measured odometry corners.
     pub fit: SquareEffectFit,
@@ -121,7 +121,7 @@ pub fn square_experiment(
 impl SquareExperiment {
     /// Markdown: measured table, fitted effects, simulated corners, noise.
     pub fn markdown(&self) -> String {
-        let mut s = String::from("## Measured (seed 001, Table III)\n\n");
+        let mut s = String::from("## Measured (Paryanto et al., Table III)\n\n");
         s.push_str(&self.measured.markdown());
         let _ = writeln!(
             s,
@@ -206,7 +206,7 @@ pub(super) fn square_output(
         PathSeries::new(name, rep.corners.iter().map(|c| f(&c.corner)).collect())
     };
     let fig = TrajectoryPlot::new(
-        "Seed 001's 6 m square: actual, measured odometry, simulated with fitted errors",
+        "Paryanto et al.'s 6 m square: actual, measured odometry, simulated with fitted errors",
         vec![
             path("actual", &|c| [c.actual_x, c.actual_y], &e.measured),
             path("measured odometry", &|c| [c.odom_x, c.odom_y], &e.measured),
@@ -219,6 +219,6 @@ pub(super) fn square_output(
         ],
     );
     draw_paths(png, &fig)?;
-    let title = "Seed 001 Table III: the 6 m square";
+    let title = "Paryanto et al. Table III: the 6 m square";
     Ok(ExperimentOutput::titled(title, e.markdown(), &e))
 }

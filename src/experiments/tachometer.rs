@@ -1,4 +1,4 @@
-//! Seed 001's calibration from its own tables: the per-wheel rpm correction
+//! The calibration of \[Paryanto\] from its own tables: the per-wheel rpm correction
 //! fitted to the tachometer table (Table I), the heading gain from the five
 //! 90° turns, and the correction applied to the straight-driving wheel speed
 //! pairs (Table II) to see whether it brings right and left together.
@@ -91,7 +91,7 @@ impl TachometerExperiment {
     /// Markdown: the fits, the corrected table, the gain.
     pub fn markdown(&self, table: &[TachoReading]) -> String {
         let (r, l) = (&self.tachometer.right, &self.tachometer.left);
-        let mut s = String::from("## rpm correction (seed 001, Table I)\n\n");
+        let mut s = String::from("## rpm correction (Paryanto et al., Table I)\n\n");
         let _ = writeln!(
             s,
             "tachometer rpm = slope · encoder rpm + intercept, least squares per wheel.\n\n\
@@ -115,7 +115,7 @@ impl TachometerExperiment {
         let g = &self.heading_gain;
         let _ = writeln!(
             s,
-            "\n## Heading gain (seed 001, five 90° turns)\n\nGain {:.3} ± {:.3} (mean ratio, the seed's 3.2; \
+            "\n## Heading gain (Paryanto et al., five 90° turns)\n\nGain {:.3} ± {:.3} (mean ratio, the paper's 3.2; \
              least squares {:.3}); per trial {}; largest residual after the gain {:.1}°.",
             g.gain,
             g.gain_stderr,
@@ -139,7 +139,7 @@ impl TachometerExperiment {
         if let Some([a, b]) = self.pair_rms {
             let _ = writeln!(
                 s,
-                "\n## Straight driving (seed 001, Table II)\n\nRMS of right − left wheel speed: \
+                "\n## Straight driving (Paryanto et al., Table II)\n\nRMS of right − left wheel speed: \
                  {a:.4} rad/s as read, {b:.4} rad/s after the rpm correction{}.",
                 if b < a {
                     ""
@@ -203,7 +203,7 @@ fn table_pairs(inp: &ExperimentInputs<'_>) -> Result<Vec<(f64, f64)>, PipelineEr
     })
 }
 
-/// `odocal experiment tachometer`: both corrections from the seed tables,
+/// `odocal experiment tachometer`: both corrections from the paper's published tables,
 /// encoder − tachometer before and after drawn into `png`.
 pub(super) fn tachometer_output(
     inp: &ExperimentInputs<'_>,
@@ -216,7 +216,7 @@ pub(super) fn tachometer_output(
     let e = tachometer_experiment(&rows, &trials, &pairs, Some(square.nominal.wheel_base))
         .map_err(bad)?;
     draw_lines(png, &correction_chart(&rows, &e.tachometer))?;
-    let title = "Seed 001: tachometer rpm correction and heading gain";
+    let title = "Paryanto et al.: tachometer rpm correction and heading gain";
     Ok(ExperimentOutput::titled(title, e.markdown(&rows), &e))
 }
 
@@ -228,7 +228,7 @@ fn correction_chart(rows: &[TachoReading], c: &TachoCalibration) -> LineChart {
     };
     let (fr, fl) = (&c.right, &c.left);
     LineChart::new(
-        "Seed 001 Table I: encoder − tachometer before and after the rpm correction",
+        "Paryanto et al. Table I: encoder − tachometer before and after the rpm correction",
         "tachometer (rpm)",
     )
     .panel(

@@ -1,7 +1,7 @@
 //! UMBmark as an experiment: a simulated robot runs the benchmark (CW/CCW ×
 //! n), gets corrected, and runs it again on fresh runs; over several robots,
 //! each with its own hidden radius and wheel-base errors, E_max,syst before
-//! and after and the improvement factor (Borenstein & Feng report about
+//! and after and the improvement factor (\[Borenstein1996\] report about
 //! 10–20×).
 
 use super::inputs::{bad, ExperimentInputs};

@@ -1,4 +1,4 @@
-//! Fleet calibration's math (method.md, "Fleets"): one calibration per
+//! Fleet calibration's math: one calibration per
 //! recording, then per robot a time series of each parameter with its
 //! uncertainty, and the alarms it supports — a slow trend (tyre wear: a
 //! regression of radius on time with its confidence), a step between

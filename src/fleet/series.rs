@@ -1,7 +1,7 @@
 //! A parameter's history as a weighted least-squares fit: an offset, a
 //! common rate over time and one offset change at each step,
 //! `y_i = a + b·t_i + Σ_k c_k·[t_i ≥ s_k]`, each point weighted by `1/σ_i²`
-//! (method.md, "Fleets": a trend is a regression on time with its
+//! (a trend is a regression on time with its
 //! confidence, a step a change-point beyond the combined uncertainty).
 
 use nalgebra::{DMatrix, DVector};
@@ -31,7 +31,7 @@ pub struct Fit {
 }
 
 impl Fit {
-    /// The Birge ratio squared: the reduced χ² when above 1, else 1. A
+    /// The Birge ratio \[Birge1932\] squared: the reduced χ² when above 1, else 1. A
     /// scatter wider than the points' σ says they are too small; the
     /// coefficients' std are widened by its square root.
     pub fn scale(&self) -> f64 {

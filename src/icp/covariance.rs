@@ -1,7 +1,7 @@
 //! Covariance of a converged match: the Hessian of the point-to-surface error
 //! at the solution, scaled by the residual variance, times an inflation factor.
 //!
-//! Why this form rather than Censi's closed form: with closest points on the
+//! Why this form rather than Censi's closed form \[Censi2007\]: with closest points on the
 //! reference polyline the residual of a correspondence is (to first order) its
 //! distance along the surface normal, so the information of a correspondence is
 //! `Jᵀ J` with `J = nᵀ [I | R' p]` (point-to-line), which is also what Censi's

@@ -19,7 +19,7 @@
 //!   the directions the geometry leaves loose (corridors). Fitted lines
 //!   rather than the raw polyline keep the range noise of the reference out
 //!   of the estimate (the zigzag polyline made motions ~2 % short).
-//! - `threshold`: KISS-ICP's adaptive gate from the prior's recent error.
+//! - `threshold`: the adaptive gate of KISS-ICP \[Vizzo2023\] from the prior's recent error.
 //! - `prior_model`: the odometry's and the constant-velocity guess's errors
 //!   against the matched motions, learned per recording; the prior term is
 //!   centred on their inverse-variance blend (`prior_blend_rate`).

@@ -98,7 +98,7 @@ pub struct PriorScale {
 }
 
 impl PriorScale {
-    /// Whether a ratio lies outside [`PLAUSIBLE_RATIO`].
+    /// Whether a ratio lies outside `PLAUSIBLE_RATIO`.
     pub fn off(&self) -> bool {
         let [lo, hi] = PLAUSIBLE_RATIO;
         [self.distance_ratio, self.turn_ratio]

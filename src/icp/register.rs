@@ -2,7 +2,7 @@
 //! Gauss–Newton step on the point-to-line residual until the pose stops
 //! changing.
 //!
-//! Why Gauss–Newton rather than the closed-form (Arun/Umeyama) alignment of
+//! Why Gauss–Newton rather than the closed-form [Arun1987; Umeyama1991] alignment of
 //! each point onto its closest surface point: the closed form minimises the
 //! point-to-point distance to targets that were themselves projected onto the
 //! surface, so its step has the right gradient but an isotropic curvature —
@@ -30,7 +30,7 @@ pub struct RegisterSettings {
     /// Cosine of the largest angle between the source point's own surface
     /// normal and the reference line's normal.
     pub min_normal_cos: f64,
-    /// Smallest Geman–McClure scale (m): the kernel never gets narrower than
+    /// Smallest Geman–McClure \[GemanMcClure1987\] scale (m): the kernel never gets narrower than
     /// the sensor noise floor, however well a pair fits.
     pub min_kappa: f64,
     /// Iteration cap.

@@ -1,4 +1,4 @@
-//! KISS-ICP's adaptive correspondence threshold (Vizzo et al. 2023, eq. 4–6),
+//! KISS-ICP's adaptive correspondence threshold [Vizzo2023, eqs. 4–6],
 //! in 2D: the deviation between the predicted (prior) and estimated motion of
 //! every pair becomes a displacement bound; the running RMS of those bounds is
 //! σ, and correspondences farther than 3σ are outliers.

@@ -1,4 +1,4 @@
-//! Censi et al.'s calibration tuples (github.com/AndreaCensi/calibration,
+//! The calibration tuples of \[Censi2013\] (github.com/AndreaCensi/calibration,
 //! `reference-output/*.tuple`): a stream of JSON objects
 //! `{"T": s, "phi_l": rad/s, "phi_r": rad/s, "sm": [dx m, dy m, dθ rad]}`,
 //! some back to back on one line, so the file is read as a JSON stream.

@@ -2,7 +2,7 @@
 //! chunk size and a short reorder window instead of the recording's length.
 //!
 //! The file is read through `mcap`'s sans-io [`LinearReader`] from a plain
-//! `File` (no mmap), in file order; [`BagStream`] makes the two passes and
+//! `File` (no mmap), in file order; `BagStream` makes the two passes and
 //! yields each stream in stamp order, exactly what the in-memory reader's
 //! stable sort produces. Any error is reported as the in-memory reader
 //! reports it.

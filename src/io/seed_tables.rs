@@ -1,4 +1,4 @@
-//! Reader for the small CSV tables transcribed from the seed papers
+//! Reader for the small CSV tables transcribed from the implemented papers
 //! (`seed-tables/*.csv`): `#` comment lines, one header line, comma-separated
 //! cells; an empty cell means "not reported". Every problem is an
 //! [`InputError`] naming the file and line. The experiments turn the rows
@@ -79,7 +79,7 @@ impl SeedTable {
                 if c.is_empty() {
                     return Ok(None);
                 }
-                // Seed 001 prints decimal commas; the transcriptions use points.
+                // [Paryanto] prints decimal commas; the transcriptions use points.
                 match c.parse::<f64>() {
                     Ok(v) if v.is_finite() => Ok(Some(v)),
                     _ => Err(InputError::new(

@@ -4,7 +4,7 @@
 //! message of each topic odocal could use says (the scan frame, the joint
 //! names, an odometry's frames and whether its twist ever moves). It reads
 //! every bag format through the same raw readers as the streams
-//! ([`super::bag_stream::RawMessages`]) with [`ReadOptions::all_topics`]
+//! (`bag_stream::RawMessages`) with [`ReadOptions::all_topics`]
 //! set, and a CARMEN log through its reader. `odocal inspect` builds on it.
 
 use std::collections::BTreeMap;

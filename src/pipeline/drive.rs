@@ -1,5 +1,5 @@
 //! The one driver of a run: samples from a [`SampleSource`] go through the
-//! incremental ICP matcher ([`icp::StreamMatcher`]) and, for a calibration,
+//! incremental ICP matcher ([`crate::icp::StreamMatcher`]) and, for a calibration,
 //! the step builder and the calibration [`Runner`]; everything else (files,
 //! Rerun, progress, in-memory results) is a [`RunObserver`]. A bag streamed
 //! from disk and the same recording in memory therefore take the same path

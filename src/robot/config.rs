@@ -92,7 +92,7 @@ pub struct RobotConfig {
 }
 
 impl Default for RobotConfig {
-    /// The users' wheelchair (seed 000): R = 0.32 m, D = 0.65 m, 8800 ticks/rev.
+    /// The wheelchair of \[Farina\]: R = 0.32 m, D = 0.65 m, 8800 ticks/rev.
     fn default() -> Self {
         Self {
             name: "wheelchair".into(),
@@ -177,7 +177,7 @@ impl RobotConfig {
         Ok((c, table.keys().cloned().collect()))
     }
 
-    /// Checks that every parameter is finite and within [`PHYSICAL_BOUNDS`]
+    /// Checks that every parameter is finite and within `PHYSICAL_BOUNDS`
     /// (a value outside is a typo or a unit slip, e.g. mm for m); the error
     /// names the key, its value and its range.
     pub fn validate(&self) -> Result<(), RobotConfigError> {

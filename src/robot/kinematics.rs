@@ -1,4 +1,4 @@
-//! Differential-drive kinematics (method.md, the standard model behind seed 000's eq. 3).
+//! Differential-drive kinematics (the standard model behind [Farina, eq. 3]).
 
 use crate::geom::{self, Pose2};
 

@@ -87,7 +87,7 @@ pub struct Step {
 
 /// The drive of a run, integrated step by step on demand, so that a run of
 /// any length needs only the controller's state: [`drive`] collects it, and
-/// each sensor of a streamed run keeps a [`Tape`] of it.
+/// each sensor of a streamed run keeps a `Tape` of it.
 #[derive(Clone)]
 pub struct Driver {
     ctl: Controller,

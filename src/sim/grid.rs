@@ -1,6 +1,6 @@
 //! A uniform grid over the wall segments for fast ray casting: each cell lists
 //! the segments crossing it, and a ray walks the cells in order
-//! (Amanatides & Woo 1987), stopping at the first cell that holds a hit.
+//! \[AmanatidesWoo1987\], stopping at the first cell that holds a hit.
 
 /// Segments binned into square cells (m, world frame).
 #[derive(Debug, Clone)]

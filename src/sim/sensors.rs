@@ -287,7 +287,8 @@ impl Sensor for Gyro {
     }
 }
 
-/// A LOAM-like reference: poses `world_from_base` with small white noise (heading included).
+/// A LOAM-like \[ZhangSingh2014\] reference: poses `world_from_base` with
+/// small white noise (heading included).
 pub struct Reference {
     position: Normal<f64>,
     heading: Normal<f64>,

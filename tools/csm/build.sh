@@ -1,5 +1,5 @@
 #!/bin/sh
-# Builds CSM (Censi's PL-ICP, github.com/AndreaCensi/csm; README's figures are
+# Builds CSM (Censi's PL-ICP [Censi2008], github.com/AndreaCensi/csm; the results' figures are
 # from commit dff2557) as a CMake Release with -O3 -D_GNU_SOURCE against the
 # system GSL, and this folder's driver sm_tum against its static library.
 #

@@ -1,5 +1,5 @@
 #!/bin/sh
-# CSM's runs behind README's CSM columns: each benchmark log matched with
+# CSM's runs behind the CSM columns of docs/results/: each benchmark log matched with
 # epsilon_xy = epsilon_theta = F x 1e-4 (CSM's default) for the five factors
 # F of odocal's run-to-run table, default sm_icp parameters otherwise, the
 # laser pose -laser_x 0.04 on FR079 (its /tf_static).

@@ -1,1 +1,1 @@
-"""The blocks of README's generated tables (tools/figures.py)."""
+"""The blocks of the generated tables of docs/results/ (tools/figures.py)."""

@@ -1,5 +1,5 @@
 """The calibration blocks: the real recordings' batch and filter
-calibrations, seed 000's Table II on simulated scans, a simulated fleet."""
+calibrations, [Farina, Table II] on simulated scans, a simulated fleet."""
 import json
 import os
 import re
@@ -155,7 +155,7 @@ def block_lego_scanner(runner, csm):
     return rows + [f.result() for f in futures] + [LEGO_DATA_README]
 
 
-# The columns (the experiment's configurations) and seed 000's own figures
+# The columns (the experiment's configurations) and the figures of [Farina, Table II]
 # (its Table II: a record, not computed).
 TABLE_II = [("Adaptive-PF", "adaptive-pf"), ("DKF", "dkf"), ("AKF", "akf"), ("PF (fixed)", "pf")]
 

@@ -1,6 +1,6 @@
 """What every block of tools/figures.py shares: running odocal once per
 command in a scratch folder, skipping what the data folder lacks, and the
-number formats of README's tables."""
+number formats of the generated tables (docs/results/)."""
 import concurrent.futures
 import os
 import statistics

@@ -31,7 +31,7 @@ CSM_SOURCE = (
     "-O3 -D_GNU_SOURCE, default sm_icp parameters, scan to scan from the odometry, "
     "the scans' true beam angles; the laser pose -laser_x 0.04 on FR079), "
     "epsilon_xy = epsilon_theta = F x 1e-4 for each factor F; each run's trajectory "
-    "scored with `odocal eval --relations --json` (README, Performance)"
+    "scored with `odocal eval --relations --json` (docs/performance.md)"
 )
 
 

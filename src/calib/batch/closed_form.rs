@@ -1,6 +1,6 @@
-//! Censi et al.'s closed-form initialisation (T-RO 2013, Sec. IV): first
+//! The closed-form initialisation of [Censi2013, Sec. IV]: first
 //! J21 = −r_L/b and J22 = r_R/b by linear least squares on the rotation
-//! (Eq. 12), then the wheel base and the laser mounting from the
+//! ([Censi2013, eq. 12]), then the wheel base and the laser mounting from the
 //! translation equation (Eq. 14–17), homogeneous in
 //! x = (ℓx, ℓy, b, cos ℓθ, sin ℓθ) under cos² + sin² = 1.
 

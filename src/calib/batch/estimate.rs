@@ -125,7 +125,8 @@ const MAX_ROUNDS: usize = 12;
 
 /// How much larger than their covariances claim the intervals' residuals
 /// are at `u`, per component `[x, y, θ]`, from the differences of
-/// consecutive whitened residuals (von Neumann's successive differences):
+/// consecutive whitened residuals (the successive differences of
+/// \[VonNeumann1941\]):
 /// √(median of (z_k − z_{k−1})²/2 over the median of χ²₁), at least 1. The
 /// differences keep the scan matcher's own noise, independent from one
 /// interval to the next, and drop what changes slowly (parameters that

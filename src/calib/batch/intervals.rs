@@ -2,7 +2,7 @@
 //! motions are composed until the interval lasts `interval_s` or turns
 //! `interval_rad`, so that each interval excites the laser pose; the
 //! covariance is composed to first order, Σ' = J₁ Σ J₁ᵀ + J₂ Σ_m J₂ᵀ with
-//! the Jacobians of `a ⊕ b` ([Censi2013] uses ~1 s tuples for the same end).
+//! the Jacobians of `a ⊕ b` (\[Censi2013\] uses ~1 s tuples for the same end).
 //! [`IntervalBuilder`] does it one motion at a time, as they come off the
 //! scan matcher; [`aggregate`] is the same over a whole list.
 

@@ -1,5 +1,5 @@
 //! Joint maximum-likelihood batch calibration of a differential drive and
-//! its laser (Censi, Franchi, Marchionni, Oriolo, "Simultaneous calibration
+//! its laser \[Censi2013\] (Censi, Franchi, Marchionni, Oriolo, "Simultaneous calibration
 //! of odometry and sensor parameters for mobile robots", IEEE T-RO 29(2),
 //! 2013): the wheel radii r_R, r_L, the wheel base b, the laser mounting
 //! ℓ = `base_from_laser` and, when the wheel samples carry time, the time
@@ -8,10 +8,10 @@
 //! Input: intervals, each with the laser's displacement `s_k` in the laser
 //! frame at its start (with a covariance, or none: then σ's are estimated
 //! from the residuals as Censi's solver does) and the wheels' motion over
-//! it. Steps: a closed-form start ([`closed_form`], Sec. IV), then
-//! Levenberg–Marquardt on the likelihood ([`solve`], Sec. V) with Censi's
-//! outlier rejection ([`outliers`]), the covariance as the inverse Fisher
-//! information, and observability and sanity checks ([`report`]).
+//! it. Steps: a closed-form start (`closed_form`, Sec. IV), then
+//! Levenberg–Marquardt on the likelihood (`solve`, Sec. V) with Censi's
+//! outlier rejection (`outliers`), the covariance as the inverse Fisher
+//! information, and observability and sanity checks (`report`).
 
 mod closed_form;
 mod estimate;

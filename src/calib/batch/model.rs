@@ -1,5 +1,5 @@
-//! The measurement model of the batch calibration (Censi et al., T-RO 2013,
-//! Eq. 3–5): the robot's motion over an interval is the composition of the
+//! The measurement model of the batch calibration ([Censi2013,
+//! eqs. 3–5]): the robot's motion over an interval is the composition of the
 //! exact arcs of its wheel sub-steps, and the laser sees
 //! `ŝ = ℓ⁻¹ ⊕ o ⊕ ℓ` with `ℓ = base_from_laser`. Poses are `[x m, y m, θ rad]`.
 
@@ -69,7 +69,7 @@ impl Unknowns {
     }
 }
 
-/// The exact arc of one wheel sub-step (Censi 2013, Eq. 4): distance
+/// The exact arc of one wheel sub-step ([Censi2013, eq. 4]): distance
 /// `(r_R Δφ_R + r_L Δφ_L)/2`, rotation `(r_R Δφ_R − r_L Δφ_L)/b`.
 pub fn arc(dl: f64, dr: f64, r_right: f64, r_left: f64, b: f64) -> P3 {
     let d = 0.5 * (r_right * dr + r_left * dl);

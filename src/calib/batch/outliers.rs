@@ -12,7 +12,7 @@
 //! [`consistent`] therefore also drops every interval whose whitened χ²,
 //! in units of the kept intervals' typical χ² (median / the median of χ²₃),
 //! lies beyond the χ²₃ quantile of `1 − p`: a robust scale, as in
-//! [Rousseeuw1987], so the threshold follows the recording's own spread
+//! \[Rousseeuw1987\], so the threshold follows the recording's own spread
 //! rather than covariances that may be too small for it.
 
 use super::model::P3;

@@ -65,7 +65,7 @@ pub struct BatchEstimate {
     /// summary under `observability`).
     #[serde(skip)]
     pub observability: BTreeMap<String, ParamObservability>,
-    /// The closed-form start (Censi 2013, Sec. IV), `[r_R, r_L, b, ℓx, ℓy, ℓθ]`.
+    /// The closed-form start ([Censi2013, Sec. IV]), `[r_R, r_L, b, ℓx, ℓy, ℓθ]`.
     pub closed_form: [f64; 6],
     /// Intervals in the final fit.
     pub intervals: usize,

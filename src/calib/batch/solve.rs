@@ -1,4 +1,4 @@
-//! The maximum-likelihood refinement (Censi 2013, Sec. V): Levenberg–Marquardt
+//! The maximum-likelihood refinement [Censi2013, Sec. V]: Levenberg–Marquardt
 //! over the unknowns minimising Σ_k e_kᵀ Σ_k⁻¹ e_k with e_k = s_k − ŝ_k
 //! ([`super::model`]). The Jacobian is by central differences (the model
 //! composes arcs and, with a time offset, interpolates wheel angles; a

@@ -7,11 +7,11 @@
 //! laser elsewhere than its description says, and starts from nominal wheel
 //! values that may be far off. None of that is known before the stream, and
 //! a robot running live has no whole recording to fit first. So the front
-//! end fits the joint model of [Censi2013] (radii, wheel base, laser
+//! end fits the joint model of \[Censi2013\] (radii, wheel base, laser
 //! mounting, time offset; [`crate::calib::batch`]) over a sliding window of
 //! the stream: once after a warm-up, then every few seconds of new data, as
 //! a sliding-window estimator of the clock offset does in visual-inertial
-//! odometry [Qin2018]. The filters keep estimating the radii and the wheel
+//! odometry \[Qin2018\]. The filters keep estimating the radii and the wheel
 //! base themselves; the window gives them
 //! - the time offset, by which every interval's wheel rates are read;
 //! - the laser mounting, by which each laser displacement becomes a base

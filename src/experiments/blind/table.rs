@@ -59,7 +59,7 @@ fn pct(k: usize, n: usize) -> f64 {
     }
 }
 
-/// 95 % Wilson score interval of k successes in n trials.
+/// 95 % Wilson score interval \[Wilson1927\] of k successes in n trials.
 pub fn wilson(k: usize, n: usize) -> (f64, f64) {
     if n == 0 {
         return (0.0, 1.0);
@@ -190,7 +190,7 @@ mod tests {
 
     #[test]
     fn wilson_interval_matches_published_values() {
-        // Wilson (1927) interval for 19 of 20: 0.764–0.991 (Newcombe 1998, Table I style).
+        // [Wilson1927] interval for 19 of 20: 0.764–0.991 ([Newcombe1998], Table I style).
         let (lo, hi) = wilson(19, 20);
         assert!(
             (lo - 0.7639).abs() < 1e-3 && (hi - 0.9911).abs() < 1e-3,

@@ -17,8 +17,8 @@ use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use std::time::Instant;
 
-/// No calibration, seed 001's tachometer and heading gain, UMBmark, seed
-/// 002's GA and its heading fusion, in this order, scored by `eval`.
+/// No calibration, the tachometer and heading gain of \[Paryanto\], UMBmark, the
+/// GA of \[GAHeading\] and its heading fusion, in this order, scored by `eval`.
 pub(crate) fn classic_methods(
     nominal: &DiffDrive,
     p: &CompareParams,
@@ -57,7 +57,7 @@ struct Calibrations<'a> {
 }
 
 impl Calibrations<'_> {
-    /// Seed 001: tachometer correction (if a table is given) and heading gain
+    /// \[Paryanto\]: tachometer correction (if a table is given) and heading gain
     /// from the square runs' total turns (actual vs estimated).
     fn tacho_heading(&mut self, eval: &Evaluation<'_>) -> Result<ClassicResult, ClassicError> {
         let t0 = Instant::now();

@@ -3,8 +3,8 @@
 //! compute time. The runs come from a caller's closure (the simulator's
 //! `square` / `square-ccw` scenarios, or [`crate::classic::drive_segments`]);
 //! the classic methods calibrate on the squares, every method is scored on
-//! the held-out evaluation runs. The literature comparison adds seed 000's
-//! filters to the same runs.
+//! the held-out evaluation runs. The literature comparison adds the
+//! filters of \[Farina\] to the same runs.
 
 mod methods;
 mod runs;
@@ -24,21 +24,21 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
 /// The methods compared side by side (kebab-case names, as in tables and JSON):
-/// the classic ones and, for the literature comparison, seed 000's filters.
+/// the classic ones and, for the literature comparison, the filters of \[Farina\].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ClassicMethod {
     /// Nominal parameters.
     None,
-    /// Seed 001: tachometer rpm correction and heading gain.
+    /// \[Paryanto\]: tachometer rpm correction and heading gain.
     TachoHeading,
-    /// Borenstein & Feng's UMBmark correction.
+    /// The UMBmark correction \[Borenstein1996\].
     Umbmark,
-    /// Seed 002's genetic algorithm.
+    /// The genetic algorithm of \[GAHeading\].
     Ga,
-    /// Seed 002's GA-calibrated odometry fused with a heading source in a PF.
+    /// The GA-calibrated odometry of \[GAHeading\] fused with a heading source in a PF.
     HeadingPf,
-    /// Seed 000's Adaptive-PF on laser velocities and gyro (`calib`).
+    /// The Adaptive-PF of \[Farina\] on laser velocities and gyro (`calib`).
     AdaptivePf,
     /// The dual Kalman filter baseline on the same measurements (`calib`).
     Dkf,
@@ -135,7 +135,7 @@ pub struct CompareParams {
 }
 
 impl Default for CompareParams {
-    /// 6 m squares (seed 001), 5 runs each way, 3 evaluation runs, 8800 ticks/rev,
+    /// 6 m squares (\[Paryanto\]), 5 runs each way, 3 evaluation runs, 8800 ticks/rev,
     /// GA box ± 10 %, pieces of 1.5–3 m.
     fn default() -> Self {
         Self {

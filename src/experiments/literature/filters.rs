@@ -1,4 +1,4 @@
-//! Seed 000's filters on the comparison's runs: the Adaptive-PF and the DKF
+//! The filters of \[Farina\] on the comparison's runs: the Adaptive-PF and the DKF
 //! calibrate online on the squares' laser velocities and gyro, and keep
 //! calibrating on fresh paths after a load change, where the classic
 //! methods keep the parameters of their calibration runs.

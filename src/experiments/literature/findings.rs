@@ -54,7 +54,7 @@ pub(super) fn findings(rows: &[LiteratureRow]) -> Vec<String> {
     } else {
         format!("The Adaptive-PF is best on: {}.", won.join(", "))
     }];
-    // Seed 000's own comparison: against the DKF and no calibration.
+    // The comparison of [Farina] itself: against the DKF and no calibration.
     let baselines: Vec<&LiteratureRow> = rows
         .iter()
         .filter(|r| matches!(r.method, ClassicMethod::Dkf | ClassicMethod::None))
@@ -65,7 +65,7 @@ pub(super) fn findings(rows: &[LiteratureRow]) -> Vec<String> {
         .map(|m| m.0)
         .collect();
     head.push(format!(
-        "Against seed 000's own baselines (dkf, none) the Adaptive-PF is better on {} of {} \
+        "Against Fariña et al.'s own baselines (dkf, none) the Adaptive-PF is better on {} of {} \
          metrics{}.",
         beats.len(),
         METRICS.len(),
@@ -85,9 +85,9 @@ pub(super) fn findings(rows: &[LiteratureRow]) -> Vec<String> {
     );
     head.push(
         "The classic calibrations need dedicated runs with measured end poses (UMBmark, GA) or \
-         a tachometer session and known turns (seed 001); the Adaptive-PF needs a laser but no \
+         a tachometer session and known turns (Paryanto et al.); the Adaptive-PF needs a laser but no \
          dedicated runs or ground truth. A tachometer measures wheel rotation, not radius, so \
-         seed 001's method cannot see radius errors: its rpm correction only removes an \
+         Paryanto et al.'s method cannot see radius errors: its rpm correction only removes an \
          encoder's rate-dependent over-read (none in these runs: it rescales the rates by the \
          tachometer's own error), and its heading gain acts on the wheel base."
             .into(),

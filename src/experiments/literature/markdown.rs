@@ -19,7 +19,7 @@ impl LiteratureTable {
              their poses measured with σ {:.1} mm and {:.2}° at the corners (GA{}) and ends \
              (UMBmark, heading gain); the Adaptive-PF and the DKF instead see laser velocities \
              (σ {:.1} mm, {:.2} mrad per scan pair × [{}, {}]) and a gyro on the same squares. \
-             Seed 001's rpm correction is fitted to a tachometer session on the same chair: \
+             Paryanto et al.'s rpm correction is fitted to a tachometer session on the same chair: \
              the wheels spun at {} steady speeds from 0.8 × an in-place turn's wheel rate to \
              1.2 × a straight's, the encoders read over 1 s beside a laser tachometer with its \
              own errors (scale σ {:.2} %, noise σ {:.2} rpm, {:.1} rpm digit); these encoders \

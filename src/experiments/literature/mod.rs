@@ -1,8 +1,8 @@
 //! Every method of the literature side by side on the same simulated runs:
 //! a wheelchair with hidden radius and wheel-base errors drives UMBmark
 //! squares (the calibration data of every method) and then irregular
-//! evaluation paths. The classic methods (seed 001, UMBmark, seed 002) see
-//! wheels and the true square ends; seed 000's Adaptive-PF and the DKF see
+//! evaluation paths. The classic methods (\[Paryanto\], UMBmark, \[GAHeading\]) see
+//! wheels and the true square ends; the Adaptive-PF of \[Farina\] and the DKF see
 //! wheels, laser-like velocities and a gyro on the same squares. Each ends
 //! with parameters, scored on the held-out paths by its odometry.
 
@@ -42,16 +42,16 @@ pub struct LiteratureParams {
     pub evaluation_length_m: f64,
     /// How the chair drives (speed, wheel rate, slip, encoder resolution).
     pub drive: DriveParams,
-    /// Noise of the laser velocities and gyro the filters of seed 000 use.
+    /// Noise of the laser velocities and gyro the filters of \[Farina\] use.
     pub laser: LaserObsParams,
     /// Particle count of the Adaptive-PF; `None` = the calibrator settings'.
     pub particles: Option<usize>,
-    /// The laser tachometer of seed 001's session (its own errors).
+    /// The laser tachometer of the session of \[Paryanto\] (its own errors).
     pub tachometer: TachometerSensor,
     /// Speeds of the session (≥ 2), spread over the chair's wheel rates.
     pub tachometer_speeds: usize,
     /// A new user boards after calibration: R_R, R_L grow by this (m) on a
-    /// second set of evaluation paths (seed 000's Fig. 6b: 4 and 2 mm);
+    /// second set of evaluation paths ([Farina, Fig. 6b]: 4 and 2 mm);
     /// [0, 0] = no such table.
     pub load_change: [f64; 2],
 }
@@ -197,10 +197,10 @@ impl<'a> Repetition<'a> {
     }
 }
 
-/// Seed 001's session on this chair before its squares: the wheels spun at
+/// The session of \[Paryanto\] on this chair before its squares: the wheels spun at
 /// `tachometer_speeds` speeds over its driving range, the encoders (which
 /// count true wheel rotation here: these runs have no rate-dependent encoder
-/// gain) read out over 1 s as the seed's microcontroller does, beside the
+/// gain) read out over 1 s as the microcontroller of \[Paryanto\] does, beside the
 /// tachometer with its own errors.
 fn tachometer_table(
     nominal: &DiffDrive,

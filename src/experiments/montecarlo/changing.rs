@@ -1,7 +1,7 @@
-//! The `changing` experiment's time plots (seed 000, Figs. 5 and 6b): run 0
+//! The `changing` experiment's time plots ([Farina, Figs. 5 and 6b]): run 0
 //! of the Monte Carlo replayed with the Adaptive-PF and the Kalman filters,
 //! their radius estimates against the truth, and the Adaptive-PF against the
-//! same filter with a fixed count (seed 000's Fig. 5 compares with N = 3000):
+//! same filter with a fixed count ([Farina, Fig. 5] compares with N = 3000):
 //! both runs' radius error, particle count and time per step over time.
 
 use super::configs::fixed_count_label;
@@ -157,7 +157,7 @@ fn chart(runs: &[Replay<'_>], pair: &[&Replay<'_>], data: &SynthData) -> LineCha
             .collect::<Vec<_>>()
     };
     LineChart::new(
-        "Radii step at 55 s, run 0 of the Monte Carlo (seed 000, Figs. 5 and 6b)",
+        "Radii step at 55 s, run 0 of the Monte Carlo (Fariña et al., Figs. 5 and 6b)",
         "time (s)",
     )
     .panel("R_R (mm)", radius_series(runs, data, true))

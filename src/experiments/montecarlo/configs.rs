@@ -1,4 +1,4 @@
-//! The calibrator configurations seed 000's tables compare.
+//! The calibrator configurations the tables of \[Farina\] compare.
 
 use crate::calib::{CalibParams, CountRule, Method, Scheme, Trigger};
 
@@ -6,7 +6,7 @@ use crate::calib::{CalibParams, CountRule, Method, Scheme, Trigger};
 /// experiment, for every filter.
 pub const CHANGING_FALSE_ALARM: f64 = 1e-4;
 
-/// The fixed particle count seed 000's Fig. 5 compares the adaptive one with.
+/// The fixed particle count [Farina, Fig. 5] compares the adaptive one with.
 pub const FIG5_FIXED_PARTICLES: usize = 3000;
 
 /// Label of the radius-step experiment's Adaptive-PF with its count held at
@@ -18,7 +18,7 @@ pub fn fixed_count_label() -> String {
     )
 }
 
-/// Seed 000's Table II configurations: adaptive-pf, pf, dkf, akf, none.
+/// The configurations of [Farina, Table II]: adaptive-pf, pf, dkf, akf, none.
 pub fn table2_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
     Method::ALL
         .iter()
@@ -34,7 +34,7 @@ pub fn table2_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
         .collect()
 }
 
-/// Seed 000's Table I configurations: the fixed PF with 4 schemes × 3 triggers.
+/// The configurations of [Farina, Table I]: the fixed PF with 4 schemes × 3 triggers.
 pub fn table1_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
     let mut out = vec![];
     for s in Scheme::ALL {
@@ -57,9 +57,9 @@ pub fn table1_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
 /// the change detector (the same test for all three, at a false-alarm
 /// probability of 1e-4 so that the Kalman filters' wider covariance does
 /// not mute it) and, labelled `METHOD, no detector`, without it (the fixed
-/// PF has none, as in seed 000); then `none`. Right after the Adaptive-PF
+/// PF has none, as in \[Farina\]); then `none`. Right after the Adaptive-PF
 /// comes the same filter, detector and every other setting kept, with its
-/// count fixed at [`FIG5_FIXED_PARTICLES`] (seed 000's Fig. 5 baseline).
+/// count fixed at [`FIG5_FIXED_PARTICLES`] (the baseline of [Farina, Fig. 5]).
 pub fn changing_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
     let mut out = vec![];
     for m in [Method::AdaptivePf, Method::Dkf, Method::Akf] {

@@ -1,4 +1,4 @@
-//! Monte Carlo experiments (seed 000's Tables I and II on synthetic runs
+//! Monte Carlo experiments ([Farina, Tables I and II] on synthetic runs
 //! with random true radii, the radii step of Fig. 6b, and Table II end to
 //! end on simulated scans): final radius errors, velocity and odometry RMSE,
 //! time per iteration, convergence time.

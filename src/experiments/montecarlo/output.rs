@@ -33,18 +33,18 @@ fn setup(name: &str, inp: &ExperimentInputs<'_>) -> Setup {
     let (configs, title) = match name {
         "resampling" => (
             table1_configs(base),
-            "Seed 000 Table I: resampling scheme × trigger",
+            "Fariña et al. Table I: resampling scheme × trigger",
         ),
         "montecarlo" => (
             table2_configs(base),
-            "Seed 000 Table II: Adaptive-PF against the baselines",
+            "Fariña et al. Table II: Adaptive-PF against the baselines",
         ),
         "montecarlo-scans" => (
             table2_configs(base),
-            "Seed 000 Table II end to end: simulated LMS111 scans, ICP, calibrators",
+            "Fariña et al. Table II end to end: simulated LMS111 scans, ICP, calibrators",
         ),
         _ => {
-            // A new user boards at 55 s (seed 000, Fig. 6b); runs long enough to re-converge.
+            // A new user boards at 55 s ([Farina, Fig. 6b]); runs long enough to re-converge.
             mc.synth.duration = mc.synth.duration.max(110.0);
             mc.synth.radius_step = Some(RadiusStep {
                 time: 55.0,
@@ -73,7 +73,7 @@ fn changing_note(s: &Setup, png: &Path) -> Result<String, PipelineError> {
     let fig = png.with_file_name("changing-run0.png");
     let mut md = format!(
         "\nRun 0 over time (radius estimates against the truth; the Adaptive-PF against the \
-         same filter with N fixed at {FIG5_FIXED_PARTICLES}, as in seed 000's Fig. 5: radius \
+         same filter with N fixed at {FIG5_FIXED_PARTICLES}, as in Fariña et al.'s Fig. 5: radius \
          error, particle count, time per step): `changing-run0.png`.\n"
     );
     if let Some(Fig5 {

@@ -1,4 +1,4 @@
-//! Seed 000's Table II end to end: every run is a simulated wheelchair with
+//! [Farina, Table II] end to end: every run is a simulated wheelchair with
 //! its own true radii and wheel base, whose LMS111 scans go through ICP; the
 //! calibrators see what they would see on a real chair (ICP motions with
 //! their own σ, quantised encoders, the gyro), not ICP-like synthetic noise.

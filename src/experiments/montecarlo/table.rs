@@ -96,7 +96,7 @@ fn wins(a: &[RunMetrics], b: &[RunMetrics], f: Metric) -> usize {
 impl MonteCarloTable {
     /// The paired comparison of the first row against every other: in how
     /// many runs (same data, same seeds) the first configuration is strictly
-    /// better, per metric ([`PAIRED`]).
+    /// better, per metric (`PAIRED`).
     pub fn paired_markdown(&self) -> String {
         let Some((first, rest)) = self.rows.split_first() else {
             return String::new();

@@ -1,4 +1,4 @@
-//! The demo's figures (seed 000's Figs. 5–8) as PNG.
+//! The demo's figures ([Farina, Figs. 5–8]) as PNG.
 
 use super::{plot_anchor, viz_err, xy, DemoInput, DemoReference};
 use crate::calib::{self, CalibrationRun, Method};

@@ -105,11 +105,11 @@ fn calibration(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
     );
     r.image(
         "radii.png",
-        "Radii and wheel base of each method against the truth (seed 000, Fig. 6/8).",
+        "Radii and wheel base of each method against the truth (Fariña et al., Figs. 6 and 8).",
     );
     r.image(
         "particles.png",
-        "Adaptive-PF particle count and process noise (seed 000, Fig. 5).",
+        "Adaptive-PF particle count and process noise (Fariña et al., Fig. 5).",
     );
     Ok(())
 }
@@ -203,7 +203,7 @@ fn odometry(s: &DemoSummary, r: &mut Report) -> Result<(), PipelineError> {
     ));
     r.image(
         "trajectories.png",
-        "Trajectories against the reference (seed 000, Fig. 7).",
+        "Trajectories against the reference (Fariña et al., Fig. 7).",
     );
     r.image("errors.png", "Position error over time.");
     Ok(())

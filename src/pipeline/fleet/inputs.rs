@@ -20,7 +20,7 @@ pub struct Listed {
     pub unix_day: f64,
 }
 
-/// Days since 1970-01-01 of a civil date (Hinnant's `days_from_civil`).
+/// Days since 1970-01-01 of a civil date (Hinnant's `days_from_civil` \[Hinnant\]).
 fn days_from_civil(y: i64, m: i64, d: i64) -> i64 {
     let y = if m <= 2 { y - 1 } else { y };
     let era = y.div_euclid(400);

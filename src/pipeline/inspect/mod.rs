@@ -1,7 +1,7 @@
 //! `odocal inspect REC`: what a recording holds ([`crate::io::survey`]),
-//! which of its topics each command would read and why ([`choose`]), the
+//! which of its topics each command would read and why (`choose`), the
 //! base → laser transform found in its transforms (or not), what each
-//! command would still miss, and a proposed robot file ([`propose`]) that
+//! command would still miss, and a proposed robot file (`propose`) that
 //! `--write-robot FILE` writes atomically.
 
 mod choose;
