@@ -185,7 +185,7 @@ fn a_radius_step_mid_run_is_retracked() {
     let r = run(&mut pf, &st, NOMINAL);
     // The change detector fired after the step, not before it: a twin of
     // the filter (same settings and seed) stepped by hand tells when.
-    let mut twin = ParticleFilter::new(&p);
+    let mut twin = ParticleFilter::new(&p.pf_settings());
     let mut fired = Vec::new();
     for s in &st {
         let before = twin.jumps();

@@ -7,6 +7,7 @@ mod calib_change_naming;
 mod calib_checks;
 mod calib_end_to_end;
 mod calib_filters;
+mod calib_online_real;
 mod calib_real;
 mod calib_resample;
 mod classic_cli;

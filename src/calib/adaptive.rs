@@ -7,7 +7,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::normal::inverse_normal_cdf;
-use super::params::{PAPER_RADIUS_M, SQRT_PAPER_STEP};
+use super::units::{PAPER_RADIUS_M, SQRT_PAPER_STEP};
 use super::steps::{usable, CalibStep, Kind};
 use serde::{Deserialize, Serialize};
 

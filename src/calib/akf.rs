@@ -77,13 +77,14 @@ impl Calibrator for AugmentedKf {
         self.x[1] = w;
         let mut q = self.q;
         // The parameters' random walk per √s (per step under the paper's
-        // preset).
+        // preset); the velocity model's error over this step's length.
         let dt = if self.per_step { 1.0 } else { s.dt().max(0.0) };
         (2..5).for_each(|i| q[i] *= dt);
+        let model_var = super::kalman::model_var_at([self.q[0], self.q[1]], s.dt());
+        (q[0], q[1]) = (model_var[0], model_var[1]);
         q[4] *= obs * obs;
         self.p = f * self.p * f.transpose() + M5::from_diagonal(&q);
         if let Some(c) = &mut self.change {
-            let model_var = [self.q[0], self.q[1]];
             let pt = self.p.fixed_view::<3, 3>(2, 2).into_owned();
             c.observe(s, &theta, &pt, obs, (self.floor, self.dof), model_var);
         }

@@ -25,7 +25,7 @@
 // `!(x > y)` is deliberate: it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::params::PAPER_RADIUS_M;
+use super::units::PAPER_RADIUS_M;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};

@@ -34,6 +34,20 @@ pub(crate) fn turn_jacobian(
     Vector3::new(jw[0] - shift, jw[1] - shift, jw[2] * obs)
 }
 
+/// The velocity model's variance `[V, W]` over a step of `dt` (s), for the
+/// model σ's configured per [`super::PAPER_STEP_S`]: the model's error is an
+/// error of the wheels' angles over the step (encoder quantisation, a
+/// sample's timing, a slip's jerk), so its rate error falls as 1/dt; an
+/// interval of a second carries 1/50 of a 0.02 s step's.
+pub(crate) fn model_var_at(base: [f64; 2], dt: f64) -> [f64; 2] {
+    let k = if dt > 0.0 {
+        (super::PAPER_STEP_S / dt).min(1.0).powi(2)
+    } else {
+        1.0
+    };
+    base.map(|v| v * k)
+}
+
 /// Initial belief: centre of the uniform ranges, variance of the uniform
 /// distribution (width²/12).
 pub(crate) fn prior(ranges: &Ranges) -> (Vector3<f64>, Matrix3<f64>) {

@@ -28,6 +28,7 @@ mod step_builder;
 mod steps;
 pub mod synth;
 mod trigger;
+mod units;
 mod weights;
 
 pub use adaptive::{occupied_bins, AdaptiveParams, CountRule};
@@ -39,8 +40,9 @@ pub use nominal::Nominal;
 pub use normal::{erfc, inverse_normal_cdf};
 pub use params::{
     CalibParams, KalmanSettings, Method, NoiseParams, PfSettings, Preset, Ranges, Units,
-    MAX_PARTICLES, PAPER_RADIUS_M, PAPER_STEP_S, SQRT_PAPER_STEP,
+    MAX_PARTICLES,
 };
+pub use units::{PAPER_RADIUS_M, PAPER_STEP_S, SQRT_PAPER_STEP};
 pub use pf::{ParticleFilter, Particles};
 pub use pool::NormalPool;
 pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};

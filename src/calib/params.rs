@@ -12,23 +12,13 @@
 
 use super::adaptive::AdaptiveParams;
 use super::change::{ChangeParams, DetectorParams};
+use super::units::{PAPER_RADIUS_M, SQRT_PAPER_STEP};
 use super::resample::Scheme;
 use super::trigger::Trigger;
 use serde::{Deserialize, Serialize};
 
 /// Most particles a filter may be asked for (`--particles`, `adaptive.n_max`).
 pub const MAX_PARTICLES: usize = 1_000_000;
-
-/// The wheel radius (m) of \[Farina\]'s wheelchair, the unit its printed
-/// noise values are in.
-pub const PAPER_RADIUS_M: f64 = 0.32;
-
-/// The step (s) its printed per-iteration noise values are taken at: one
-/// scan of its LMS111 at 50 Hz. odocal's random walks are per √s, so that
-/// the filters follow a change as fast whatever their step rate (one scan
-/// pair, or an interval of a second); the defaults are the paper's values
-/// divided by √0.02.
-pub const PAPER_STEP_S: f64 = 0.02;
 
 /// Which form of the filters runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -145,9 +135,12 @@ impl Ranges {
 #[serde(default, deny_unknown_fields)]
 pub struct NoiseParams {
     /// σ of the Gaussian random walk on R_R, R_L, D, in wheel radii per √s
-    /// (a step of dt draws σ·√dt): the fixed PF's process noise (\[Farina\]:
-    /// 0.0005 m per 0.02 s iteration on 0.32 m wheels) and the Adaptive-PF's
-    /// σ until its first measurement.
+    /// (a step of dt draws σ·√dt): the fixed PF's process noise and the
+    /// Adaptive-PF's σ until its first measurement. 10⁻³: a radius may
+    /// wander 0.1 % in a second, 0.8 % in a minute. (The 0.5 mm per
+    /// iteration of \[Farina\] on 0.32 m wheels, 1.1 % per √s at 50 Hz, keeps
+    /// a filter without its adaptive rule several millimetres wide on a real
+    /// robot; `preset = "published"` uses it.)
     pub param_sigma: f64,
     /// Half-width of the uniform jitter on each particle's V (m/s) and W
     /// (rad/s) after prediction ([Farina, Sec. III] mentions such jitter without a
@@ -206,7 +199,7 @@ pub struct NoiseParams {
 impl Default for NoiseParams {
     fn default() -> Self {
         Self {
-            param_sigma: 5e-4 / PAPER_RADIUS_M / SQRT_PAPER_STEP,
+            param_sigma: 1e-3,
             velocity_jitter: 0.0,
             sigma_floor: 1e-3,
             model_sigma_v: 0.01 / PAPER_RADIUS_M,
@@ -307,6 +300,7 @@ impl CalibParams {
     pub fn with_preset(&self) -> Self {
         let mut p = self.clone();
         if p.preset == Preset::Published {
+            p.noise.param_sigma = 5e-4 / PAPER_RADIUS_M / SQRT_PAPER_STEP;
             p.noise.kernel_shrink = 1.0;
             p.noise.model_sigma_v = 0.0;
             p.noise.model_sigma_w = 0.0;
@@ -494,5 +488,4 @@ pub struct Units {
     pub per_step: bool,
 }
 
-/// √[`PAPER_STEP_S`].
-pub const SQRT_PAPER_STEP: f64 = 0.141_421_356_237_309_5;
+

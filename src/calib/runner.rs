@@ -24,6 +24,7 @@ pub struct Runner {
     total_s: f64,
     steps: usize,
     resets: usize,
+    firings: usize,
     last: Option<Estimate>,
 }
 
@@ -39,6 +40,7 @@ impl Runner {
             total_s: 0.0,
             steps: 0,
             resets: 0,
+            firings: 0,
             last: None,
         }
     }
@@ -61,6 +63,7 @@ impl Runner {
         let e = cal.step(s);
         self.total_s += t.elapsed().as_secs_f64();
         self.resets += e.weights_reset as usize;
+        self.firings += e.changed as usize;
         let dt = s.t1 - s.t0.max(covered);
         if dt > 0.0 {
             self.pose *= e.drive().increment(s.omega_right * dt, s.omega_left * dt);
@@ -72,6 +75,11 @@ impl Runner {
         e
     }
 
+    /// The estimate after the last step, if any.
+    pub fn last(&self) -> Option<Estimate> {
+        self.last
+    }
+
     /// Steps run so far.
     pub fn steps(&self) -> usize {
         self.steps
@@ -80,6 +88,11 @@ impl Runner {
     /// Steps whose weights all underflowed and were reset.
     pub fn weight_resets(&self) -> usize {
         self.resets
+    }
+
+    /// Steps at which the change detector fired.
+    pub fn firings(&self) -> usize {
+        self.firings
     }
 
     /// The summary after the steps so far (the nominal parameters before any).

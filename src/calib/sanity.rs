@@ -160,14 +160,29 @@ fn misfit(ev: &Evidence, p: &CheckParams) -> [Option<(String, f64)>; 2] {
 
 /// The observability of R_R, R_L and D from `ev`, with `std` the filter's
 /// standard deviations (widened here where weak) and `nominal` the scale.
+/// With `changed` (the filter's change detector fired), a misfit of one
+/// fixed law is what the filter followed: it is stated, not widened by.
 pub fn observability(
     ev: &Evidence,
     std: &DiffDrive,
     nominal: &DiffDrive,
     p: &CheckParams,
+    changed: bool,
 ) -> Observability {
     let g = gaps(ev, nominal.wheel_base, p);
-    let [fit_radii, fit_base] = misfit(ev, p);
+    let [fit_radii, fit_base] = misfit(ev, p).map(|f| {
+        f.map(|(why, k)| match changed {
+            false => (why, k),
+            true => (
+                format!(
+                    "{}; the filter's change detector fired, so the std is the filter's after \
+                     the change it followed, not widened",
+                    why.trim_end_matches("; the std is widened by √χ²")
+                ),
+                1.0,
+            ),
+        })
+    });
     let radius_missing = g
         .few
         .clone()
@@ -317,14 +332,14 @@ mod tests {
     fn a_straight_run_cannot_give_the_wheel_base() {
         let p = CheckParams::default();
         let straight = evidence(&vec![(5.0, 5.0); 100], false);
-        let o = observability(&straight, &drive(0.001), &drive(0.5), &p);
+        let o = observability(&straight, &drive(0.001), &drive(0.5), &p, false);
         assert!(o.parameters["r_right"].observable);
         let d = &o.parameters["wheel_base"];
         assert!(
             !d.observable && d.missing.as_ref().unwrap().contains("turn"),
             "{d:?}"
         );
-        let full = observability(&evidence(&course(), false), &drive(0.001), &drive(0.5), &p);
+        let full = observability(&evidence(&course(), false), &drive(0.001), &drive(0.5), &p, false);
         assert!(full.unobservable().is_empty(), "{:?}", full.parameters);
         assert_eq!(
             evidence(&vec![(5.0, 5.0); 100], false).wiring(),
@@ -349,13 +364,13 @@ mod tests {
         }
         let [v, w] = ev.fit_chi2().map(Option::unwrap);
         assert!(v > 30.0 && w > 30.0, "{v} {w}");
-        let o = observability(&ev, &drive(0.001), &drive(0.5), &p);
+        let o = observability(&ev, &drive(0.001), &drive(0.5), &p, false);
         let r = &o.parameters["r_right"];
         assert!(r.observable && r.weak && r.missing.as_ref().unwrap().contains("χ²"));
         // `drive(0.001)` as the filter's std: 0.1 m for each radius.
         assert!((r.std / 0.1 - v.sqrt()).abs() < 1e-9, "{}", r.std);
         // Exact measurements: no widening.
-        let exact = observability(&evidence(&course(), false), &drive(0.001), &drive(0.5), &p);
+        let exact = observability(&evidence(&course(), false), &drive(0.001), &drive(0.5), &p, false);
         assert_eq!(exact.parameters["r_right"].std, 0.1);
     }
 

@@ -133,44 +133,13 @@ pub fn run(
         robot,
         params: &params,
     };
-    let (done, assumptions, input, wheel_source) = match (&job.input, &started) {
-        (CalibSource::Recording(path), Some(s)) => {
-            let mut source = crate::io::RecordingSource::new(&s.rec);
-            let (done, mut a) = run.recording(&mut source, &mut obs)?;
-            super::start::state(&mut a, &s.est, &nominal.robot);
-            (done, a, path, Some(s.wheels.clone()))
-        }
-        (CalibSource::Recording(path), None)
-            if crate::io::sniff(path)? == crate::io::Format::CensiTuples =>
-        {
-            let (done, a) = run.tuples(path, &mut obs)?;
-            (done, a, path, None)
-        }
-        (CalibSource::Recording(path), None) => {
-            let (done, a, wheels) = run.file(path, &mut obs)?;
-            (done, a, path, Some(wheels))
-        }
-        (CalibSource::Csv { motions, wheels }, _) => {
-            let input = read_csv_input(motions, wheels, &cfg.icp)?;
-            let done = drive::calibrate_streams(
-                &input.wheels,
-                &input.observations,
-                &input.gyro,
-                robot,
-                &params,
-                &cfg.measurements,
-                &mut obs,
-            )
-            .map_err(|e| name_csv_inputs(e, motions, wheels))?;
-            (done, nominal.assumptions(), motions, None)
-        }
-    };
+    let (done, assumptions, input, wheel_source) = run.input(job, started.as_ref(), &mut obs)?;
     drop(obs);
-    let mut summary = done.summary;
+    let mut summary = done.summary.clone();
     summary.assumptions = assumptions;
     vet(
         &mut summary,
-        &done.evidence,
+        &done,
         &nominal.robot,
         &params,
         &input.display().to_string(),
@@ -236,7 +205,60 @@ struct Run<'a> {
     params: &'a CalibParams,
 }
 
+/// What a run over the job's input gives: the calibration, the
+/// assumptions, the input's path (to name in messages) and where the wheels
+/// came from.
+type Ran<'j> = (
+    drive::CalibRunSummary,
+    crate::assumptions::Assumptions,
+    &'j Path,
+    Option<crate::recording::WheelSource>,
+);
+
 impl Run<'_> {
+    /// The calibration of the job's input, by its kind: a recording (from
+    /// the batch start's shifted copy with `--init batch`), Censi's tuples,
+    /// or CSV motions and wheels.
+    fn input<'j>(
+        &self,
+        job: &'j CalibrateJob,
+        started: Option<&super::start::FromBatch>,
+        obs: &mut dyn RunObserver,
+    ) -> Result<Ran<'j>, PipelineError> {
+        Ok(match (&job.input, started) {
+            (CalibSource::Recording(path), Some(s)) => {
+                let mut source = crate::io::RecordingSource::new(&s.rec);
+                let (done, mut a) = self.recording(&mut source, obs)?;
+                super::start::state(&mut a, &s.est, &self.nominal.robot);
+                (done, a, path, Some(s.wheels.clone()))
+            }
+            (CalibSource::Recording(path), None)
+                if crate::io::sniff(path)? == crate::io::Format::CensiTuples =>
+            {
+                let (done, a) = self.tuples(path, obs)?;
+                (done, a, path, None)
+            }
+            (CalibSource::Recording(path), None) => {
+                let (done, a, wheels) = self.file(path, obs)?;
+                (done, a, path, Some(wheels))
+            }
+            (CalibSource::Csv { motions, wheels }, _) => {
+                let input = read_csv_input(motions, wheels, &self.cfg.icp)?;
+                let done = drive::calibrate_streams(
+                    &input.wheels,
+                    &input.observations,
+                    &input.gyro,
+                    self.robot,
+                    self.params,
+                    &self.cfg.measurements,
+                    obs,
+                )
+                .map_err(|e| name_csv_inputs(e, motions, wheels))?;
+                (done, self.nominal.assumptions(), motions, None)
+            }
+        })
+    }
+
     /// ICP and the calibrator over `source`; the nominal values' sources
     /// with the mounting the matcher used.
     fn recording(
@@ -474,11 +496,12 @@ fn state_online(a: &mut crate::assumptions::Assumptions, o: &calib::online::Onli
 /// plausibility. What the data cannot support is an error naming `input`.
 fn vet(
     summary: &mut CalibSummary,
-    evidence: &calib::Evidence,
+    done: &drive::CalibRunSummary,
     robot: &RobotConfig,
     params: &CalibParams,
     input: &str,
 ) -> Result<(), PipelineError> {
+    let evidence = &done.evidence;
     let refuse = |m: String| -> PipelineError { InputError::new(input, m).into() };
     if let Some(fault) = evidence.wiring().fault() {
         return Err(refuse(format!("wheel encoders wired wrongly: {fault}")));
@@ -487,7 +510,13 @@ fn vet(
         return Ok(());
     }
     let nominal = robot.diff_drive();
-    let o = calib::observability(evidence, &summary.std, &nominal, &params.checks);
+    let o = calib::observability(
+        evidence,
+        &summary.std,
+        &nominal,
+        &params.checks,
+        done.firings > 0,
+    );
     let missing = o.unobservable();
     if !missing.is_empty() {
         return Err(refuse(format!(

@@ -16,6 +16,7 @@ use crate::calib::{
 };
 use crate::geom::{self, Pose2};
 use crate::robot::DiffDrive;
+use super::odometry::WheelOdometry;
 use crate::error::InputError;
 use crate::icp::{IcpParams, IcpStats, Prior, StreamMatcher, Tally};
 use crate::io::{Item, SampleSource, StreamInfo};
@@ -255,6 +256,7 @@ enum Feed {
     Online {
         front: Box<FrontEnd>,
         icp_mount: Pose2,
+        odometry: WheelOdometry,
     },
 }
 
@@ -306,6 +308,7 @@ impl CalibStage {
         let feed = Feed::Online {
             front: Box::new(front),
             icp_mount,
+            odometry: WheelOdometry::default(),
         };
         let shown = nominal.unwrap_or(DiffDrive {
             r_right: f64::NAN,
@@ -337,8 +340,12 @@ impl CalibStage {
 
     /// A wheel sample (stamp order).
     pub fn push_wheel(&mut self, w: WheelSample) {
-        if let Feed::Online { front, .. } = &mut self.feed {
+        if let Feed::Online {
+            front, odometry, ..
+        } = &mut self.feed
+        {
             front.push_wheel(&w);
+            odometry.push(w);
         }
         self.steps.push_wheel(w);
     }
@@ -362,7 +369,9 @@ impl CalibStage {
     /// unless the pair failed.
     pub fn push_motion(&mut self, m: &Motion) {
         match &mut self.feed {
-            Feed::Online { front, icp_mount } => {
+            Feed::Online {
+                front, icp_mount, ..
+            } => {
                 front.push_motion(&LaserMotion::from_motion(m, icp_mount));
             }
             Feed::Direct => {
@@ -410,13 +419,22 @@ impl CalibStage {
         let runner = &mut self.runner;
         let evidence = &mut self.evidence;
         let measured = &mut self.measured;
+        let feed = &mut self.feed;
         let mut one = |s: CalibStep| {
             evidence.add(&s);
             *measured += usize::from(!s.measurements().is_empty());
-            run_step(runner, cal, &s, obs)
+            run_step(runner, cal, &s, feed, obs)
         };
         whole.into_iter().for_each(&mut one);
         self.steps.poll(all_done, &mut one);
+        if all_done {
+            if let (Feed::Online { front, odometry, .. }, Some(e)) =
+                (&mut self.feed, self.runner.last())
+            {
+                let mut pose = |t: f64, p: &Pose2| obs.calibrated_pose(t, p);
+                odometry.advance(f64::INFINITY, front.time_offset(), &e.drive(), &mut pose);
+            }
+        }
         Ok(())
     }
 
@@ -483,11 +501,15 @@ fn start_calibrator(
     calib::build(&p, shown).map_err(|e| PipelineError::BadArgument(e.to_string()))
 }
 
-/// One filter step, its estimate and calibrated poses handed to the observer.
+/// One filter step, its estimate and calibrated poses handed to the observer:
+/// behind the online front end the wheel samples up to the step's end,
+/// integrated at their own rate with the estimate after the step; fed
+/// directly, the step's own increment.
 fn run_step(
     runner: &mut Runner,
     cal: &mut (dyn Calibrator + Send),
     s: &CalibStep,
+    feed: &mut Feed,
     obs: &mut dyn RunObserver,
 ) {
     let mut poses: [Option<(f64, crate::geom::Pose2)>; 2] = [None, None];
@@ -496,8 +518,18 @@ fn run_step(
         poses[slot] = Some((t, *p));
     });
     obs.step(&e, cal.cloud());
-    for (t, p) in poses.into_iter().flatten() {
-        obs.calibrated_pose(t, &p);
+    match feed {
+        Feed::Online {
+            front, odometry, ..
+        } => {
+            let mut pose = |t: f64, p: &Pose2| obs.calibrated_pose(t, p);
+            odometry.advance(s.t1, front.time_offset(), &e.drive(), &mut pose);
+        }
+        Feed::Direct => {
+            for (t, p) in poses.into_iter().flatten() {
+                obs.calibrated_pose(t, &p);
+            }
+        }
     }
 }
 
@@ -539,6 +571,8 @@ pub struct CalibRunSummary {
     pub weight_resets: usize,
     /// The excitation and wiring the steps showed.
     pub evidence: calib::Evidence,
+    /// Steps at which the change detector fired.
+    pub firings: usize,
 }
 
 /// Runs ICP and the calibrator `calib` names over `source` and gives both
@@ -614,6 +648,7 @@ fn finish(stage: &CalibStage, input: &str) -> Result<CalibRunSummary, PipelineEr
         })?,
         weight_resets: stage.weight_resets(),
         evidence: stage.evidence().clone(),
+        firings: stage.runner.firings(),
     })
 }
 
@@ -678,5 +713,6 @@ pub fn calibrate_streams(
         summary: stage.summary()?,
         weight_resets: stage.weight_resets(),
         evidence: stage.evidence().clone(),
+        firings: stage.runner.firings(),
     })
 }

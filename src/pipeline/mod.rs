@@ -17,6 +17,7 @@ pub mod icp;
 pub mod inspect;
 pub mod nominal;
 pub mod observe;
+pub mod odometry;
 pub mod outputs;
 pub mod paste;
 pub mod recorder;

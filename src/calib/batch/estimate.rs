@@ -77,15 +77,24 @@ pub fn estimate_with_laser(
         info: nalgebra::DMatrix::zeros(n, n),
         chi2: 0.0,
     };
+    // Censi's drops accumulate over his rounds; the robust rule judges every
+    // round afresh among those, so that its cap holds for the whole.
+    let mut censi = keep.clone();
     for round in 0..MAX_ROUNDS {
         f = fit(&data(pb, &covs, &keep, &step, &free), &f.p, p.max_iterations);
         let res = residuals(pb, &f.p);
         let before = keep.clone();
         if round < p.outlier_iterations {
-            drop_outliers(&res, &covs, &mut keep, p.outlier_fraction);
+            drop_outliers(&res, &covs, &mut censi, p.outlier_fraction);
         }
-        let fits = outliers::consistent(&res, &covs, &keep, p.outlier_probability);
-        keep.iter_mut().zip(&fits).for_each(|(k, f)| *k &= *f);
+        let fits = outliers::consistent(
+            &res,
+            &covs,
+            &censi,
+            p.outlier_probability,
+            p.outlier_max_fraction,
+        );
+        keep = censi.iter().zip(&fits).map(|(c, f)| *c && *f).collect();
         if keep.iter().filter(|k| **k).count() < p.min_intervals.max(6) {
             // Too few would be left to fit: `f` is the fit of the last set.
             keep = before;

@@ -119,6 +119,8 @@ pub struct BatchParams {
     /// intervals' typical χ², is an outlier (`outliers::consistent`); 0 =
     /// Censi's fixed fraction alone.
     pub outlier_probability: f64,
+    /// At most this fraction of the intervals is dropped by that rule.
+    pub outlier_max_fraction: f64,
     /// Estimate the time offset when the intervals carry wheel time.
     pub time_offset: bool,
     /// Levenberg–Marquardt iteration limit per fit.
@@ -155,6 +157,7 @@ impl Default for BatchParams {
             outlier_iterations: 4,
             outlier_fraction: 0.01,
             outlier_probability: 1e-3,
+            outlier_max_fraction: 0.1,
             time_offset: true,
             max_iterations: 50,
             min_intervals: 10,

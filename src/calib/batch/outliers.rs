@@ -64,13 +64,17 @@ pub fn chi2(e: P3, cov: &Matrix3<f64>) -> f64 {
 
 /// Which intervals are consistent with the rest: `false` for those whose χ²
 /// over the robust scale (the median χ² of those in `kept`, over the median
-/// of χ²₃) exceeds the χ²₃ quantile of `1 − probability`. All kept when
-/// `probability` is 0 or fewer than 10 intervals are kept.
+/// of χ²₃) exceeds the χ²₃ quantile of `1 − probability`, the largest first
+/// and at most `max_fraction` of all: a recording whose residuals are far
+/// from Gaussian everywhere (heavy tails, errors that grow with speed) is
+/// not cut down to its quietest part. All kept when `probability` is 0 or
+/// fewer than 10 intervals are kept.
 pub fn consistent(
     residuals: &[P3],
     covs: &[Matrix3<f64>],
     kept: &[bool],
     probability: f64,
+    max_fraction: f64,
 ) -> Vec<bool> {
     let c: Vec<f64> = residuals.iter().zip(covs).map(|(e, s)| chi2(*e, s)).collect();
     let mut k: Vec<f64> = c
@@ -79,14 +83,19 @@ pub fn consistent(
         .filter(|(x, k)| **k && x.is_finite())
         .map(|(x, _)| *x)
         .collect();
+    let mut out = vec![true; c.len()];
     if !(probability > 0.0) || k.len() < 10 {
-        return vec![true; c.len()];
+        return out;
     }
     k.sort_by(f64::total_cmp);
     let chi3 = ChiSquared::new(3.0).expect("3 degrees of freedom");
     let scale = (k[k.len() / 2] / chi3.inverse_cdf(0.5)).max(f64::MIN_POSITIVE);
     let limit = chi3.inverse_cdf(1.0 - probability);
-    c.iter().map(|x| *x / scale <= limit).collect()
+    let mut beyond: Vec<usize> = (0..c.len()).filter(|&i| !(c[i] / scale <= limit)).collect();
+    beyond.sort_by(|&a, &b| c[b].total_cmp(&c[a]));
+    let most = (max_fraction * c.len() as f64).floor() as usize;
+    beyond.into_iter().take(most).for_each(|i| out[i] = false);
+    out
 }
 
 #[cfg(test)]
@@ -120,11 +129,17 @@ mod tests {
             })
             .collect();
         e.extend([[0.05, 0.0, 0.0]; 4]);
-        let k = consistent(&e, &covs, &vec![true; 204], 1e-3);
+        let k = consistent(&e, &covs, &vec![true; 204], 1e-3, 0.1);
         assert!(k[..200].iter().all(|x| *x));
         assert!(k[200..].iter().all(|x| !*x));
+        // At most a tenth: of 30 beyond, the 20 largest go.
+        let mut many = e.clone();
+        (0..30).for_each(|i| many[i] = [0.01 + 1e-4 * i as f64, 0.0, 0.0]);
+        let k = consistent(&many, &covs, &vec![true; 204], 1e-3, 0.1);
+        assert_eq!(k.iter().filter(|x| !**x).count(), 20);
+        assert!(k[..10].iter().all(|x| *x) && k[10..30].iter().all(|x| !*x));
         // Off, or too few to judge: all kept.
-        assert!(consistent(&e, &covs, &vec![true; 204], 0.0).iter().all(|x| *x));
-        assert!(consistent(&e[..9], &covs[..9], &[true; 9], 1e-3).iter().all(|x| *x));
+        assert!(consistent(&e, &covs, &vec![true; 204], 0.0, 0.1).iter().all(|x| *x));
+        assert!(consistent(&e[..9], &covs[..9], &[true; 9], 1e-3, 0.1).iter().all(|x| *x));
     }
 }

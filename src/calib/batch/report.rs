@@ -278,7 +278,7 @@ fn observe(std: &[f64], c: &Context) -> BTreeMap<String, ParamObservability> {
     };
     let mut checks = *c.checks;
     checks.weak_widening = 1.0;
-    let mut out = observability(&c.evidence, &sd, c.nominal, &checks).parameters;
+    let mut out = observability(&c.evidence, &sd, c.nominal, &checks, false).parameters;
     let b0 = c.nominal.wheel_base;
     let nom = [c.nominal.r_right, c.nominal.r_left, b0];
     let ev = &c.evidence;

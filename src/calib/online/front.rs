@@ -60,6 +60,8 @@ pub struct FrontEnd {
     started: Option<Started>,
     first_t: Option<f64>,
     last_fit_t: Option<f64>,
+    /// Intervals in the window at the last fit.
+    last_fit_n: usize,
     /// The time offset and mounting in use, and the mounting's std's.
     offset: f64,
     laser: P3,
@@ -75,6 +77,11 @@ pub struct FrontEnd {
     offsets: Vec<(f64, Valued)>,
     /// Whether the intervals carry no time (Censi's tuples).
     untimed: bool,
+    /// The mounting's running information and information-weighted sum.
+    mount_info: Matrix3<f64>,
+    mount_sum: Vector3<f64>,
+    /// Intervals in the window at the last fit (the rest is new).
+    mount_overlap: usize,
 }
 
 impl FrontEnd {
@@ -94,7 +101,7 @@ impl FrontEnd {
         };
         Self {
             builder: IntervalBuilder::new(p.interval_s, p.interval_rad, 1e-3),
-            window: GeometryWindow::new(p.window_s, batch.max_time_offset_s),
+            window: GeometryWindow::new(p.window_s, p.max_intervals, batch.max_time_offset_s),
             p: p.clone(),
             batch,
             checks: *checks,
@@ -105,6 +112,7 @@ impl FrontEnd {
             started: None,
             first_t: None,
             last_fit_t: None,
+            last_fit_n: 0,
             offset: 0.0,
             laser_std: None,
             laser_estimated: false,
@@ -114,6 +122,9 @@ impl FrontEnd {
             fits: Vec::new(),
             offsets: Vec::new(),
             untimed: false,
+            mount_info: Matrix3::zeros(),
+            mount_sum: Vector3::zeros(),
+            mount_overlap: 0,
         }
     }
 
@@ -190,14 +201,17 @@ impl FrontEnd {
     fn schedule(&mut self, t: f64) {
         let since_first = t - self.first_t.unwrap_or(t);
         let since_fit = self.last_fit_t.map_or(f64::INFINITY, |l| t - l);
+        let grown = 4 * self.window.len() >= 5 * self.last_fit_n;
         let due = match self.started {
-            None => since_first >= self.p.warmup_s && since_fit >= self.p.retry_s,
+            None => since_first >= self.p.warmup_s && since_fit >= self.p.retry_s && grown,
             Some(_) => since_fit >= self.p.resolve_s,
         };
         if due {
             self.fit(t);
         }
-        if self.started.is_none() && since_first >= self.p.warmup_max_s {
+        // A robot on the move cannot wait for ever; intervals without time
+        // (tuples, read whole) wait for the fit to the end.
+        if self.started.is_none() && since_first >= self.p.warmup_max_s && !self.untimed {
             self.start_nominal(t);
         }
     }
@@ -208,6 +222,7 @@ impl FrontEnd {
     /// and the residuals' scale.
     fn fit(&mut self, t: f64) {
         self.last_fit_t = Some(t);
+        self.last_fit_n = self.window.len();
         let nominal = match self.nominal {
             Some(n) => Ok(n),
             None => self.window_start(),
@@ -270,6 +285,7 @@ impl FrontEnd {
                 search: self.p.search_warm,
             });
         }
+        self.window.slide();
     }
 
     /// The filters start from the nominal values (no fit succeeded in time).
@@ -288,9 +304,8 @@ impl FrontEnd {
     /// (or as configured), else the estimate. Returns the stated mounting
     /// when it is kept.
     fn choose_mount(&mut self, e: &BatchEstimate) -> Option<P3> {
-        let est = [e.laser.x.value, e.laser.y.value, e.laser.yaw.value];
-        let std = [e.laser.x.std, e.laser.y.std, e.laser.yaw.std];
-        let cov: Matrix3<f64> = e.covariance.fixed_view::<3, 3>(3, 3).into_owned();
+        let (est, cov) = self.mount_mean(e);
+        let std = [0, 1, 2].map(|i| cov[(i, i)].max(0.0).sqrt());
         let (use_estimate, check) = match (&self.stated, self.p.mount) {
             (_, MountChoice::Estimate) => (true, None),
             (None, _) => (true, None),
@@ -305,7 +320,7 @@ impl FrontEnd {
                 let contradicted = chi2 > limit;
                 let words = format!(
                     "the {src} mounting x {:.4} m, y {:.4} m, yaw {:.4} rad against the \
-                     window's x {:.4} ± {:.4} m, y {:.4} ± {:.4} m, yaw {:.4} ± {:.4} rad: \
+                     stream's x {:.4} ± {:.4} m, y {:.4} ± {:.4} m, yaw {:.4} ± {:.4} rad: \
                      χ² {chi2:.1} {} {limit:.1}",
                     s[0],
                     s[1],
@@ -340,6 +355,34 @@ impl FrontEnd {
             self.laser = *s;
             self.laser_std = None;
             Some(*s)
+        }
+    }
+
+    /// The mounting so far and its covariance: a constant of the robot, so
+    /// each fit's estimate enters an information-weighted mean, its
+    /// information counted for the share of its window that is new since the
+    /// previous fit (overlapping windows would count the same data again).
+    fn mount_mean(&mut self, e: &BatchEstimate) -> (P3, Matrix3<f64>) {
+        let est = Vector3::new(e.laser.x.value, e.laser.y.value, e.laser.yaw.value);
+        let cov: Matrix3<f64> = e.covariance.fixed_view::<3, 3>(3, 3).into_owned();
+        let new = self.window.len().saturating_sub(self.mount_overlap);
+        let share = new as f64 / self.window.len().max(1) as f64;
+        self.mount_overlap = self.window.len();
+        if let Some(info) = cov.try_inverse().filter(|_| share > 0.0) {
+            // Yaw taken near the mean so far (no wrap inside the sum).
+            let mut x = est;
+            if let Some(m) = self.mount_info.try_inverse().map(|c| c * self.mount_sum) {
+                x[2] = m[2] + wrap_angle(x[2] - m[2]);
+            }
+            self.mount_info += info * share;
+            self.mount_sum += info * share * x;
+        }
+        match self.mount_info.try_inverse() {
+            Some(c) => {
+                let m = c * self.mount_sum;
+                ([m[0], m[1], wrap_angle(m[2])], c)
+            }
+            None => ([est[0], est[1], est[2]], cov),
         }
     }
 

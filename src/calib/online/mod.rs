@@ -67,10 +67,14 @@ pub struct OnlineParams {
     /// the stated mounting and a zero time offset (and later fits still
     /// correct the offset and the mounting).
     pub warmup_max_s: f64,
-    /// Stream time (s) between failed warm-up fits.
+    /// Stream time (s) between failed warm-up fits (at least; the window
+    /// must also have grown by a quarter).
     pub retry_s: f64,
-    /// The window's length (s).
+    /// The window's length (s) once the first fit has succeeded (until
+    /// then it grows from the stream's start).
     pub window_s: f64,
+    /// Most intervals the window holds.
+    pub max_intervals: usize,
     /// Stream time (s) between fits once started.
     pub resolve_s: f64,
     /// Estimate the time offset (else 0: one clock).
@@ -96,6 +100,7 @@ impl Default for OnlineParams {
             warmup_max_s: 90.0,
             retry_s: 3.0,
             window_s: 120.0,
+            max_intervals: 3000,
             resolve_s: 15.0,
             time_offset: true,
             mount: MountChoice::Check,
@@ -122,6 +127,9 @@ impl OnlineParams {
         }
         if !(pos(self.retry_s) && pos(self.window_s) && pos(self.resolve_s)) {
             return Err("online.retry_s, window_s and resolve_s must be > 0 s".into());
+        }
+        if self.max_intervals < 10 {
+            return Err("online.max_intervals must be at least 10".into());
         }
         if !(self.mount_probability > 0.0 && self.mount_probability < 1.0) {
             return Err("online.mount_probability must be in (0, 1)".into());

@@ -16,6 +16,9 @@ use crate::robot::DiffDrive;
 #[derive(Debug, Clone)]
 pub struct GeometryWindow {
     window_s: f64,
+    max_intervals: usize,
+    /// Whether the window slides (after the first successful fit).
+    sliding: bool,
     /// Wheel samples are kept this much (s) before the oldest interval.
     margin_s: f64,
     /// Each interval with its laser-clock `[t0, t1]`.
@@ -26,11 +29,14 @@ pub struct GeometryWindow {
 }
 
 impl GeometryWindow {
-    /// A window of `window_s` (s); wheel samples up to `max_offset_s` before
-    /// its oldest interval are kept for reading it at a time offset.
-    pub fn new(window_s: f64, max_offset_s: f64) -> Self {
+    /// A window of `window_s` (s) once sliding, of at most `max_intervals`;
+    /// wheel samples up to `max_offset_s` before its oldest interval are kept
+    /// for reading it at a time offset.
+    pub fn new(window_s: f64, max_intervals: usize, max_offset_s: f64) -> Self {
         Self {
             window_s,
+            max_intervals: max_intervals.max(1),
+            sliding: false,
             margin_s: max_offset_s.abs() + 1.0,
             intervals: VecDeque::new(),
             wheels: VecDeque::new(),
@@ -59,6 +65,14 @@ impl GeometryWindow {
         span
     }
 
+    /// From now on the window slides (keeps the last `window_s` seconds).
+    pub fn slide(&mut self) {
+        self.sliding = true;
+        if let Some(&(_, _, t1)) = self.intervals.back() {
+            self.forget(t1);
+        }
+    }
+
     /// Intervals in the window.
     pub fn len(&self) -> usize {
         self.intervals.len()
@@ -72,10 +86,9 @@ impl GeometryWindow {
     /// Drops what ended more than `window_s` before `now` (s), and the
     /// wheel samples no kept interval can read.
     fn forget(&mut self, now: f64) {
-        while self
-            .intervals
-            .front()
-            .is_some_and(|(_, _, t1)| *t1 < now - self.window_s)
+        let old = |(_, _, t1): &(Interval, f64, f64)| *t1 < now - self.window_s;
+        while self.intervals.len() > self.max_intervals
+            || (self.sliding && self.intervals.front().is_some_and(old))
         {
             self.intervals.pop_front();
         }
@@ -133,7 +146,8 @@ mod tests {
 
     #[test]
     fn keeps_the_last_window_and_the_wheels_it_reads() {
-        let mut w = GeometryWindow::new(10.0, 1.0);
+        let mut w = GeometryWindow::new(10.0, 1000, 1.0);
+        w.slide();
         for i in 0..1000 {
             w.push_wheel(&WheelSample {
                 stamp: i as f64 * 0.1,
@@ -149,13 +163,16 @@ mod tests {
         // Wheels from 2 s before the oldest interval's start (89 s) on.
         assert!(w.wheels[1].stamp >= 87.0 - 1e-9 && w.wheels[0].stamp < 87.0);
         // Untimed intervals are counted by their durations.
-        let mut u = GeometryWindow::new(10.0, 1.0);
+        let mut u = GeometryWindow::new(10.0, 30, 1.0);
         for _ in 0..50 {
             u.push(Interval {
                 wheels: WheelMotion::Steps(vec![[0.1, 0.1]]),
                 ..span(0.0)
             });
         }
+        // Not sliding yet: it grows, up to its cap.
+        assert_eq!(u.len(), 30);
+        u.slide();
         assert_eq!(u.len(), 11);
     }
 }

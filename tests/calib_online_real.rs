@@ -1,0 +1,179 @@
+//! The card's own pipeline on the real robots of the shared data, as a user
+//! runs it: `odocal calibrate --input REC --robot NAME` with each online
+//! method, started from the robot file's nominal values, no batch pass
+//! first. Each check is also run on the nominal values, which must fail it
+//! (the negative control): a filter that never moved would pass none.
+//!
+//! References odocal did not compute with the filters: the joint batch
+//! estimate of the same recording (the Mines rover has no ground truth),
+//! the LEGO robot's overhead tracker (track 172.5 mm in the data README's
+//! own dead-reckoning fit; the scans lag the wheels by 0.49 s by the
+//! landmarks' headings, `tools/lego_scanner_check.py`), and Censi et al.'s
+//! published calibration of their Khepera tuples.
+
+use crate::support::{odocal, ok_json, scratch, shared_data};
+use serde_json::Value;
+use std::path::Path;
+
+const ONLINE: [&str; 4] = ["adaptive-pf", "pf", "dkf", "akf"];
+
+/// `calibrate --json` of `rec` with the bundled robot `robot` and `method`.
+fn calibrate(rec: &Path, robot: &str, method: &str, out: &Path) -> Value {
+    ok_json(&odocal(&[
+        "calibrate",
+        "--input",
+        rec.to_str().unwrap(),
+        "--robot",
+        robot,
+        "--method",
+        method,
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]))
+}
+
+/// Radii and wheel base of a summary (m).
+fn kinematics(j: &Value) -> [f64; 3] {
+    ["r_right", "r_left", "wheel_base"].map(|k| j["final"][k].as_f64().unwrap())
+}
+
+/// Whether `est` lies within `rel` (relative) of `reference`, per entry;
+/// the first entry out, in words.
+fn within(est: [f64; 3], reference: [f64; 3], rel: [f64; 3]) -> Result<(), String> {
+    for (i, name) in ["r_right", "r_left", "wheel_base"].iter().enumerate() {
+        let d = est[i] / reference[i] - 1.0;
+        if d.abs() > rel[i] {
+            return Err(format!(
+                "{name} {:.5} m is {:+.2} % from {:.5} m (tolerance {:.1} %)",
+                est[i],
+                100.0 * d,
+                reference[i],
+                100.0 * rel[i]
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The check on every online method, and on the nominal values, which must
+/// fail it.
+fn every_method_and_not_the_nominal(
+    what: &str,
+    runs: &[(&str, [f64; 3])],
+    nominal: [f64; 3],
+    reference: [f64; 3],
+    rel: [f64; 3],
+) {
+    for (m, est) in runs {
+        if let Err(e) = within(*est, reference, rel) {
+            panic!("{what} {m}: {e}");
+        }
+    }
+    assert!(
+        within(nominal, reference, rel).is_err(),
+        "{what}: the nominal values pass the check, which then proves nothing"
+    );
+}
+
+#[test]
+fn mines_rover_every_online_method_agrees_with_the_batch_from_the_nominal_values() {
+    let Some(data) = shared_data("mines_online") else {
+        return;
+    };
+    let dir = scratch("mines_online");
+    let nominal = [0.077, 0.077, 0.330];
+    let mut means = Vec::new();
+    for e in ["exp1", "exp2"] {
+        let rec = data.join(format!("mines-rover/{e}.mcap"));
+        let batch = calibrate(&rec, "mines-rover", "batch", &dir.join(format!("{e}-batch")));
+        let reference = kinematics(&batch);
+        let mut runs = Vec::new();
+        for m in ONLINE {
+            let j = calibrate(&rec, "mines-rover", m, &dir.join(format!("{e}-{m}")));
+            // The scans are stamped late: the filters read the wheels at
+            // the offset they estimated, within 3 σ of the batch's.
+            let (t, s) = (&j["time_offset"], &batch["time_offset"]);
+            assert_eq!(t["source"], "estimated", "{e} {m}");
+            let (a, b) = (t["value"].as_f64().unwrap(), s["value"].as_f64().unwrap());
+            let sd = t["std"].as_f64().unwrap().hypot(s["std"].as_f64().unwrap());
+            assert!((a - b).abs() < 3.0 * sd, "{e} {m}: {a} vs batch {b} ± {sd}");
+            assert!(a < -0.1, "{e} {m}: the scans lag the wheels ({a} s)");
+            runs.push((m, kinematics(&j)));
+        }
+        every_method_and_not_the_nominal(e, &runs, nominal, reference, [0.015, 0.015, 0.03]);
+        let apf = runs[0].1;
+        means.push((0.5 * (apf[0] + apf[1]), 0.5 * (reference[0] + reference[1])));
+    }
+    // Between the two sessions the filter's radii move as the batch's do.
+    let (online, batch) = (means[0].0 / means[1].0, means[0].1 / means[1].1);
+    assert!(
+        (online / batch - 1.0).abs() < 0.01,
+        "exp1/exp2 radii: filter {online:.4}, batch {batch:.4}"
+    );
+}
+
+#[test]
+fn lego_robot_every_online_method_finds_the_track_and_the_late_scans() {
+    let Some(data) = shared_data("lego_online") else {
+        return;
+    };
+    let dir = scratch("lego_online");
+    let rec = data.join("lego-robot/lego-robot.mcap");
+    let mut runs = Vec::new();
+    for m in ONLINE {
+        let j = calibrate(&rec, "lego-robot", m, &dir.join(m));
+        let dt = j["time_offset"]["value"].as_f64().unwrap();
+        assert!((-0.56..-0.40).contains(&dt), "{m}: time offset {dt}");
+        runs.push((m, kinematics(&j)));
+    }
+    // The tracker's track (172.5 mm) within 3 %; the radii are not
+    // compared (the tracker's own scale is not the scans'): the check holds
+    // the wheel base alone (a tolerance of 100 % on the radii).
+    every_method_and_not_the_nominal(
+        "lego",
+        &runs,
+        [0.020, 0.020, 0.150],
+        [0.020, 0.020, 0.1725],
+        [1.0, 1.0, 0.03],
+    );
+}
+
+#[test]
+fn censi_tuples_the_default_method_gives_the_authors_calibration() {
+    let Some(data) = shared_data("censi_online") else {
+        return;
+    };
+    let dir = scratch("censi_online");
+    for set in ["lstraight", "l90", "lmov"] {
+        let d = data.join("censi-calibration");
+        let authors: Value = serde_json::from_str(
+            &std::fs::read_to_string(d.join(format!("{set}_results.json"))).unwrap(),
+        )
+        .unwrap();
+        let a = |k: &str| authors[k].as_f64().unwrap();
+        let reference = [0.5 * a("r_diam"), 0.5 * a("l_diam"), a("axle")];
+        let out = ok_json(&odocal(&[
+            "calibrate",
+            "--input",
+            d.join(format!("{set}.tuple")).to_str().unwrap(),
+            "--robot",
+            "khepera",
+            "--out",
+            dir.join(set).to_str().unwrap(),
+            "--json",
+        ]));
+        assert_eq!(out["method"], "adaptive-pf");
+        assert!(out["route"].as_str().unwrap().contains("tuple"));
+        every_method_and_not_the_nominal(
+            set,
+            &[("adaptive-pf", kinematics(&out))],
+            [0.021, 0.021, 0.090],
+            reference,
+            [0.005, 0.005, 0.005],
+        );
+        // The laser's yaw, which the tuples are measured in, estimated.
+        let yaw = out["laser"]["yaw"]["value"].as_f64().unwrap();
+        assert!((yaw - a("l_theta")).abs() < 0.05, "{set}: yaw {yaw}");
+    }
+}
