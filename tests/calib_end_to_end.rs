@@ -323,10 +323,11 @@ fn bundled_calibration(d: &std::path::Path, name: &str, icp: &str) -> [[f64; 2];
 }
 
 #[test]
-fn thinned_scans_calibrate_the_chair_as_whole_ones_only_less_precisely() {
-    // docs/performance.md ("Speed against thinning"): every second beam of the scans being
-    // matched is a throughput setting whose cost shows in the spread, not in
-    // the values. Against the simulator's final radii and wheel base.
+fn thinned_scans_calibrate_the_chair_as_whole_ones() {
+    // docs/performance.md ("Speed against thinning"): every second beam of
+    // the scans being matched is a throughput setting that leaves the values
+    // where the whole scans put them. Against the simulator's final radii
+    // (after its step), which the nominal 0.32 m misses by 1.16 and 1.44 mm.
     let d = crate::support::scratch("calib_thinned");
     let truth: serde_json::Value = serde_json::from_str(include_str!(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -337,17 +338,14 @@ fn thinned_scans_calibrate_the_chair_as_whole_ones_only_less_precisely() {
     let truth = CHAIR_PARAMS.map(|k| last[k].as_f64().unwrap());
     let all = bundled_calibration(&d, "all", "");
     let thinned = bundled_calibration(&d, "thinned", "beam_stride = 2\n");
+    let tol = [1.0e-3, 1.0e-3, 6.0e-3];
     for (k, name) in CHAIR_PARAMS.iter().enumerate() {
-        let [est, std] = thinned[k];
-        assert!(
-            (est - truth[k]).abs() < 2.5 * std,
-            "{name}: thinned {est:.5} ± {std:.5} m, truth {:.5} m",
-            truth[k]
-        );
-        assert!(
-            std > 1.1 * all[k][1],
-            "{name}: thinned std {std:.5} m, not wider than the whole scans' {:.5} m",
-            all[k][1]
-        );
+        let (t, w) = (thinned[k][0], all[k][0]);
+        assert!((t - w).abs() < tol[k], "{name}: thinned {t:.5} m, whole {w:.5} m");
+    }
+    for k in 0..2 {
+        let within = |x: f64| (x - truth[k]).abs() < 1.0e-3;
+        assert!(within(all[k][0]), "{}: {} vs truth {}", CHAIR_PARAMS[k], all[k][0], truth[k]);
+        assert!(!within(0.32), "the nominal radius passes the check");
     }
 }

@@ -265,7 +265,8 @@ fn motions_that_break_covariance_or_speed_rules_are_refused() {
         refused(&o, &["motions.csv", "line 3", needle]);
     }
     // A failed row may hold anything: it never becomes an observation (the
-    // run is then refused for its single step, not for the row).
+    // run is then refused for having too little to start the filters from,
+    // not for the row).
     let (m, w) = csv_inputs(&d, "0.1,0.2,5.0,0,0.01,1e-6,0,0,-1e-6,0,1e-6,5,100,0");
     let o = odocal(&[
         "calibrate",
@@ -278,7 +279,7 @@ fn motions_that_break_covariance_or_speed_rules_are_refused() {
         "--out",
         s(&d.join("cal")),
     ]);
-    refused(&o, &["motions.csv", "only 1 steps with a measurement"]);
+    refused(&o, &["motions.csv", "wheels.csv", "the filters never started"]);
     // Wheels that do not overlap the motions: both files named.
     let w2 = d.join("late.csv");
     std::fs::write(&w2, "t,left,right\n100,0,0\n101,0,0\n").unwrap();
@@ -291,7 +292,7 @@ fn motions_that_break_covariance_or_speed_rules_are_refused() {
         "--out",
         s(&d.join("cal2")),
     ]);
-    refused(&o, &["motions.csv", "late.csv", "nothing to calibrate"]);
+    refused(&o, &["motions.csv", "late.csv", "the filters never started"]);
 }
 
 #[test]

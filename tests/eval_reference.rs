@@ -222,7 +222,7 @@ fn lego_raw_odometry_against_the_tracker() {
     let near = ok(&odocal(
         &[&args[..], &["--resample-reference", "false"]].concat(),
     ));
-    assert!(near.contains("paired poses     37 of 278"), "{near}");
+    assert!(near.contains("paired poses     26 of 217"), "{near}");
     assert!(
         near.contains("fewer than half of the poses paired"),
         "{near}"

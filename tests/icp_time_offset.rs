@@ -116,19 +116,20 @@ fn mines_rover_clock_check_agrees_with_the_batch_and_calibrate_states_it() {
     let delta = batch["time_offset"]["value"].as_f64().unwrap();
     eprintln!("clock check {best:+.4} s, batch {delta:+.4} s");
     assert!((best - delta).abs() < 0.03, "check {best} vs batch {delta}");
+    // The filters estimate the offset on the stream themselves: within 25 ms
+    // (a quarter of a wheel period) of the batch's, where 0 is 180 ms off.
     let dkf = run("calibrate", &["--method", "dkf"], &out("dkf"));
     let a = &dkf["assumptions"]["time_offset"];
-    assert_eq!(a["source"], "default", "{a}");
-    assert!(a["note"].as_str().unwrap().contains("--init batch"), "{a}");
-    // With the prior read at another offset, the filters still pair equal
-    // stamps: the note names both instead of calling them in agreement.
+    assert_eq!(a["source"], "estimated", "{a}");
+    let online = a["value"].as_f64().unwrap();
+    crate::support::assert_recovered("time_offset", online, delta, 0.0, 0.025);
+    // With the scan matcher's prior read at another offset, the filters'
+    // own estimate does not follow it.
     let cfg = out("prior_offset.toml");
-    std::fs::write(&cfg, "[icp]\ntime_offset = -0.17\n").unwrap();
+    std::fs::write(&cfg, "[icp]\ntime_offset = -0.05\n").unwrap();
     let cfg = ["--method", "dkf", "--config", cfg.to_str().unwrap()];
     let shifted = run("calibrate", &cfg, &out("dkf_shifted"));
     let a = &shifted["assumptions"]["time_offset"];
-    assert_eq!(a["value"], 0.0, "{a}");
-    let note = a["note"].as_str().unwrap();
-    assert!(note.contains("[icp] time_offset = -0.170 s"), "{a}");
-    assert!(!note.contains("agree"), "{a}");
+    let v = a["value"].as_f64().unwrap();
+    crate::support::assert_recovered("time_offset, prior shifted", v, delta, 0.0, 0.025);
 }

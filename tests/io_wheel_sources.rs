@@ -146,8 +146,9 @@ fn an_odometry_twist_calibrates_the_controllers_multipliers() {
     let [rr, rl, d] = final_truth();
     let m = &v["multipliers"];
     let want = [
-        ("right_wheel_radius", rr / CTRL_RADIUS, 1e-3),
-        ("left_wheel_radius", rl / CTRL_RADIUS, 1e-3),
+        // Within 0.3 % of multipliers that depart 3.4 % from 1.
+        ("right_wheel_radius", rr / CTRL_RADIUS, 3e-3),
+        ("left_wheel_radius", rl / CTRL_RADIUS, 3e-3),
         ("wheel_separation", d / CTRL_SEPARATION, 3e-3),
     ];
     for (key, truth, tol) in want {

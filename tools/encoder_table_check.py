@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Seed 001's encoder-versus-tachometer table (Table I) fitted from first
+"""The encoder-versus-tachometer table of Paryanto et al. (Table I, docs/references.md: Paryanto) fitted from first
 principles with numpy, as a check on `odocal::diagnose::encoder_table`
 written without looking at it.
 

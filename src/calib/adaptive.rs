@@ -7,8 +7,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::normal::inverse_normal_cdf;
-use super::units::{PAPER_RADIUS_M, SQRT_PAPER_STEP};
 use super::steps::{usable, CalibStep, Kind};
+use super::units::{PAPER_RADIUS_M, SQRT_PAPER_STEP};
 use serde::{Deserialize, Serialize};
 
 /// How the particle count is chosen at each resampling.
@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 pub enum CountRule {
     /// Fixed count.
     Fixed,
-    /// Seed 000: N = dispersion / `per_particle`, the dispersion being the
+    /// \[Farina\]: N = dispersion / `per_particle`, the dispersion being the
     /// width of the radius cloud (`dispersion_sigmas` weighted standard
     /// deviations of R_R plus as many of R_L).
     #[default]
@@ -38,7 +38,7 @@ pub struct AdaptiveParams {
     pub per_particle: f64,
     /// How many standard deviations of a radius make its dispersion (the
     /// width of the interval its particles fill: 6 = ±3σ, 99.7 % of a
-    /// Gaussian cloud). Seed 000 does not say which spread it means; the
+    /// Gaussian cloud). \[Farina\] does not say which spread it means; the
     /// standard deviation alone (1) gives fewer particles than any sensible
     /// floor from the first resampling on, so the count would never move.
     pub dispersion_sigmas: f64,
@@ -149,7 +149,7 @@ impl AdaptiveParams {
         Ok(())
     }
 
-    /// Seed 000's count, `ceil(dispersion / per_particle)` clamped to
+    /// The count of \[Farina\], `ceil(dispersion / per_particle)` clamped to
     /// [`n_min`, `n_max`], for weighted standard deviations `std_r_right`,
     /// `std_r_left` (m) of the radius particles: the dispersion is
     /// `dispersion_sigmas · (std_r_right + std_r_left)`.
@@ -302,7 +302,11 @@ mod tests {
         // residuals (0.3 m/s, 0.4 rad/s) give α·sqrt(0.3² + 0.13²).
         let lever = AdaptiveParams::default().in_metres(PAPER_RADIUS_M, 0.325, SQRT_PAPER_STEP);
         let want = 1e-4 * (0.09f64 + 0.13 * 0.13).sqrt();
-        assert!((lever.sigma_of(e) - want).abs() < 1e-15, "{}", lever.sigma_of(e));
+        assert!(
+            (lever.sigma_of(e) - want).abs() < 1e-15,
+            "{}",
+            lever.sigma_of(e)
+        );
         let none = CalibStep::new(0.0, 0.02, 1.0, 1.0).with(Kind::V, 1.0, f64::INFINITY);
         assert!(p.residuals(&none, 0.0, 0.0, 1e-3).is_none());
         // A persistent residual survives the average, alternating noise does not.

@@ -61,23 +61,14 @@ impl Calibrator for DualKf {
         // Parameter filter, time update: random walk (D's scaled by it).
         // (per √s: times dt; per step under the paper's preset).
         let dt = if self.per_step { 1.0 } else { s.dt().max(0.0) };
-        self.p_theta +=
-            Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, obs * obs)) * self.q_theta * dt;
+        self.p_theta += Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, obs * obs))
+            * self.q_theta
+            * dt;
         let model_var = model_var_at(self.model_var, s.dt());
         if let Some(c) = &mut self.change {
             let fd = (self.floor, self.dof);
             c.observe(s, &self.theta, &self.p_theta, obs, fd, model_var);
         }
-        // What the parameter filter predicts for V and W, and how surely:
-        // the measurements are judged against it (an outlier is one the
-        // parameters cannot explain; the state filter's own prior is loose
-        // by design and would let every outlier through).
-        let (_, jac) = model(&self.theta, s.omega_right, s.omega_left);
-        let jw = turn_jacobian(&self.theta, &jac[1], w0, obs);
-        let pred_var = [
-            jac[0].dot(&(self.p_theta * jac[0])) + model_var[0],
-            jw.dot(&(self.p_theta * jw)) + model_var[1],
-        ];
         // State filter update with the measurements (scalar updates, V and W
         // independent given θ), each robustly weighted.
         let mut x = [v0, w0];
@@ -89,8 +80,8 @@ impl Calibrator for DualKf {
                 Kind::W => 1,
             };
             let r = m.sigma.max(self.floor).powi(2);
-            let nu = m.value - [v0, w0][k];
-            let r = r / student_t_weight(nu * nu / (pred_var[k] + r), self.dof);
+            let nu = m.value - x[k];
+            let r = r / student_t_weight(nu * nu / (px[k] + r), self.dof);
             let g = px[k] / (px[k] + r);
             x[k] += g * (m.value - x[k]);
             px[k] *= 1.0 - g;

@@ -42,7 +42,6 @@ pub use params::{
     CalibParams, KalmanSettings, Method, NoiseParams, PfSettings, Preset, Ranges, Units,
     MAX_PARTICLES,
 };
-pub use units::{PAPER_RADIUS_M, PAPER_STEP_S, SQRT_PAPER_STEP};
 pub use pf::{ParticleFilter, Particles};
 pub use pool::NormalPool;
 pub use resample::{inverse_cdf, resample, sorted_uniforms, Resampler, Scheme};
@@ -53,6 +52,7 @@ pub use sanity::{implausible, observability, CheckParams, Observability, ParamOb
 pub use step_builder::StepBuilder;
 pub use steps::{steps, usable, CalibStep, Kind, Measurement, MAX_GAP_STEP, MAX_MEASUREMENTS};
 pub use trigger::Trigger;
+pub use units::{PAPER_RADIUS_M, PAPER_STEP_S, SQRT_PAPER_STEP};
 pub use weights::{fast_exp, Weights};
 
 use crate::robot::DiffDrive;

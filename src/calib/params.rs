@@ -12,9 +12,9 @@
 
 use super::adaptive::AdaptiveParams;
 use super::change::{ChangeParams, DetectorParams};
-use super::units::{PAPER_RADIUS_M, SQRT_PAPER_STEP};
 use super::resample::Scheme;
 use super::trigger::Trigger;
+use super::units::{PAPER_RADIUS_M, SQRT_PAPER_STEP};
 use serde::{Deserialize, Serialize};
 
 /// Most particles a filter may be asked for (`--particles`, `adaptive.n_max`).
@@ -41,7 +41,7 @@ pub enum Preset {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
-    /// Seed 000's Adaptive-PF (adaptive particle count and process noise).
+    /// The Adaptive-PF of \[Farina\] (adaptive particle count and process noise).
     #[default]
     AdaptivePf,
     /// Particle filter with a fixed count and fixed process noise.
@@ -487,5 +487,3 @@ pub struct Units {
     /// Whether the random walks are then per step.
     pub per_step: bool,
 }
-
-

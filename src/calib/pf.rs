@@ -254,7 +254,11 @@ impl ParticleFilter {
         let n = self.p.len();
         let obs = super::kalman::observability(w_turn, self.observability_turn_rate);
         // The random walk per √s (per step under the paper's preset).
-        let k = if self.per_step { 1.0 } else { s.dt().max(0.0).sqrt() };
+        let k = if self.per_step {
+            1.0
+        } else {
+            s.dt().max(0.0).sqrt()
+        };
         let (sr, sd) = (self.sigma * k, self.sigma * k * obs);
         let [o1, o2, o3] = self.pool.offsets::<3, _>(n, &mut self.rng);
         let pool = self.pool.data();

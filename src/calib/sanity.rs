@@ -339,7 +339,13 @@ mod tests {
             !d.observable && d.missing.as_ref().unwrap().contains("turn"),
             "{d:?}"
         );
-        let full = observability(&evidence(&course(), false), &drive(0.001), &drive(0.5), &p, false);
+        let full = observability(
+            &evidence(&course(), false),
+            &drive(0.001),
+            &drive(0.5),
+            &p,
+            false,
+        );
         assert!(full.unobservable().is_empty(), "{:?}", full.parameters);
         assert_eq!(
             evidence(&vec![(5.0, 5.0); 100], false).wiring(),
@@ -370,7 +376,13 @@ mod tests {
         // `drive(0.001)` as the filter's std: 0.1 m for each radius.
         assert!((r.std / 0.1 - v.sqrt()).abs() < 1e-9, "{}", r.std);
         // Exact measurements: no widening.
-        let exact = observability(&evidence(&course(), false), &drive(0.001), &drive(0.5), &p, false);
+        let exact = observability(
+            &evidence(&course(), false),
+            &drive(0.001),
+            &drive(0.5),
+            &p,
+            false,
+        );
         assert_eq!(exact.parameters["r_right"].std, 0.1);
     }
 

@@ -33,6 +33,13 @@ pub struct CalibInput {
     pub gyro: Vec<GyroSample>,
 }
 
+/// ICP motions in the base frame (a motions CSV) and the wheel angles to
+/// read them against.
+struct CsvInput {
+    motions: Vec<crate::motion::Motion>,
+    wheels: Vec<WheelSample>,
+}
+
 /// The calibrator settings for `robot` when the calibrator starts at once
 /// (observations given, no online front end): the configured ones, except
 /// that without configured ranges the filters search ± the front end's
@@ -99,12 +106,8 @@ pub fn run(
     let _lock = check_job_outputs(job)?;
     let started = start(job, &cfg, &nominal)?;
     let robot = started.as_ref().map_or(&nominal.robot, |s| &s.robot);
-    // A recording goes through the online front end, which starts the
-    // filters; CSV velocity observations start them at once.
-    let params = match &job.input {
-        CalibSource::Recording(_) => cfg.calib.clone(),
-        CalibSource::Csv { .. } => params_for_robot(&cfg.calib, robot),
-    };
+    // The online front end starts the filters.
+    let params = cfg.calib.clone();
     let mut logger = open_logger(job.viewer.as_ref())?;
     let mut recorder = logger.as_deref_mut().map(|l| {
         StreamRecorder::new(
@@ -244,17 +247,20 @@ impl Run<'_> {
             }
             (CalibSource::Csv { motions, wheels }, _) => {
                 let input = read_csv_input(motions, wheels, &self.cfg.icp)?;
-                let done = drive::calibrate_streams(
+                let done = drive::calibrate_motions(
+                    &input.motions,
                     &input.wheels,
-                    &input.observations,
-                    &input.gyro,
-                    self.robot,
+                    Some(self.robot.diff_drive()),
                     self.params,
                     &self.cfg.measurements,
                     obs,
                 )
                 .map_err(|e| name_csv_inputs(e, motions, wheels))?;
-                (done, self.nominal.assumptions(), motions, None)
+                let mut a = self.nominal.assumptions();
+                if let Some(o) = &done.summary.online {
+                    state_online(&mut a, o);
+                }
+                (done, a, motions, None)
             }
         })
     }
@@ -575,23 +581,19 @@ fn name_csv_inputs(e: PipelineError, motions: &Path, wheels: &Path) -> PipelineE
     }
 }
 
-/// The calibration input of the CSV files: wheel angles and the motions'
-/// velocity observations; at least two wheel samples and one observation
-/// (without any, the filters would only return their prior).
+/// The calibration input of the CSV files: the motions (base frame) and the
+/// wheel angles; at least two wheel samples and one valid motion (without
+/// any, the filters would only return their prior).
 fn read_csv_input(
     motions_csv: &Path,
     wheels: &Path,
     icp: &crate::icp::IcpParams,
-) -> Result<CalibInput, PipelineError> {
+) -> Result<CsvInput, PipelineError> {
     let motions = crate::io::csv::read_motions_numbered(motions_csv)?;
     super::sense::check_motions(motions_csv, &motions, icp)?;
-    let input = CalibInput {
-        observations: motions
-            .iter()
-            .filter_map(|(_, m)| VelocityObs::from_motion(m))
-            .collect(),
+    let input = CsvInput {
         wheels: crate::io::csv::read_wheels(wheels)?,
-        gyro: Vec::new(),
+        motions: motions.into_iter().map(|(_, m)| m).collect(),
     };
     if input.wheels.len() < 2 {
         return Err(InputError::new(
@@ -603,13 +605,13 @@ fn read_csv_input(
         )
         .into());
     }
-    if input.observations.is_empty() {
+    if !input.motions.iter().any(|m| VelocityObs::from_motion(m).is_some()) {
         return Err(InputError::new(
             motions_csv.display().to_string(),
             format!(
                 "no velocity observation to calibrate from: {} motions, none valid \
                  (failed pairs give none)",
-                motions.len()
+                input.motions.len()
             ),
         )
         .into());

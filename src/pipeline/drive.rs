@@ -677,6 +677,43 @@ pub fn calibrate_intervals(
     finish(&stage, input)
 }
 
+/// Runs the calibrator over base-frame motions (a motions CSV: the laser's
+/// frame is the base's, the mounting the identity) and wheel angles through
+/// the online front end, as [`run_calibration`] does over a recording.
+pub fn calibrate_motions(
+    motions: &[Motion],
+    wheels: &[WheelSample],
+    nominal: Option<DiffDrive>,
+    calib: &CalibParams,
+    meas: &MeasurementConfig,
+    obs: &mut dyn RunObserver,
+) -> Result<CalibRunSummary, PipelineError> {
+    let stated = Some(([0.0; 3], "motions_csv".to_string()));
+    let mut stage =
+        CalibStage::online(calib, nominal, stated, Pose2::identity(), meas, false)?;
+    obs.start(&StreamInfo {
+        wheels: wheels.len(),
+        ..StreamInfo::default()
+    });
+    for w in wheels {
+        obs.item(&Item::Wheel(*w));
+        stage.push_wheel(*w);
+    }
+    stage.end_wheels();
+    stage.end_gyro();
+    for m in motions {
+        stage.push_motion(m);
+        stage.poll(false, obs)?;
+    }
+    stage.poll(true, obs)?;
+    Ok(CalibRunSummary {
+        summary: stage.summary()?,
+        weight_resets: stage.weight_resets(),
+        evidence: stage.evidence().clone(),
+        firings: stage.runner.firings(),
+    })
+}
+
 /// Runs the calibrator `calib` names over given wheel angles, velocity
 /// observations (sorted by `t0`) and gyro rates: the same stage as
 /// [`run_calibration`] without the front end, fed whole streams, the

@@ -64,7 +64,9 @@ pub fn estimate_with_laser(
     if let Some(l) = laser {
         init.laser = l;
     }
-    let free: Vec<bool> = (0..n).map(|i| laser.is_none() || !(3..6).contains(&i)).collect();
+    let free: Vec<bool> = (0..n)
+        .map(|i| laser.is_none() || !(3..6).contains(&i))
+        .collect();
     let mut keep = vec![true; pb.intervals.len()];
     if !given {
         covs = noise(pb, &residuals(pb, &init.to_vec(6)), &keep);
@@ -81,7 +83,11 @@ pub fn estimate_with_laser(
     // round afresh among those, so that its cap holds for the whole.
     let mut censi = keep.clone();
     for round in 0..MAX_ROUNDS {
-        f = fit(&data(pb, &covs, &keep, &step, &free), &f.p, p.max_iterations);
+        f = fit(
+            &data(pb, &covs, &keep, &step, &free),
+            &f.p,
+            p.max_iterations,
+        );
         let res = residuals(pb, &f.p);
         let before = keep.clone();
         if round < p.outlier_iterations {
@@ -110,7 +116,11 @@ pub fn estimate_with_laser(
     if !given {
         // The σ's of the final residuals, and the fit they weight.
         covs = noise(pb, &residuals(pb, &f.p), &keep);
-        f = fit(&data(pb, &covs, &keep, &step, &free), &f.p, p.max_iterations);
+        f = fit(
+            &data(pb, &covs, &keep, &step, &free),
+            &f.p,
+            p.max_iterations,
+        );
     }
     let ctx = report::Context {
         nominal,

@@ -239,7 +239,11 @@ impl FrontEnd {
         };
         match joint {
             Ok((n, joint)) => {
-                report.laser = Some([joint.laser.x.value, joint.laser.y.value, joint.laser.yaw.value]);
+                report.laser = Some([
+                    joint.laser.x.value,
+                    joint.laser.y.value,
+                    joint.laser.yaw.value,
+                ]);
                 let held = self.choose_mount(&joint);
                 let e = match held {
                     Some(l) => self.solve(&n, Some(l)).unwrap_or(joint),

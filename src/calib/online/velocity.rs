@@ -70,7 +70,10 @@ mod tests {
         let s = oplus(oplus(inverse(laser), o), laser);
         let cov = Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-6, 4e-6, 1e-6));
         let v = velocity(2.0, 3.0, s, &cov, laser).unwrap();
-        assert!((v.v - 0.5).abs() < 1e-9 && (v.w - 0.4).abs() < 1e-12, "{v:?}");
+        assert!(
+            (v.v - 0.5).abs() < 1e-9 && (v.w - 0.4).abs() < 1e-12,
+            "{v:?}"
+        );
         // Turned round, the laser's x is the base's −x: σ along the chord is
         // the laser's x σ (1 mm), nearly; the turn's σ is unchanged.
         assert!((v.sigma_w - 1e-3).abs() < 1e-12);
