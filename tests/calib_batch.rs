@@ -132,7 +132,10 @@ fn batch_calibrates_censi_tuples_from_the_command_line() {
         dir.join("pf").to_str().unwrap(),
         "--json",
     ]));
-    assert!(filt["route"].as_str().unwrap().contains("one filter step per tuple"));
+    assert!(filt["route"]
+        .as_str()
+        .unwrap()
+        .contains("one filter step per tuple"));
     assert_eq!(filt["laser"]["source"], "estimated");
     crate::support::assert_recovered(
         "laser yaw",

@@ -341,11 +341,20 @@ fn thinned_scans_calibrate_the_chair_as_whole_ones() {
     let tol = [1.0e-3, 1.0e-3, 6.0e-3];
     for (k, name) in CHAIR_PARAMS.iter().enumerate() {
         let (t, w) = (thinned[k][0], all[k][0]);
-        assert!((t - w).abs() < tol[k], "{name}: thinned {t:.5} m, whole {w:.5} m");
+        assert!(
+            (t - w).abs() < tol[k],
+            "{name}: thinned {t:.5} m, whole {w:.5} m"
+        );
     }
     for k in 0..2 {
         let within = |x: f64| (x - truth[k]).abs() < 1.0e-3;
-        assert!(within(all[k][0]), "{}: {} vs truth {}", CHAIR_PARAMS[k], all[k][0], truth[k]);
+        assert!(
+            within(all[k][0]),
+            "{}: {} vs truth {}",
+            CHAIR_PARAMS[k],
+            all[k][0],
+            truth[k]
+        );
         assert!(!within(0.32), "the nominal radius passes the check");
     }
 }

@@ -99,7 +99,10 @@ fn adaptive_pf_and_kalman_baselines_converge_to_the_truth() {
         let nominal_miss = (NOMINAL.r_right - k.r_right)
             .abs()
             .max((NOMINAL.r_left - k.r_left).abs());
-        assert!(nominal_miss > 3.0 * 1.25e-3, "the nominal radii miss by only {nominal_miss} m");
+        assert!(
+            nominal_miss > 3.0 * 1.25e-3,
+            "the nominal radii miss by only {nominal_miss} m"
+        );
         let end = none.trajectory.poses.last().unwrap();
         let truth = d.reference.pose_at(*none.trajectory.stamps.last().unwrap());
         let miss = (end.translation.vector - truth.unwrap().translation.vector).norm();

@@ -86,7 +86,12 @@ fn mines_rover_every_online_method_agrees_with_the_batch_from_the_nominal_values
     let mut means = Vec::new();
     for e in ["exp1", "exp2"] {
         let rec = data.join(format!("mines-rover/{e}.mcap"));
-        let batch = calibrate(&rec, "mines-rover", "batch", &dir.join(format!("{e}-batch")));
+        let batch = calibrate(
+            &rec,
+            "mines-rover",
+            "batch",
+            &dir.join(format!("{e}-batch")),
+        );
         let reference = kinematics(&batch);
         let mut runs = Vec::new();
         for m in ONLINE {
@@ -96,7 +101,10 @@ fn mines_rover_every_online_method_agrees_with_the_batch_from_the_nominal_values
             // quarter of the wheels' period) of the batch's; 0 is 180 ms off.
             let t = &j["time_offset"];
             assert_eq!(t["source"], "estimated", "{e} {m}");
-            let (a, b) = (t["value"].as_f64().unwrap(), batch["time_offset"]["value"].as_f64().unwrap());
+            let (a, b) = (
+                t["value"].as_f64().unwrap(),
+                batch["time_offset"]["value"].as_f64().unwrap(),
+            );
             crate::support::assert_recovered(&format!("{e} {m} time offset"), a, b, 0.0, 0.025);
             runs.push((m, kinematics(&j)));
         }
@@ -142,7 +150,10 @@ fn lego_robot_every_online_method_finds_the_track_and_the_late_scans() {
     for (m, k) in &runs {
         let r = turn(*k);
         let tol = if *m == "dkf" { 0.04 } else { 0.03 };
-        assert!((r / tracker - 1.0).abs() < tol, "{m}: R/D {r:.5} vs {tracker:.5}");
+        assert!(
+            (r / tracker - 1.0).abs() < tol,
+            "{m}: R/D {r:.5} vs {tracker:.5}"
+        );
     }
     let nominal = turn([0.020, 0.020, 0.150]);
     assert!((nominal / tracker - 1.0).abs() > 0.03, "the nominal passes");

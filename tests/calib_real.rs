@@ -94,7 +94,6 @@ fn lego_batch_finds_the_late_scans_and_its_scale_is_the_trackers() {
     assert!((1.107 - scale).abs() < 0.035, "scale {scale}");
     let ape = e["ape"]["rmse"].as_f64().unwrap();
     assert!(ape <= 0.056, "APE {ape}");
-
 }
 
 /// The data README's tick check finds exp1's effective radius 5.4 % larger
@@ -136,13 +135,22 @@ fn mines_sessions_radii_differ_only_through_stalled_matches() {
             r.push((0.5 * (vs(&b["r_right"]).0 + vs(&b["r_left"]).0), dt));
         }
         let lag = (r[0].1 - r[1].1).abs();
-        assert!(lag < 0.025, "{tag}: the sessions' latencies differ by {lag} s");
+        assert!(
+            lag < 0.025,
+            "{tag}: the sessions' latencies differ by {lag} s"
+        );
         r[0].0 / r[1].0
     };
     let least_squares = ratio(Some(&s2s_ls), "s2s-ls");
-    assert!((1.04..1.07).contains(&least_squares), "scan to scan, least squares {least_squares}");
+    assert!(
+        (1.04..1.07).contains(&least_squares),
+        "scan to scan, least squares {least_squares}"
+    );
     let robust = ratio(Some(&s2s), "s2s");
-    assert!((0.96..1.0).contains(&robust), "scan to scan, robust {robust}");
+    assert!(
+        (0.96..1.0).contains(&robust),
+        "scan to scan, robust {robust}"
+    );
     let default = ratio(None, "default");
     assert!((0.96..1.0).contains(&default), "default matcher {default}");
 }

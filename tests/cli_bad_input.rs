@@ -279,7 +279,10 @@ fn motions_that_break_covariance_or_speed_rules_are_refused() {
         "--out",
         s(&d.join("cal")),
     ]);
-    refused(&o, &["motions.csv", "wheels.csv", "the filters never started"]);
+    refused(
+        &o,
+        &["motions.csv", "wheels.csv", "the filters never started"],
+    );
     // Wheels that do not overlap the motions: both files named.
     let w2 = d.join("late.csv");
     std::fs::write(&w2, "t,left,right\n100,0,0\n101,0,0\n").unwrap();
@@ -292,7 +295,10 @@ fn motions_that_break_covariance_or_speed_rules_are_refused() {
         "--out",
         s(&d.join("cal2")),
     ]);
-    refused(&o, &["motions.csv", "late.csv", "the filters never started"]);
+    refused(
+        &o,
+        &["motions.csv", "late.csv", "the filters never started"],
+    );
 }
 
 #[test]

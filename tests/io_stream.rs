@@ -225,7 +225,6 @@ fn same_file(a: &Path, b: &Path) {
     assert!(x == y, "{} and {} differ", a.display(), b.display());
 }
 
-
 /// `odocal calibrate` on a file with `particles` particles and `method`.
 fn calibrate_command(
     input: &Path,

@@ -13,8 +13,8 @@ use super::paste::Paste;
 use super::recorder::{RecorderOptions, StreamRecorder};
 use super::viewer::{open_logger, Viewer};
 use super::PipelineError;
-use crate::calib::{self, CalibParams, CalibSummary, CalibrationRun, Ranges};
 use crate::assumptions::Origin;
+use crate::calib::{self, CalibParams, CalibSummary, CalibrationRun, Ranges};
 use crate::error::InputError;
 use crate::io::out_lock::OutputLock;
 use crate::motion::VelocityObs;
@@ -318,10 +318,12 @@ impl Run<'_> {
             "time_offset",
             0.0,
             Origin::Recording,
-            Some("the tuples pair each laser displacement with the wheel rates of its own \
+            Some(
+                "the tuples pair each laser displacement with the wheel rates of its own \
                   interval (already synchronised); they carry no time to estimate an offset \
                   from"
-                .into()),
+                    .into(),
+            ),
         );
         Ok((done, a))
     }
@@ -442,7 +444,9 @@ fn state_online(a: &mut crate::assumptions::Assumptions, o: &calib::online::Onli
     if t.source == "estimated" {
         let settled = t
             .converged_s
-            .map_or("not settled by the end".to_string(), |s| format!("settled at {s:.1} s"));
+            .map_or("not settled by the end".to_string(), |s| {
+                format!("settled at {s:.1} s")
+            });
         a.set(
             "time_offset",
             t.value,
@@ -605,7 +609,11 @@ fn read_csv_input(
         )
         .into());
     }
-    if !input.motions.iter().any(|m| VelocityObs::from_motion(m).is_some()) {
+    if !input
+        .motions
+        .iter()
+        .any(|m| VelocityObs::from_motion(m).is_some())
+    {
         return Err(InputError::new(
             motions_csv.display().to_string(),
             format!(

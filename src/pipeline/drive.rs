@@ -8,20 +8,20 @@
 use std::time::Instant;
 
 use super::observe::RunObserver;
+use super::odometry::WheelOdometry;
 use super::{Mount, PipelineError};
 use crate::calib::batch::{LaserMotion, P3};
 use crate::calib::online::{FrontEnd, Mounted, Started};
 use crate::calib::{
     self, CalibParams, CalibStep, CalibSummary, Calibrator, Ranges, Runner, StepBuilder,
 };
-use crate::geom::{self, Pose2};
-use crate::robot::DiffDrive;
-use super::odometry::WheelOdometry;
 use crate::error::InputError;
+use crate::geom::{self, Pose2};
 use crate::icp::{IcpParams, IcpStats, Prior, StreamMatcher, Tally};
 use crate::io::{Item, SampleSource, StreamInfo};
 use crate::motion::{Motion, VelocityObs};
 use crate::recording::{GyroSample, WheelSample};
+use crate::robot::DiffDrive;
 use crate::robot::RobotConfig;
 use serde::{Deserialize, Serialize};
 
@@ -286,8 +286,16 @@ impl CalibStage {
         meas: &MeasurementConfig,
         has_gyro: bool,
     ) -> Result<Self, PipelineError> {
-        let cal = calib::build(params, nominal).map_err(|e| PipelineError::BadArgument(e.to_string()))?;
-        Ok(Self::with(Feed::Direct, Some(cal), params, nominal, meas, has_gyro))
+        let cal =
+            calib::build(params, nominal).map_err(|e| PipelineError::BadArgument(e.to_string()))?;
+        Ok(Self::with(
+            Feed::Direct,
+            Some(cal),
+            params,
+            nominal,
+            meas,
+            has_gyro,
+        ))
     }
 
     /// A stage behind the online front end ([`calib::online`]): `nominal`
@@ -304,7 +312,13 @@ impl CalibStage {
         params
             .validate()
             .map_err(|e| PipelineError::BadArgument(e.to_string()))?;
-        let front = FrontEnd::new(&params.online, &params.batch, &params.checks, nominal, stated);
+        let front = FrontEnd::new(
+            &params.online,
+            &params.batch,
+            &params.checks,
+            nominal,
+            stated,
+        );
         let feed = Feed::Online {
             front: Box::new(front),
             icp_mount,
@@ -428,8 +442,12 @@ impl CalibStage {
         whole.into_iter().for_each(&mut one);
         self.steps.poll(all_done, &mut one);
         if all_done {
-            if let (Feed::Online { front, odometry, .. }, Some(e)) =
-                (&mut self.feed, self.runner.last())
+            if let (
+                Feed::Online {
+                    front, odometry, ..
+                },
+                Some(e),
+            ) = (&mut self.feed, self.runner.last())
             {
                 let mut pose = |t: f64, p: &Pose2| obs.calibrated_pose(t, p);
                 odometry.advance(f64::INFINITY, front.time_offset(), &e.drive(), &mut pose);
@@ -495,9 +513,18 @@ fn start_calibrator(
     let mut p = params.clone();
     if p.ranges.is_none() {
         let c = started.centre;
-        p.ranges = Some(Ranges::around(c.r_right, c.r_left, c.wheel_base, started.search));
+        p.ranges = Some(Ranges::around(
+            c.r_right,
+            c.r_left,
+            c.wheel_base,
+            started.search,
+        ));
     }
-    let shown = if nominal.r_right.is_finite() { nominal } else { started.centre };
+    let shown = if nominal.r_right.is_finite() {
+        nominal
+    } else {
+        started.centre
+    };
     calib::build(&p, shown).map_err(|e| PipelineError::BadArgument(e.to_string()))
 }
 
@@ -609,9 +636,12 @@ pub fn run_calibration(
         )
         .into());
     }
-    let stated = icp_stage
-        .stated
-        .then(|| (geom::xyt(&icp_stage.mount.pose), icp_stage.mount.origin.as_str().to_string()));
+    let stated = icp_stage.stated.then(|| {
+        (
+            geom::xyt(&icp_stage.mount.pose),
+            icp_stage.mount.origin.as_str().to_string(),
+        )
+    });
     let mut stage = CalibStage::online(
         calib,
         Some(robot.diff_drive()),
@@ -689,8 +719,7 @@ pub fn calibrate_motions(
     obs: &mut dyn RunObserver,
 ) -> Result<CalibRunSummary, PipelineError> {
     let stated = Some(([0.0; 3], "motions_csv".to_string()));
-    let mut stage =
-        CalibStage::online(calib, nominal, stated, Pose2::identity(), meas, false)?;
+    let mut stage = CalibStage::online(calib, nominal, stated, Pose2::identity(), meas, false)?;
     obs.start(&StreamInfo {
         wheels: wheels.len(),
         ..StreamInfo::default()

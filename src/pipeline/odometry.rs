@@ -48,7 +48,9 @@ impl WheelOdometry {
             }
             self.last = Some(w);
             // Kept increasing when the offset in use moves back.
-            let t = self.t.map_or(w.stamp - offset, |p| (w.stamp - offset).max(p));
+            let t = self
+                .t
+                .map_or(w.stamp - offset, |p| (w.stamp - offset).max(p));
             self.t = Some(t);
             out(t, &self.pose);
         }
@@ -84,8 +86,14 @@ mod tests {
         // One radian of both wheels: 0.1 m straight.
         assert!((got[1].1 - 0.1).abs() < 1e-12);
         // A larger radius for the rest.
-        let d2 = DiffDrive { r_right: 0.2, r_left: 0.2, ..d };
-        o.advance(f64::INFINITY, -0.2, &d2, &mut |t, p| got.push((t, p.translation.x)));
+        let d2 = DiffDrive {
+            r_right: 0.2,
+            r_left: 0.2,
+            ..d
+        };
+        o.advance(f64::INFINITY, -0.2, &d2, &mut |t, p| {
+            got.push((t, p.translation.x))
+        });
         assert_eq!(got.len(), 5);
         assert!((got[4].1 - 0.7).abs() < 1e-12, "{got:?}");
     }
