@@ -146,7 +146,17 @@ fn experiment_montecarlo_scans_writes_its_table_and_refuses_bad_settings() {
         .iter()
         .map(|r| r["label"].as_str().unwrap())
         .collect();
-    assert_eq!(labels, ["adaptive-pf", "pf", "dkf", "akf", "none"]);
+    assert_eq!(
+        labels,
+        [
+            "adaptive-pf",
+            "pf",
+            "dkf",
+            "akf",
+            "none",
+            "adaptive-pf-published"
+        ]
+    );
     for row in v["rows"].as_array().unwrap() {
         let runs = row["runs"].as_array().unwrap();
         assert_eq!(runs.len(), 2);

@@ -203,3 +203,79 @@ fn censi_tuples_the_default_method_gives_the_authors_calibration() {
         assert!((yaw - a("l_theta")).abs() < 0.05, "{set}: yaw {yaw}");
     }
 }
+
+/// A robot file that states the joints, the encoders and the mounting but
+/// no wheel radii or wheel base: the default method calibrates from scratch
+/// (the front end's closed-form fit of the first minutes, then the filter),
+/// says so in its assumptions, and lands within 3 % (radii) and 5 % (wheel
+/// base) of the batch that was given the nominal values. The scans are then
+/// matched without the wheels as their prior, which the missing kinematics
+/// would have to integrate: the residual differences come from there. The
+/// negative control is what such a file used to be filled with, the
+/// wheelchair's 0.32 / 0.65 m. What needs nominal values is refused.
+#[test]
+fn robots_without_nominal_values_calibrate_from_scratch() {
+    let Some(data) = shared_data("online_from_scratch") else {
+        return;
+    };
+    let dir = scratch("online_from_scratch");
+    for (robot, rel) in [
+        ("lego-robot", "lego-robot/lego-robot.mcap"),
+        ("mines-rover", "mines-rover/exp1.mcap"),
+    ] {
+        let rec = data.join(rel);
+        let text = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scans/robots/{robot}.toml")),
+        )
+        .unwrap();
+        let kept: Vec<&str> = text
+            .lines()
+            .filter(|l| {
+                !["r_right", "r_left", "wheel_base"]
+                    .iter()
+                    .any(|k| l.starts_with(k))
+            })
+            .collect();
+        assert_eq!(
+            kept.len() + 3,
+            text.lines().count(),
+            "{robot}: three lines dropped"
+        );
+        let file = dir.join(format!("{robot}.toml"));
+        std::fs::write(&file, kept.join("\n")).unwrap();
+        let file = file.to_str().unwrap();
+        let j = calibrate(&rec, file, "adaptive-pf", &dir.join(robot));
+        let a = &j["assumptions"]["r_right"];
+        assert!(a["value"].is_null(), "{robot}: {a}");
+        assert!(
+            a["note"].as_str().unwrap().contains("no nominal value"),
+            "{a}"
+        );
+        assert_eq!(j["warmup"]["from"], "warm-up", "{robot}");
+        let batch = calibrate(&rec, robot, "batch", &dir.join(format!("{robot}-batch")));
+        every_method_and_not_the_nominal(
+            robot,
+            &[("adaptive-pf", kinematics(&j))],
+            [0.32, 0.32, 0.65],
+            kinematics(&batch),
+            [0.03, 0.03, 0.05],
+        );
+        let none = odocal(&[
+            "calibrate",
+            "--input",
+            rec.to_str().unwrap(),
+            "--robot",
+            file,
+            "--method",
+            "none",
+            "--out",
+            dir.join(format!("{robot}-none")).to_str().unwrap(),
+        ]);
+        assert_eq!(none.status.code(), Some(2), "{robot}");
+        let e = String::from_utf8_lossy(&none.stderr);
+        assert!(
+            e.contains("states none (r_right, r_left, wheel_base)"),
+            "{e}"
+        );
+    }
+}

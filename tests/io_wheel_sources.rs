@@ -193,6 +193,24 @@ fn an_odometry_twist_calibrates_the_controllers_multipliers() {
         "{err}"
     );
     assert!(err.contains("odometry_scale"), "{err}");
+    // The same robot file without [wheels]: the bag's one wheel stream is
+    // found and said to be, and calibrates to the same multipliers. Without
+    // the finding this run stops at the JointState default (exit 2).
+    let found_robot = dir.join("found.toml");
+    std::fs::write(&found_robot, ODOM_ROBOT.split("[wheels]").next().unwrap()).unwrap();
+    let found = calibrate(&bag, &found_robot, &dir.join("out3"));
+    let fs = &found["wheel_source"];
+    assert_eq!(fs["kind"], "odometry", "{fs}");
+    assert_eq!(fs["topic"], "/odom");
+    assert_eq!(fs["source"], "recording", "{fs}");
+    assert!(
+        fs["notes"][0]
+            .as_str()
+            .unwrap()
+            .contains("one wheel stream"),
+        "{fs}"
+    );
+    assert_eq!(found["multipliers"], v["multipliers"]);
 }
 
 #[test]

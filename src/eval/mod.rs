@@ -39,6 +39,7 @@ pub mod stats;
 pub mod sync;
 pub mod traj3;
 pub mod umeyama;
+pub mod windowed;
 
 pub use align::{align, alignment_transform, origin_by_heading, resolve, Alignment};
 pub use ape::{ape, Ape};
@@ -51,3 +52,4 @@ pub use rpe::{rpe, rpe_positions, DeltaUnit, Rpe, RpeDelta};
 pub use stats::Stats;
 pub use sync::{resample, sync, Matched, SyncOptions};
 pub use traj3::{trajectory_from_stamped, Pose3, Trajectory3};
+pub use windowed::{windowed_error, WheelIncrement, WindowedError};

@@ -188,13 +188,18 @@ pub(super) fn recording_problem(
     p: &BatchParams,
 ) -> Result<(crate::recording::Recording, Problem, WheelSource), PipelineError> {
     let robot = &nominal.robot;
-    let read = super::read_options(cfg, robot);
-    let rec = crate::io::read_recording(path, &read)?;
-    let found = super::wheels::Found {
+    let mut read = super::read_options(cfg, robot);
+    let mut rec = crate::io::read_recording(path, &read)?;
+    let mut found = super::wheels::Found {
         wheels: rec.wheels.len(),
         odom: rec.odom.len(),
         bag: crate::io::sniff(path)? != crate::io::Format::Text,
     };
+    if let Some(only) = super::wheels::only_source(&read, nominal, found) {
+        read = only;
+        rec = crate::io::read_recording(path, &read)?;
+        found.wheels = rec.wheels.len();
+    }
     super::wheels::require(&read, nominal, &rec.source, found)?;
     let wheels = super::wheels::describe(&read, nominal, found.wheels, rec.wheel_values);
     let robot_icp = match super::icp::mount(&rec, robot) {

@@ -19,7 +19,7 @@ use crate::error::InputError;
 use crate::io::out_lock::OutputLock;
 use crate::motion::VelocityObs;
 use crate::recording::{GyroSample, WheelSample};
-use crate::robot::RobotConfig;
+use crate::robot::{DiffDrive, RobotConfig, WheelSourceKind};
 use std::path::{Path, PathBuf};
 
 /// What a calibrator is fed: wheel angles, velocity observations, gyro.
@@ -98,10 +98,13 @@ pub fn run(
     job: &CalibrateJob,
     watch: &mut dyn RunObserver,
 ) -> Result<CalibrateOutcome, PipelineError> {
-    let (mut cfg, nominal) = job.common.load_nominal()?;
+    let (mut cfg, nominal) = job.common.load_nominal_open()?;
     job.choice.apply(&mut cfg.calib);
     if cfg.calib.method == calib::Method::Batch {
         return super::batch::run(job, watch);
+    }
+    if nominal.kinematics().is_none() {
+        from_scratch_allowed(job, &cfg.calib)?;
     }
     let _lock = check_job_outputs(job)?;
     let started = start(job, &cfg, &nominal)?;
@@ -143,7 +146,7 @@ pub fn run(
     vet(
         &mut summary,
         &done,
-        &nominal.robot,
+        nominal.kinematics().map(|_| robot.diff_drive()),
         &params,
         &input.display().to_string(),
     )?;
@@ -155,7 +158,8 @@ pub fn run(
         summary.rebase(nominal.robot.diff_drive());
         summary.start = Some(s.est);
     }
-    let paste = Paste::of(&summary, &nominal.robot, &input.display().to_string());
+    let controller = controller(&mut summary, &nominal);
+    let paste = Paste::of(&summary, &controller, &input.display().to_string());
     files.commit(&paste.with(&summary))?;
     paste.write(&job.out)?;
     let notes = match recorder {
@@ -179,6 +183,55 @@ fn finish_recording(
 ) -> Result<Vec<String>, PipelineError> {
     r.changes(&super::changes::entries(&summary.changes));
     r.finish().map_err(super::viewer::viz_error)
+}
+
+/// The controller the parameters are pasted into: the nominal robot's; or,
+/// without nominal values, one told the calibrated ones (one wheel_radius,
+/// the mean, the multipliers their ratio to it), `summary`'s multipliers
+/// rebased on it.
+fn controller(summary: &mut CalibSummary, nominal: &super::Nominal) -> RobotConfig {
+    if nominal.kinematics().is_some() {
+        return nominal.robot.clone();
+    }
+    let f = summary.final_params;
+    let r = 0.5 * (f.r_right + f.r_left);
+    summary.rebase(DiffDrive {
+        r_right: r,
+        r_left: r,
+        wheel_base: f.wheel_base,
+    });
+    RobotConfig {
+        r_right: r,
+        r_left: r,
+        wheel_base: f.wheel_base,
+        ..nominal.robot.clone()
+    }
+}
+
+/// Refuses what cannot run without nominal kinematics: `--method none`
+/// (it keeps them) and `--init batch` (the batch starts from them).
+fn from_scratch_allowed(job: &CalibrateJob, calib: &CalibParams) -> Result<(), PipelineError> {
+    let file = job
+        .common
+        .robot
+        .as_deref()
+        .map_or(String::new(), |p| p.display().to_string());
+    let why = if calib.method == calib::Method::None {
+        "--method none keeps the nominal values"
+    } else if matches!(job.init, Start::Batch) {
+        "--init batch starts from the batch estimate, which starts from the nominal values"
+    } else {
+        return Ok(());
+    };
+    Err(InputError::new(
+        file,
+        format!(
+            "{why}, and the robot file states none (r_right, r_left, wheel_base): state them, \
+             or run an online method without --init, which starts from a closed-form fit of \
+             the first minutes"
+        ),
+    )
+    .into())
 }
 
 /// The batch start of `--init batch` (`None` for `--init nominal`).
@@ -219,6 +272,12 @@ type Ran<'j> = (
 );
 
 impl Run<'_> {
+    /// The kinematics the front end starts from: the robot's (the batch's
+    /// with `--init batch`), `None` when the robot file states none.
+    fn nominal_kinematics(&self) -> Option<DiffDrive> {
+        self.nominal.kinematics().map(|_| self.robot.diff_drive())
+    }
+
     /// The calibration of the job's input, by its kind: a recording (from
     /// the batch start's shifted copy with `--init batch`), Censi's tuples,
     /// or CSV motions and wheels.
@@ -250,7 +309,7 @@ impl Run<'_> {
                 let done = drive::calibrate_motions(
                     &input.motions,
                     &input.wheels,
-                    Some(self.robot.diff_drive()),
+                    self.nominal_kinematics(),
                     self.params,
                     &self.cfg.measurements,
                     obs,
@@ -273,9 +332,10 @@ impl Run<'_> {
         obs: &mut dyn RunObserver,
     ) -> Result<(drive::CalibRunSummary, crate::assumptions::Assumptions), PipelineError> {
         let info = source.info().clone();
-        let (icp, done) = drive::run_calibration(
+        let (icp, done) = drive::run_calibration_from(
             source,
             self.robot,
+            self.nominal_kinematics(),
             &self.nominal.icp_params(&self.cfg.icp, &info),
             self.params,
             &self.cfg.measurements,
@@ -304,7 +364,7 @@ impl Run<'_> {
             .map(|l| ([l.x, l.y, l.yaw], Origin::RobotFile.as_str().to_string()));
         let done = drive::calibrate_intervals(
             problem.intervals,
-            Some(self.robot.diff_drive()),
+            self.nominal_kinematics(),
             stated,
             self.params,
             &path.display().to_string(),
@@ -342,17 +402,36 @@ impl Run<'_> {
         ),
         PipelineError,
     > {
-        let read = super::read_options(self.cfg, self.robot);
-        let mut source = crate::io::open(path, &read)?;
-        let info = source.info().clone();
-        let found = super::wheels::Found {
+        let configured = super::read_options(self.cfg, self.robot);
+        // Declared before the source that may borrow it.
+        let only;
+        let mut source = crate::io::open(path, &configured)?;
+        let mut info = source.info().clone();
+        let mut found = super::wheels::Found {
             wheels: info.wheels,
             odom: info.odom,
             bag: crate::io::sniff(path)? != crate::io::Format::Text,
         };
-        super::wheels::require(&read, self.nominal, &path.display().to_string(), found)?;
+        only = super::wheels::only_source(&configured, self.nominal, found);
+        if let Some(r) = &only {
+            source = crate::io::open(path, r)?;
+            info = source.info().clone();
+            found.wheels = info.wheels;
+        }
+        let read = only.as_ref().unwrap_or(&configured);
+        super::wheels::require(read, self.nominal, &path.display().to_string(), found)?;
+        if read.wheels.source == WheelSourceKind::Odometry && self.nominal.kinematics().is_none() {
+            return Err(InputError::new(
+                path.display().to_string(),
+                "the wheels come from the robot's own odometry, whose twist is turned back \
+                 into wheel rates with the controller's configured radii and separation: \
+                 state them as r_right, r_left and wheel_base in the robot file",
+            )
+            .topic(read.wheel_topic())
+            .into());
+        }
         let (done, a) = self.recording(source.as_mut(), obs)?;
-        let wheels = super::wheels::describe(&read, self.nominal, info.wheels, info.wheel_values);
+        let wheels = super::wheels::describe(read, self.nominal, info.wheels, info.wheel_values);
         Ok((done, a, wheels))
     }
 }
@@ -507,7 +586,7 @@ fn state_online(a: &mut crate::assumptions::Assumptions, o: &calib::online::Onli
 fn vet(
     summary: &mut CalibSummary,
     done: &drive::CalibRunSummary,
-    robot: &RobotConfig,
+    nominal: Option<DiffDrive>,
     params: &CalibParams,
     input: &str,
 ) -> Result<(), PipelineError> {
@@ -519,7 +598,9 @@ fn vet(
     if params.method == calib::Method::None {
         return Ok(());
     }
-    let nominal = robot.diff_drive();
+    // Without nominal values the estimate sets the scale, and no estimate
+    // is judged against a nominal one (only against its search range).
+    let nominal = nominal.unwrap_or(summary.final_params);
     let o = calib::observability(
         evidence,
         &summary.std,

@@ -618,6 +618,22 @@ pub fn run_calibration(
     meas: &MeasurementConfig,
     obs: &mut dyn RunObserver,
 ) -> Result<(IcpRunSummary, CalibRunSummary), PipelineError> {
+    let nominal = Some(robot.diff_drive());
+    run_calibration_from(source, robot, nominal, icp, calib, meas, obs)
+}
+
+/// [`run_calibration`] with the nominal kinematics given apart: `None` for
+/// a robot whose file states none (the filters then start from the front
+/// end's closed-form fit; `robot`'s own values are not used).
+pub fn run_calibration_from(
+    source: &mut dyn SampleSource,
+    robot: &RobotConfig,
+    nominal: Option<DiffDrive>,
+    icp: &IcpParams,
+    calib: &CalibParams,
+    meas: &MeasurementConfig,
+    obs: &mut dyn RunObserver,
+) -> Result<(IcpRunSummary, CalibRunSummary), PipelineError> {
     let info = source.info().clone();
     obs.start(&info);
     let mut icp_stage = IcpStage::new(&info, source.name(), robot, icp, true)?;
@@ -644,7 +660,7 @@ pub fn run_calibration(
     });
     let mut stage = CalibStage::online(
         calib,
-        Some(robot.diff_drive()),
+        nominal,
         stated,
         icp_stage.mount.pose,
         meas,

@@ -62,6 +62,15 @@ impl Common {
             Nominal::load(self.robot.as_deref())?,
         ))
     }
+
+    /// Like [`Self::load_nominal`], the robot file allowed to state no
+    /// nominal kinematics ([`Nominal::load_open`]).
+    pub fn load_nominal_open(&self) -> Result<(Config, Nominal), PipelineError> {
+        Ok((
+            Config::load(self.config.as_deref())?,
+            Nominal::load_open(self.robot.as_deref())?,
+        ))
+    }
 }
 
 /// How recordings are read with these settings: the configured topics and

@@ -11,7 +11,7 @@ use crate::geom::{self, Pose2};
 use crate::icp::{IcpParams, Prior, PriorChoice};
 use crate::io::StreamInfo;
 use crate::recording::WheelValues;
-use crate::robot::{LaserMount, RobotConfig, WheelSourceKind};
+use crate::robot::{DiffDrive, LaserMount, RobotConfig, WheelSourceKind};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
@@ -53,14 +53,41 @@ impl Nominal {
                 given: BTreeSet::new(),
             });
         };
+        Self::load_with(Some(path), RobotConfig::from_toml_keys)
+    }
+
+    /// Like [`Self::load`], but a robot file may state no nominal
+    /// kinematics at all ([`Self::kinematics`] is then `None`): for the
+    /// online calibration, which starts from a closed-form fit of the first
+    /// minutes instead.
+    pub fn load_open(path: Option<&Path>) -> Result<Self, PipelineError> {
+        match path {
+            None => Self::load(None),
+            Some(_) => Self::load_with(path, RobotConfig::from_toml_keys_open),
+        }
+    }
+
+    fn load_with(
+        path: Option<&Path>,
+        parse: fn(&str) -> Result<(RobotConfig, BTreeSet<String>), crate::robot::RobotConfigError>,
+    ) -> Result<Self, PipelineError> {
+        let Some(path) = path else {
+            return Self::load(None);
+        };
         let (text, name) = robot_text(path)?;
-        let (robot, given) =
-            RobotConfig::from_toml_keys(&text).map_err(|e| InputError::new(name, e.to_string()))?;
+        let (robot, given) = parse(&text).map_err(|e| InputError::new(name, e.to_string()))?;
         Ok(Self {
             robot,
             file: Some(path.to_path_buf()),
             given,
         })
+    }
+
+    /// The nominal kinematics, `None` when the robot file states none
+    /// (loaded by [`Self::load_open`]).
+    pub fn kinematics(&self) -> Option<DiffDrive> {
+        let unknown = self.file.is_some() && !self.given.contains("r_right");
+        (!unknown).then(|| self.robot.diff_drive())
     }
 
     /// Where `key` of the robot came from.
@@ -88,6 +115,14 @@ impl Nominal {
         match given {
             PriorChoice::Auto if self.file.is_none() && info.wheels >= 2 && info.odom >= 2 => {
                 PriorChoice::Odometry
+            }
+            // No kinematics to integrate the wheels with.
+            PriorChoice::Auto if self.kinematics().is_none() => {
+                if info.odom >= 2 {
+                    PriorChoice::Odometry
+                } else {
+                    PriorChoice::None
+                }
             }
             c => c,
         }
@@ -215,12 +250,20 @@ impl Nominal {
             _ => None,
         };
         let mut a = Assumptions::default();
+        let unknown = self.kinematics().is_none();
         for (k, v) in [
             ("r_right", r.r_right),
             ("r_left", r.r_left),
             ("wheel_base", r.wheel_base),
             ("ticks_per_rev", r.ticks_per_rev),
         ] {
+            if unknown && k != "ticks_per_rev" {
+                let note = "the robot file states no nominal value: the filters start from a \
+                            closed-form fit of the first minutes (the warm-up), and no estimate \
+                            is judged against a nominal one";
+                a.set(k, Option::<f64>::None, Origin::RobotFile, Some(note.into()));
+                continue;
+            }
             a.set(k, v, self.origin(k), hint(k));
         }
         for (k, v) in [

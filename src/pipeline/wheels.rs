@@ -24,8 +24,11 @@ pub fn describe(
         type_name: read.wheel_type().to_string(),
         values,
         messages,
-        source: origin(nominal),
-        notes: notes(read, values),
+        source: origin(read, nominal),
+        notes: found_notes(read, nominal)
+            .into_iter()
+            .chain(notes(read, values))
+            .collect(),
     }
 }
 
@@ -38,12 +41,44 @@ pub fn state(summary: &mut CalibSummary, source: WheelSource) {
     summary.wheel_source = Some(source);
 }
 
-fn origin(nominal: &Nominal) -> Origin {
+/// Where the wheel source came from: the robot file's `[wheels]`, the
+/// recording (its one wheel stream, [`only_source`]) or the default.
+fn origin(read: &ReadOptions, nominal: &Nominal) -> Origin {
     if nominal.given.contains("wheels") {
         Origin::RobotFile
+    } else if read.wheels.source != WheelSourceKind::default() {
+        Origin::Recording
     } else {
         Origin::Default
     }
+}
+
+/// The read options of a recording whose robot file names no `[wheels]`
+/// source and that holds no JointState wheels but the robot's own odometry
+/// (`nav_msgs/Odometry`, e.g. a diff_drive_controller's): that odometry,
+/// its one usable wheel stream, read from its twist. `None` keeps `read`.
+pub fn only_source(read: &ReadOptions, nominal: &Nominal, found: Found) -> Option<ReadOptions> {
+    let unnamed = !nominal.given.contains("wheels") && read.wheels.is_default();
+    (unnamed && found.bag && found.wheels < 2 && found.odom >= 2).then(|| {
+        let mut r = read.clone();
+        r.wheels.source = WheelSourceKind::Odometry;
+        r
+    })
+}
+
+/// Why the source is the one it is, when the recording chose it.
+fn found_notes(read: &ReadOptions, nominal: &Nominal) -> Vec<String> {
+    if origin(read, nominal) != Origin::Recording {
+        return Vec::new();
+    }
+    vec![format!(
+        "the robot file names no [wheels] source and the recording has no JointState wheels \
+         on {}: its one wheel stream, {} on {}, is used (set [wheels] source and topic to \
+         choose another)",
+        read.topics.joint_states,
+        read.wheel_type(),
+        read.wheel_topic()
+    )]
 }
 
 /// How the messages became wheel angles, and what the source cannot show.
@@ -138,7 +173,7 @@ pub fn require(
         .into());
     }
     let kind = read.wheels.source;
-    let whence = match origin(nominal) {
+    let whence = match origin(read, nominal) {
         Origin::RobotFile => "of the robot file",
         _ => "by default: the robot file has no [wheels] table",
     };

@@ -157,13 +157,28 @@ impl RobotConfig {
     pub fn from_toml_keys(
         text: &str,
     ) -> Result<(Self, std::collections::BTreeSet<String>), RobotConfigError> {
+        let (c, keys) = Self::from_toml_keys_open(text)?;
+        if !keys.contains("r_right") {
+            return Err(RobotConfigError::Missing(REQUIRED_KEYS.to_vec()));
+        }
+        Ok((c, keys))
+    }
+
+    /// Like [`Self::from_toml_keys`], but a file that states none of the
+    /// nominal kinematics is accepted (a robot calibrated from scratch):
+    /// its `r_right`, `r_left` and `wheel_base` are then the defaults, which
+    /// are placeholders, never nominal values (the keys returned say they
+    /// were not given). A file stating some of the three is refused.
+    pub fn from_toml_keys_open(
+        text: &str,
+    ) -> Result<(Self, std::collections::BTreeSet<String>), RobotConfigError> {
         let table: toml::Table = toml::from_str(text)?;
         let c: Self = toml::from_str(text)?;
         let missing: Vec<&'static str> = REQUIRED_KEYS
             .into_iter()
             .filter(|k| !table.contains_key(*k))
             .collect();
-        if !missing.is_empty() {
+        if !missing.is_empty() && missing.len() < REQUIRED_KEYS.len() {
             return Err(RobotConfigError::Missing(missing));
         }
         if c.wheels.source == WheelSourceKind::Ticks && !table.contains_key("ticks_per_rev") {

@@ -6,15 +6,6 @@ import re
 
 from .common import ROOT, num, pm
 
-# (label, bag under the data folder, robot file name)
-REAL_RECORDINGS = [
-    ("mines-rover exp1", "mines-rover/exp1.mcap", "mines-rover"),
-    ("mines-rover exp2", "mines-rover/exp2.mcap", "mines-rover"),
-    ("lego-robot", "lego-robot/lego-robot.mcap", "lego-robot"),
-]
-
-FILTERS = ["adaptive-pf", "dkf", "akf"]
-
 PARAMETER_LABEL = {"r_right": "R_R", "r_left": "R_L", "wheel_base": "D"}
 
 
@@ -47,52 +38,151 @@ def refusal_cell(reason):
     return f"refused ({reason.split(':')[0]})"
 
 
-def filter_cell(result):
-    d, refused = result
-    if refused:
-        return refusal_cell(refused)
-    f, sd = d["final"], d["std"]
-    r = [num(f[k] * 1000, 1) for k in ("r_right", "r_left")]
-    cell = (f"R {r[0]} / {r[1]} ± {num(max(sd['r_right'], sd['r_left']) * 1000, 1)}, "
-            f"D {num(f['wheel_base'] * 1000, 0)} ± {num(sd['wheel_base'] * 1000, 0)}")
-    nominal = [num(d["assumptions"][k]["value"] * 1000, 1) for k in ("r_right", "r_left")]
-    nominal_d = num(d["assumptions"]["wheel_base"]["value"] * 1000, 0)
-    if r == nominal and num(f["wheel_base"] * 1000, 0) == nominal_d:
-        cell += " (the nominal values)"
-    return cell
+# The real-robot table: each online method (and the published Adaptive-PF)
+# from the robot file's nominal values, and the batch, on every real
+# recording. (label, input under the data folder, robot file name).
+REAL_INPUTS = [
+    ("LEGO robot", "lego-robot/lego-robot.mcap", "lego-robot"),
+    ("Mines exp1", "mines-rover/exp1.mcap", "mines-rover"),
+    ("Mines exp2", "mines-rover/exp2.mcap", "mines-rover"),
+    ("Censi lstraight", "censi-calibration/lstraight.tuple", "khepera"),
+    ("Censi l90", "censi-calibration/l90.tuple", "khepera"),
+    ("Censi lmov", "censi-calibration/lmov.tuple", "khepera"),
+]
+# (row label, method, whether the published preset)
+REAL_ROWS = [
+    ("adaptive-pf", "adaptive-pf", False),
+    ("pf", "pf", False),
+    ("dkf", "dkf", False),
+    ("akf", "akf", False),
+    ("adaptive-pf, published", "adaptive-pf", True),
+    ("batch", "batch", False),
+]
+# The independent references: the LEGO tracker's dead-reckoning fit (data
+# README: 20.0 mm wheels, 172.5 mm track; compared as R/D, free of the
+# tracker's scale), the Mines tick check (data README: 2050 / 2160 ticks per
+# revolution at 77 mm from straight runs), the authors' solver (Censi).
+TRACKER_TURN = 0.0200 / 0.1725
+TICKS_RADIUS = {"Mines exp1": 0.077 * 2000 / 2050, "Mines exp2": 0.077 * 2000 / 2160}
 
 
-def batch_cell(result):
-    d, refused = result
+def published_config(runner):
+    return runner.scratch_file("published.toml", '[calib]\npreset = "published"\n')
+
+
+def real_run(runner, label, rel, robot, method, published):
+    """A future of `odocal calibrate --json` from the nominal values: (its
+    output, its calibration.csv rows) or (None, the refusal)."""
+    bag = runner.data_file(rel)
+    args = ["calibrate", "--input", bag, "--robot", robot, "--method", method, "--json"]
+    args += ["--config", published_config(runner)] if published else []
+    out = runner.path(f"real-{label.replace(' ', '-')}-{method}-{int(published)}")
+
+    def work():
+        p = runner.call([*args, "--out", out], allowed=(0, 2))
+        refused = re.search(r"calibration refused: (.*)", p.stderr)
+        if p.returncode == 2 and refused:
+            return None, refused.group(1)
+        if p.returncode != 0:
+            raise RuntimeError(f"odocal {' '.join(args)} failed ({p.returncode}):\n{p.stderr}")
+        history = []
+        csv = os.path.join(out, "calibration.csv")
+        if os.path.exists(csv):
+            with open(csv) as f:
+                head = f.readline().strip().split(",")
+                for line in f:
+                    row = dict(zip(head, line.strip().split(",")))
+                    history.append([float(row[k]) for k in ("t", "r_right", "r_left", "wheel_base")])
+        return (json.loads(p.stdout), history), None
+
+    return runner.once(("real", rel, robot, method, published), work)
+
+
+def kinematics(d):
+    """(R_R, R_L, D), (their std) of a filter's or the batch's output."""
+    if "final" in d:
+        f, s = d["final"], d["std"]
+        return [f[k] for k in ("r_right", "r_left", "wheel_base")], [s[k] for k in ("r_right", "r_left", "wheel_base")]
+    return ([d[k]["value"] for k in ("r_right", "r_left", "wheel_base")],
+            [d[k]["std"] for k in ("r_right", "r_left", "wheel_base")])
+
+
+def settled_s(history):
+    """Seconds from the first estimate to the first after which every one
+    stays within 1 % of the final radii and 2 % of the final wheel base."""
+    if len(history) < 2:
+        return None
+    last = history[-1]
+    near = lambda h: all(abs(h[i] / last[i] - 1) <= 0.01 for i in (1, 2)) and abs(h[3] / last[3] - 1) <= 0.02
+    k = len(history) - 1
+    while k > 0 and near(history[k - 1]):
+        k -= 1
+    return history[k][0] - history[0][0]
+
+
+def reference_cell(label):
+    if label == "LEGO robot":
+        return f"tracker fit: R/D {TRACKER_TURN:.4f} (20.0 / 172.5 mm)"
+    if label in TICKS_RADIUS:
+        return f"tick check: R {num(TICKS_RADIUS[label] * 1000, 1)} mm"
+    return "authors' solver: " + censi_authors_text(label)
+
+
+def censi_authors(runner, label):
+    path = runner.data_file(f"censi-calibration/{label.split()[-1]}_results.json")
+    with open(path) as f:
+        a = json.load(f)
+    return [a["r_diam"] / 2, a["l_diam"] / 2, a["axle"]]
+
+
+def censi_authors_text(label):
+    return f"`{label.split()[-1]}_results.json`"
+
+
+def agreement(runner, label, k):
+    """How the estimate `k` = (R_R, R_L, D) departs from the column's
+    independent reference."""
+    if label == "LEGO robot":
+        turn = 0.5 * (k[0] + k[1]) / k[2]
+        return f"R/D {num(100 * (turn / TRACKER_TURN - 1), 1)} %"
+    if label in TICKS_RADIUS:
+        r = 0.5 * (k[0] + k[1])
+        return f"R {num(100 * (r / TICKS_RADIUS[label] - 1), 1)} %"
+    a = censi_authors(runner, label)
+    worst = max((abs(k[i] / a[i] - 1), i) for i in range(3))
+    return f"worst {('R_R', 'R_L', 'D')[worst[1]]} {num(100 * (k[worst[1]] / a[worst[1]] - 1), 2)} %"
+
+
+def real_cell(runner, label, result):
+    got, refused = result
     if refused:
         return refusal_cell(refused)
-    mm = lambda v, k: num(v * 1000, k)
-    rr, rl, wb, las, dt = (d[k] for k in ("r_right", "r_left", "wheel_base", "laser", "time_offset"))
-    return (f"R {mm(rr['value'], 1)} / {mm(rl['value'], 1)} ± {mm(max(rr['std'], rl['std']), 1)} mm, "
-            f"D {mm(wb['value'], 0)} ± {mm(wb['std'], 0)} mm, "
-            f"laser {mm(las['x']['value'], 0)} / {mm(las['y']['value'], 0)} "
-            f"± {mm(max(las['x']['std'], las['y']['std']), 0)} mm, "
-            f"δ {num(dt['value'], 3)} ± {num(dt['std'], 3)} s")
+    d, history = got
+    k, s = kinematics(d)
+    cell = (f"R {num(k[0] * 1000, 2 if k[0] < 0.03 else 1)} / {num(k[1] * 1000, 2 if k[1] < 0.03 else 1)} "
+            f"± {num(max(s[0], s[1]) * 1000, 2 if k[0] < 0.03 else 1)}, "
+            f"D {num(k[2] * 1000, 1)} ± {num(s[2] * 1000, 1)}")
+    dt = d.get("time_offset")
+    if dt and dt.get("value") is not None and dt.get("source", "estimated") == "estimated" and dt["std"] > 0:
+        cell += f"; δ {num(dt['value'], 3)} ± {num(dt['std'], 3)} s"
+    t = settled_s(history) if "final" in d else None
+    if t is not None:
+        cell += f"; settled {num(t, 0)} s"
+    return cell + f"; {agreement(runner, label, k)}"
 
 
 def block_real_calibration(runner, csm):
-    rows = [
-        "| recording | batch (radii, wheel base, laser x/y, time offset) | "
-        + " | ".join(f"{m} nominal / from batch" for m in FILTERS) + " |",
-        "|---|---|---|---|---|",
-    ]
-    bags = {rel: runner.data_file(rel) for _, rel, _ in REAL_RECORDINGS}
+    rows = ["| | " + " | ".join(label for label, _, _ in REAL_INPUTS) + " |",
+            "|---" * (len(REAL_INPUTS) + 1) + "|",
+            "| reference | " + " | ".join(reference_cell(label) for label, _, _ in REAL_INPUTS) + " |"]
     futures = {
-        (rel, m, b): calibrate(runner, bags[rel], robot, m, b)
-        for _, rel, robot in REAL_RECORDINGS
-        for m, b in [("batch", False)] + [(m, b) for m in FILTERS for b in (False, True)]
+        (row, label): real_run(runner, label, rel, robot, method, published)
+        for row, method, published in REAL_ROWS
+        for label, rel, robot in REAL_INPUTS
     }
-    for label, rel, _ in REAL_RECORDINGS:
-        cells = [batch_cell(futures[(rel, "batch", False)].result())]
-        for m in FILTERS:
-            pair = [filter_cell(futures[(rel, m, b)].result()) for b in (False, True)]
-            cells.append(" / ".join(pair))
-        rows.append(f"| {label} | {' | '.join(cells)} |")
+    for row, _, _ in REAL_ROWS:
+        cells = [real_cell(runner, label, futures[(row, label)].result()) for label, _, _ in REAL_INPUTS]
+        rows.append(f"| {row} | {' | '.join(cells)} |")
     return rows
 
 
@@ -157,7 +247,8 @@ def block_lego_scanner(runner, csm):
 
 # The columns (the experiment's configurations) and the figures of [Farina, Table II]
 # (its Table II: a record, not computed).
-TABLE_II = [("Adaptive-PF", "adaptive-pf"), ("DKF", "dkf"), ("AKF", "akf"), ("PF (fixed)", "pf")]
+TABLE_II = [("Adaptive-PF", "adaptive-pf"), ("DKF", "dkf"), ("AKF", "akf"), ("PF (fixed)", "pf"),
+            ("Adaptive-PF, published", "adaptive-pf-published")]
 
 PAPER = {
     "final radius error R_R / R_L (mm)": ("1.86 / 1.91", "2.11 / 1.85"),
@@ -166,6 +257,7 @@ PAPER = {
     "RMSE x,y (m), online odometry": ("3.38", "5.44"),
     "RMSE θ (rad), online odometry": ("0.585", "0.941"),
     "RMSE x,y (m), final parameters": ("–", "–"),
+    "RMSE x,y (m), 10 s windows from the estimate at each start": ("–", "–"),
     "time per step (ms)": ("0.89", "0.46"),
 }
 
@@ -209,7 +301,7 @@ def block_table_ii_scans(runner, csm):
                       f"{r['converged'] * 100:.0f} %")
     return [
         "| | " + " | ".join(name for name, _ in TABLE_II) + " | paper: Adaptive-PF | paper: DKF |",
-        "|---|---|---|---|---|---|---|",
+        "|---" * (len(TABLE_II) + 3) + "|",
         table_ii_row("final radius error R_R / R_L (mm)", rows, wins,
                      lambda r: f"{num(med(r, 'err_r_right') * 1000, 2)} / {num(med(r, 'err_r_left') * 1000, 2)}",
                      "radius error"),
@@ -222,6 +314,8 @@ def block_table_ii_scans(runner, csm):
         table_ii_row("RMSE x,y (m), final parameters", rows, wins,
                      lambda r: num(med(r, "rmse_xy_final"), 3 if med(r, "rmse_xy_final") < 1 else 2),
                      "RMSE x,y, final parameters"),
+        table_ii_row("RMSE x,y (m), 10 s windows from the estimate at each start", rows, wins,
+                     lambda r: num(med(r, "rmse_xy_window"), 3), "RMSE x,y, 10 s windows"),
         table_ii_row("time per step (ms)", rows, wins,
                      lambda r: f"{med(r, 'mean_iteration_ms'):.2g}", None),
     ]

@@ -67,27 +67,64 @@ pub fn estimate_with_laser(
     let free: Vec<bool> = (0..n)
         .map(|i| laser.is_none() || !(3..6).contains(&i))
         .collect();
-    let mut keep = vec![true; pb.intervals.len()];
+    let keep = vec![true; pb.intervals.len()];
     if !given {
         covs = noise(pb, &residuals(pb, &init.to_vec(6)), &keep);
     }
     signs(&init)?;
     let evidence = excitation(pb, &incs, &covs, &init);
     let step = steps(&init, nominal, track.map(|t| t.period()));
-    let mut f = Fit {
+    let f = Fit {
         p: init.to_vec(n),
         info: nalgebra::DMatrix::zeros(n, n),
         chi2: 0.0,
     };
+    let how = Rounds {
+        given,
+        step: &step,
+        free: &free,
+    };
+    let (f, keep, covs) = fit_rounds(pb, p, &how, f, keep, covs);
+    let ctx = report::Context {
+        nominal,
+        params: p,
+        checks,
+        evidence,
+        init,
+        kept: keep.iter().filter(|k| **k).count(),
+        dropped: keep.iter().filter(|k| !**k).count(),
+        noise: (!given).then(|| [0, 1, 2].map(|i| covs[0][(i, i)].sqrt())),
+        period: track.map(|t| t.period()),
+        free,
+    };
+    report::build(&f, ctx)
+}
+
+/// How the fit-and-reject rounds fit: whether the intervals carry their own
+/// covariances (else the σ's come from the residuals), the unknowns' steps
+/// and which are free.
+struct Rounds<'a> {
+    given: bool,
+    step: &'a [f64],
+    free: &'a [bool],
+}
+
+/// Censi's fit-and-reject rounds from `f`, with the robust rule on top: the
+/// last fit, which intervals it kept and their covariances.
+fn fit_rounds(
+    pb: &Problem,
+    p: &BatchParams,
+    how: &Rounds<'_>,
+    mut f: Fit,
+    mut keep: Vec<bool>,
+    mut covs: Vec<Matrix3<f64>>,
+) -> (Fit, Vec<bool>, Vec<Matrix3<f64>>) {
+    let (given, step, free) = (how.given, how.step, how.free);
     // Censi's drops accumulate over his rounds; the robust rule judges every
     // round afresh among those, so that its cap holds for the whole.
     let mut censi = keep.clone();
     for round in 0..MAX_ROUNDS {
-        f = fit(
-            &data(pb, &covs, &keep, &step, &free),
-            &f.p,
-            p.max_iterations,
-        );
+        f = fit(&data(pb, &covs, &keep, step, free), &f.p, p.max_iterations);
         let res = residuals(pb, &f.p);
         let before = keep.clone();
         if round < p.outlier_iterations {
@@ -116,25 +153,9 @@ pub fn estimate_with_laser(
     if !given {
         // The σ's of the final residuals, and the fit they weight.
         covs = noise(pb, &residuals(pb, &f.p), &keep);
-        f = fit(
-            &data(pb, &covs, &keep, &step, &free),
-            &f.p,
-            p.max_iterations,
-        );
+        f = fit(&data(pb, &covs, &keep, step, free), &f.p, p.max_iterations);
     }
-    let ctx = report::Context {
-        nominal,
-        params: p,
-        checks,
-        evidence,
-        init,
-        kept: keep.iter().filter(|k| **k).count(),
-        dropped: keep.iter().filter(|k| !**k).count(),
-        noise: (!given).then(|| [0, 1, 2].map(|i| covs[0][(i, i)].sqrt())),
-        period: track.map(|t| t.period()),
-        free,
-    };
-    report::build(&f, ctx)
+    (f, keep, covs)
 }
 
 /// Most fit-and-reject rounds: Censi's `outlier_iterations` (with the

@@ -1,6 +1,6 @@
 //! The calibrator configurations the tables of \[Farina\] compare.
 
-use crate::calib::{CalibParams, CountRule, Method, Scheme, Trigger};
+use crate::calib::{CalibParams, CountRule, Method, Preset, Scheme, Trigger};
 
 /// False-alarm probability of the change detector in the radius-step
 /// experiment, for every filter.
@@ -18,9 +18,11 @@ pub fn fixed_count_label() -> String {
     )
 }
 
-/// The configurations of [Farina, Table II]: adaptive-pf, pf, dkf, akf, none.
+/// The configurations of [Farina, Table II]: adaptive-pf, pf, dkf, akf,
+/// none, and the Adaptive-PF as published ([`PUBLISHED_LABEL`]), so that
+/// what odocal's departures from the paper buy is measured.
 pub fn table2_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
-    Method::ALL
+    let mut out: Vec<(String, CalibParams)> = Method::ALL
         .iter()
         .map(|&m| {
             (
@@ -31,8 +33,20 @@ pub fn table2_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
                 },
             )
         })
-        .collect()
+        .collect();
+    out.push((
+        PUBLISHED_LABEL.to_string(),
+        CalibParams {
+            method: Method::AdaptivePf,
+            preset: Preset::Published,
+            ..base.clone()
+        },
+    ));
+    out
 }
+
+/// Label of the Adaptive-PF under `preset = "published"` in Table II.
+pub const PUBLISHED_LABEL: &str = "adaptive-pf-published";
 
 /// The configurations of [Farina, Table I]: the fixed PF with 4 schemes × 3 triggers.
 pub fn table1_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {

@@ -3,6 +3,7 @@
 
 use crate::calib::synth::SynthData;
 use crate::calib::{CalibStep, CalibrationRun};
+use crate::eval::{windowed_error, WheelIncrement};
 use crate::geom::{self, Pose2};
 use crate::robot::DiffDrive;
 use serde::Serialize;
@@ -31,6 +32,11 @@ pub struct RunMetrics {
     pub rmse_xy_final: f64,
     /// RMSE of that odometry's heading (rad).
     pub rmse_theta_final: f64,
+    /// RMSE of the position of the odometry dead-reckoned over 10 s windows,
+    /// each with the estimate in effect at its start, relative to the
+    /// window's start (m): the odometry a robot runs on while it calibrates
+    /// ([`crate::eval::windowed`]); 0 when no window could be scored.
+    pub rmse_xy_window: f64,
     /// Mean time per step (ms).
     pub mean_iteration_ms: f64,
     /// Time from the start (or the radius step) after which both radius
@@ -85,6 +91,55 @@ pub fn fixed_odometry(steps: &[CalibStep], k: &DiffDrive) -> (Vec<f64>, Vec<Pose
         }
     }
     (stamps, poses)
+}
+
+/// The window of [`RunMetrics::rmse_xy_window`] (s).
+pub const WINDOW_S: f64 = 10.0;
+
+/// The wheel rotation of `steps` as increments, each step's part not yet
+/// covered by its mean wheel rates (as [`fixed_odometry`] integrates).
+fn step_increments(steps: &[CalibStep]) -> Vec<WheelIncrement> {
+    let mut covered = f64::NEG_INFINITY;
+    let mut out = Vec::with_capacity(steps.len());
+    for s in steps {
+        let t0 = s.t0.max(covered);
+        let dt = s.t1 - t0;
+        if dt > 0.0 {
+            out.push(WheelIncrement {
+                t0,
+                t1: s.t1,
+                d_right: s.omega_right * dt,
+                d_left: s.omega_left * dt,
+            });
+            covered = s.t1;
+        }
+    }
+    out
+}
+
+/// The windowed odometry RMSE of a run (m; 0 when no window was scored).
+fn window_rmse(r: &CalibrationRun, steps: &[CalibStep], truth: &dyn RunTruth) -> f64 {
+    let estimates: Vec<(f64, DiffDrive)> = r
+        .history
+        .iter()
+        .map(|h| {
+            (
+                h.t,
+                DiffDrive {
+                    r_right: h.r_right,
+                    r_left: h.r_left,
+                    wheel_base: h.wheel_base,
+                },
+            )
+        })
+        .collect();
+    windowed_error(
+        &step_increments(steps),
+        &estimates,
+        &|t| truth.pose_at(t),
+        WINDOW_S,
+    )
+    .map_or(0.0, |e| e.rmse_m)
 }
 
 /// RMSE of position (m) and heading (rad) of poses against the truth, the
@@ -149,6 +204,7 @@ pub fn score(
         rmse_theta,
         rmse_xy_final,
         rmse_theta_final,
+        rmse_xy_window: window_rmse(r, steps, truth),
         mean_iteration_ms: r.summary.mean_iteration_ms,
         convergence_s: conv_from.map(|t| (t - start).max(0.0)),
     }

@@ -27,6 +27,9 @@ pub struct TableRow {
     pub rmse_xy_final: Stat,
     /// RMSE θ of the odometry with the final parameters (rad).
     pub rmse_theta_final: Stat,
+    /// RMSE x, y of the odometry over 10 s windows, each with the estimate
+    /// at its start (m).
+    pub rmse_xy_window: Stat,
     /// Time per iteration (ms).
     pub mean_iteration_ms: Stat,
     /// Convergence time over the runs that converged (s).
@@ -57,6 +60,7 @@ impl TableRow {
             rmse_theta: col(&|r| r.rmse_theta),
             rmse_xy_final: col(&|r| r.rmse_xy_final),
             rmse_theta_final: col(&|r| r.rmse_theta_final),
+            rmse_xy_window: col(&|r| r.rmse_xy_window),
             mean_iteration_ms: col(&|r| r.mean_iteration_ms),
             converged: conv.len() as f64 / runs.len().max(1) as f64,
             convergence_s: stat(conv),
@@ -80,12 +84,13 @@ type Metric = fn(&RunMetrics) -> f64;
 
 /// The metrics the paired comparison counts, each lower-is-better: name
 /// and value of one run (a run that never converged counts as never).
-const PAIRED: [(&str, Metric); 5] = [
+const PAIRED: [(&str, Metric); 6] = [
     ("radius error", |r| 0.5 * (r.err_r_right + r.err_r_left)),
     ("convergence", |r| r.convergence_s.unwrap_or(f64::INFINITY)),
     ("RMSE x,y", |r| r.rmse_xy),
     ("RMSE θ", |r| r.rmse_theta),
     ("RMSE x,y, final parameters", |r| r.rmse_xy_final),
+    ("RMSE x,y, 10 s windows", |r| r.rmse_xy_window),
 ];
 
 /// Runs (of the same seeds) in which `a` is strictly better than `b` on `f`.
@@ -124,14 +129,14 @@ impl MonteCarloTable {
     /// Markdown table of medians (errors in mm, times in ms and s).
     pub fn to_markdown(&self) -> String {
         let mut s = format!(
-            "Medians over {} runs (mean in parentheses).\n\n| config | err R_R (mm) | err R_L (mm) | err D (mm) | RMSE V (m/s) | RMSE W (rad/s) | RMSE x,y (m) | RMSE θ (rad) | RMSE x,y, final params (m) | RMSE θ, final params (rad) | ms/iter | convergence (s) | converged |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+            "Medians over {} runs (mean in parentheses).\n\n| config | err R_R (mm) | err R_L (mm) | err D (mm) | RMSE V (m/s) | RMSE W (rad/s) | RMSE x,y (m) | RMSE θ (rad) | RMSE x,y, final params (m) | RMSE θ, final params (rad) | RMSE x,y, 10 s windows (m) | ms/iter | convergence (s) | converged |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             self.runs
         );
         for r in &self.rows {
             let mm = |x: &Stat| format!("{:.3} ({:.3})", 1e3 * x.median, 1e3 * x.mean);
             let g = |x: &Stat| format!("{:.4} ({:.4})", x.median, x.mean);
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.4} | {:.2} | {:.0} % |\n",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.4} | {:.2} | {:.0} % |\n",
                 r.label,
                 mm(&r.err_r_right),
                 mm(&r.err_r_left),
@@ -142,6 +147,7 @@ impl MonteCarloTable {
                 g(&r.rmse_theta),
                 g(&r.rmse_xy_final),
                 g(&r.rmse_theta_final),
+                g(&r.rmse_xy_window),
                 r.mean_iteration_ms.median,
                 r.convergence_s_censored.median,
                 100.0 * r.converged

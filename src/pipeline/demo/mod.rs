@@ -20,7 +20,7 @@ use crate::pipeline::recorder::{RecorderOptions, StreamRecorder};
 use crate::pipeline::viewer::{open_logger, Viewer};
 use crate::pipeline::{Common, Config, Nominal, PipelineError};
 use crate::recording::Recording;
-use crate::robot::wheel_odometry;
+use crate::robot::{wheel_odometry, DiffDrive};
 use crate::sim::Truth;
 use crate::traj::Trajectory;
 use crate::viz::{Logger, NullLogger};
@@ -62,6 +62,12 @@ pub struct MethodResult {
     /// method's final parameters, against the reference: what the
     /// calibration is worth afterwards.
     pub eval_final: Option<TrajectoryMetrics>,
+    /// The wheel odometry over 10 s windows, each dead-reckoned with the
+    /// estimate in effect at its start, against the reference's motion over
+    /// the window: the odometry a robot runs on while it calibrates (none
+    /// against a reference without headings, or for `none`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub windowed: Option<eval::WindowedError>,
 }
 
 /// What `odocal demo` prints with `--json` and writes as `summary.json`.
@@ -185,6 +191,37 @@ fn origin_eval(
             None
         }
     }
+}
+
+/// The windowed odometry error of `run` over `wheels` against `reference`
+/// (10 s windows from the first estimate on).
+fn windowed(
+    run: &CalibrationRun,
+    wheels: &[crate::recording::WheelSample],
+    reference: &Trajectory,
+) -> Option<eval::WindowedError> {
+    let increments: Vec<eval::WheelIncrement> = wheels
+        .windows(2)
+        .map(|w| eval::WheelIncrement {
+            t0: w[0].stamp,
+            t1: w[1].stamp,
+            d_right: w[1].right - w[0].right,
+            d_left: w[1].left - w[0].left,
+        })
+        .collect();
+    let estimates: Vec<(f64, DiffDrive)> = run
+        .history
+        .iter()
+        .map(|h| {
+            let k = DiffDrive {
+                r_right: h.r_right,
+                r_left: h.r_left,
+                wheel_base: h.wheel_base,
+            };
+            (h.t, k)
+        })
+        .collect();
+    eval::windowed_error(&increments, &estimates, &|t| reference.pose_at(t), 10.0)
 }
 
 fn convergence(run: &CalibrationRun, truth: &Truth, t_start: f64) -> Option<f64> {
@@ -540,6 +577,9 @@ fn method_results(
                     reference,
                     notes,
                 ),
+                windowed: reference
+                    .filter(|r| estimates && !r.position_only)
+                    .and_then(|r| windowed(run, &input.recording.wheels, &r.traj)),
                 eval_final: (!changing)
                     .then(|| {
                         origin_eval(
