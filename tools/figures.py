@@ -77,10 +77,12 @@ def volatile(row):
 
 def merged(old, new):
     """`new` with each volatile row taken from `old` (matched by its first
-    cell) where it has one."""
+    cell) where it has one with as many cells (a table that gained a column
+    takes the new row whole)."""
     first = lambda row: row.split("|")[1].strip() if row.count("|") > 1 else row
     kept = {first(r): r for r in old if volatile(r)}
-    return [kept.get(first(r), r) if volatile(r) else r for r in new]
+    same = lambda r: first(r) in kept and kept[first(r)].count("|") == r.count("|")
+    return [kept[first(r)] if volatile(r) and same(r) else r for r in new]
 
 
 def default_odocal():

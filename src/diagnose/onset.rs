@@ -71,6 +71,10 @@ pub struct OnsetParams {
     /// Whether the changes are named after the run.
     pub enabled: bool,
     /// Window length before the firing (s); the onset is searched in it.
+    /// 15 s: a detector fed intervals whose σ is the scans' own (weak along
+    /// a corridor) fires up to about 11 s after a radius step, and the
+    /// window must reach back over the step. (20 s reaches, on a 60 s run,
+    /// back before the filters start, and the step is then mis-sized.)
     pub before_s: f64,
     /// Window length after the firing (s).
     pub after_s: f64,
@@ -95,7 +99,7 @@ impl Default for OnsetParams {
     fn default() -> Self {
         Self {
             enabled: true,
-            before_s: 10.0,
+            before_s: 15.0,
             after_s: 10.0,
             bic_margin: 10.0,
             min_rows: 25,

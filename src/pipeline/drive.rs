@@ -549,6 +549,9 @@ fn run_step(
         Feed::Online {
             front, odometry, ..
         } => {
+            if e.changed {
+                front.changed_at(s.t1);
+            }
             let mut pose = |t: f64, p: &Pose2| obs.calibrated_pose(t, p);
             odometry.advance(s.t1, front.time_offset(), &e.drive(), &mut pose);
         }

@@ -119,7 +119,8 @@ PAGES = {
         "diagnoses the nominal chair. \"Named right\" = every hidden cause named, nothing "
         "else, and the verdict not `no-discrepancy` (for a null run: `no-discrepancy`); "
         "\"estimates ok\" = every estimate of a rightly named effect within 20 % of the "
-        "truth or 2 standard errors, whichever is wider.",
+        "truth, never widened by the fit's standard error, a parameter not reported "
+        "counting as out.",
         "blind-diagnosis-suite",
     ),
     "fleet": (

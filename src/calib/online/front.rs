@@ -167,6 +167,15 @@ impl FrontEnd {
         }
     }
 
+    /// The filters' detector fired at `t` (s, laser clock): the window
+    /// keeps only what comes after, so that the next fits (the time offset,
+    /// the mounting check) describe the robot as it is now; a fit that the
+    /// few intervals left cannot support is refused, and the offset and
+    /// mounting in use stay.
+    pub fn changed_at(&mut self, t: f64) {
+        self.window.forget_before(t);
+    }
+
     /// Where the filters start, once known.
     pub fn started(&self) -> Option<&Started> {
         self.started.as_ref()

@@ -73,6 +73,21 @@ impl GeometryWindow {
         }
     }
 
+    /// Forgets every interval that starts before `t` (s, laser clock):
+    /// after a change of the robot, one fit over both sides of it would
+    /// describe neither, and the time offset would absorb the difference.
+    pub fn forget_before(&mut self, t: f64) {
+        while self.intervals.front().is_some_and(|&(_, t0, _)| t0 < t) {
+            self.intervals.pop_front();
+        }
+        let Some(&(_, oldest, _)) = self.intervals.front() else {
+            return;
+        };
+        while self.wheels.len() > 2 && self.wheels[1].stamp < oldest - self.margin_s {
+            self.wheels.pop_front();
+        }
+    }
+
     /// Intervals in the window.
     pub fn len(&self) -> usize {
         self.intervals.len()

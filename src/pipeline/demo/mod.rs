@@ -11,7 +11,7 @@ use crate::error::InputError;
 use crate::eval::{self, Alignment, EvalOptions, Trajectory3, TrajectoryMetrics};
 use crate::geom::Pose2;
 use crate::io::{RecordingSource, SampleSource};
-use crate::pipeline::calibrate::{self, CalibInput};
+use crate::pipeline::calibrate;
 use crate::pipeline::drive;
 use crate::pipeline::icp::IcpOutput;
 use crate::pipeline::observe::Observers;
@@ -448,10 +448,12 @@ fn calibrate_all(
 ) -> Result<Calibrated, PipelineError> {
     let (rec, robot, cfg) = (input.recording, &input.nominal.robot, input.config);
     progress("icp", 0.0);
+    // As `calibrate` runs them: the online front end sets each filter's
+    // start and search.
     let params_for = |m: Method| {
         let mut p = cfg.calib.clone();
         p.method = m;
-        calibrate::params_for_robot(&p, robot)
+        p
     };
     let mut recorder = StreamRecorder::new(
         logger,
@@ -495,23 +497,23 @@ fn calibrate_all(
         calibrate::calibration_assumptions(input.nominal, &icp_done, cfg.icp.prior, &info);
     let icp_out = collect.icp(icp_done.stats);
     let mut runs = vec![(first, collect.calibration(done.summary, done.weight_resets))];
-    let cal_input = CalibInput {
-        observations: icp_out.observations(),
-        wheels: rec.wheels.clone(),
-        gyro: rec.gyro.clone(),
-    };
+    // Every other method through the same driver (ICP and the online front
+    // end), so that each figure is what `calibrate --method M` gives.
     for (i, m) in DEMO_METHODS.iter().enumerate().skip(1) {
         progress(m.as_str(), i as f64 / DEMO_METHODS.len() as f64);
         let mut files = CalibFiles::create(&out.join(m.as_str()))?;
-        let run = calibrate::from_streams_observed(
-            &cal_input,
+        let mut collect = Collect::default();
+        let mut source = RecordingSource::new(rec);
+        let (_, done) = drive::run_calibration(
+            &mut source,
             robot,
+            &icp_params,
             &params_for(*m),
             &cfg.measurements,
-            &mut files,
+            &mut Observers(vec![&mut collect, &mut files]),
         )?;
-        files.commit(&run.summary)?;
-        runs.push((*m, run));
+        files.commit(&done.summary)?;
+        runs.push((*m, collect.calibration(done.summary, done.weight_resets)));
     }
     Ok(Calibrated {
         icp: icp_out,
