@@ -51,6 +51,23 @@ pub fn inverse(a: &Pose2) -> Pose2 {
     a.inverse()
 }
 
+/// The Jacobian of a map of planar pose vectors `[x, y, θ]` at `x`, by
+/// central differences of step 1e-6 (what a covariance is carried through a
+/// frame change with, to first order).
+pub fn jacobian3(f: impl Fn([f64; 3]) -> [f64; 3], x: [f64; 3]) -> nalgebra::Matrix3<f64> {
+    let mut j = nalgebra::Matrix3::zeros();
+    for k in 0..3 {
+        let (mut a, mut b) = (x, x);
+        a[k] += 1e-6;
+        b[k] -= 1e-6;
+        let (fa, fb) = (f(a), f(b));
+        for r in 0..3 {
+            j[(r, k)] = (fa[r] - fb[r]) / 2e-6;
+        }
+    }
+    j
+}
+
 /// Relative motion `inv(a) ⊕ b`: pose `b` expressed in the frame of `a`.
 /// This is the relation convention of \[Kummerle2009\] (`delta = inv(x_t1) * x_t2`).
 pub fn between(a: &Pose2, b: &Pose2) -> Pose2 {

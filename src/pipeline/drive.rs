@@ -456,6 +456,17 @@ impl CalibStage {
         Ok(())
     }
 
+    /// The run's results so far: the summary, the weight resets, the
+    /// evidence and the detector's firings.
+    pub fn run_summary(&self) -> Result<CalibRunSummary, PipelineError> {
+        Ok(CalibRunSummary {
+            summary: self.summary()?,
+            weight_resets: self.weight_resets(),
+            evidence: self.evidence().clone(),
+            firings: self.runner.firings(),
+        })
+    }
+
     /// What the steps so far show of the excitation and the wiring.
     pub fn evidence(&self) -> &calib::Evidence {
         &self.evidence
@@ -690,14 +701,9 @@ pub fn run_calibration_from(
 
 /// The stage's results; a failure names the input.
 fn finish(stage: &CalibStage, input: &str) -> Result<CalibRunSummary, PipelineError> {
-    Ok(CalibRunSummary {
-        summary: stage.summary().map_err(|e| match e {
-            PipelineError::BadArgument(m) => InputError::new(input, m).into(),
-            other => other,
-        })?,
-        weight_resets: stage.weight_resets(),
-        evidence: stage.evidence().clone(),
-        firings: stage.runner.firings(),
+    stage.run_summary().map_err(|e| match e {
+        PipelineError::BadArgument(m) => InputError::new(input, m).into(),
+        other => other,
     })
 }
 
@@ -754,12 +760,7 @@ pub fn calibrate_motions(
         stage.poll(false, obs)?;
     }
     stage.poll(true, obs)?;
-    Ok(CalibRunSummary {
-        summary: stage.summary()?,
-        weight_resets: stage.weight_resets(),
-        evidence: stage.evidence().clone(),
-        firings: stage.runner.firings(),
-    })
+    stage.run_summary()
 }
 
 /// Runs the calibrator `calib` names over given wheel angles, velocity
@@ -794,10 +795,5 @@ pub fn calibrate_streams(
     stage.end_gyro();
     observations.iter().for_each(|o| stage.push_obs(*o));
     stage.poll(true, obs)?;
-    Ok(CalibRunSummary {
-        summary: stage.summary()?,
-        weight_resets: stage.weight_resets(),
-        evidence: stage.evidence().clone(),
-        firings: stage.runner.firings(),
-    })
+    stage.run_summary()
 }

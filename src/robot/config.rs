@@ -167,7 +167,7 @@ impl RobotConfig {
     /// Like [`Self::from_toml_keys`], but a file that states none of the
     /// nominal kinematics is accepted (a robot calibrated from scratch):
     /// its `r_right`, `r_left` and `wheel_base` are then the defaults, which
-    /// are placeholders, never nominal values (the keys returned say they
+    /// stand in for nothing: they are never nominal values (the keys returned say they
     /// were not given). A file stating some of the three is refused.
     pub fn from_toml_keys_open(
         text: &str,

@@ -15,6 +15,13 @@ def calibrate(runner, bag, robot, method, init_batch):
     args = ["calibrate", "--input", bag, "--robot", robot, "--method", method, "--json"]
     args += ["--init", "batch"] if init_batch else []
     out = runner.path(f"cal-{os.path.basename(bag)}-{method}-{int(init_batch)}")
+    return calibrate_once(runner, ("calibrate", bag, robot, method, init_batch), args, out)
+
+
+def calibrate_once(runner, key, args, out, result=lambda out, d: d):
+    """A future of `odocal ARGS --out OUT` run once per `key`: `result(out,
+    its JSON)`, or None and the reason when the calibration is refused
+    (exit 2)."""
 
     def work():
         p = runner.call([*args, "--out", out], allowed=(0, 2))
@@ -23,9 +30,9 @@ def calibrate(runner, bag, robot, method, init_batch):
             return None, refused.group(1)
         if p.returncode != 0:
             raise RuntimeError(f"odocal {' '.join(args)} failed ({p.returncode}):\n{p.stderr}")
-        return json.loads(p.stdout), None
+        return result(out, json.loads(p.stdout)), None
 
-    return runner.once(("calibrate", bag, robot, method, init_batch), work)
+    return runner.once(key, work)
 
 
 def refusal_cell(reason):
@@ -77,25 +84,21 @@ def real_run(runner, label, rel, robot, method, published):
     args = ["calibrate", "--input", bag, "--robot", robot, "--method", method, "--json"]
     args += ["--config", published_config(runner)] if published else []
     out = runner.path(f"real-{label.replace(' ', '-')}-{method}-{int(published)}")
+    with_history = lambda out, d: (d, history_rows(out))
+    return calibrate_once(runner, ("real", rel, robot, method, published), args, out, with_history)
 
-    def work():
-        p = runner.call([*args, "--out", out], allowed=(0, 2))
-        refused = re.search(r"calibration refused: (.*)", p.stderr)
-        if p.returncode == 2 and refused:
-            return None, refused.group(1)
-        if p.returncode != 0:
-            raise RuntimeError(f"odocal {' '.join(args)} failed ({p.returncode}):\n{p.stderr}")
-        history = []
-        csv = os.path.join(out, "calibration.csv")
-        if os.path.exists(csv):
-            with open(csv) as f:
-                head = f.readline().strip().split(",")
-                for line in f:
-                    row = dict(zip(head, line.strip().split(",")))
-                    history.append([float(row[k]) for k in ("t", "r_right", "r_left", "wheel_base")])
-        return (json.loads(p.stdout), history), None
 
-    return runner.once(("real", rel, robot, method, published), work)
+def history_rows(out):
+    """(t, R_R, R_L, D) of each row of OUT/calibration.csv (none without it)."""
+    rows = []
+    csv = os.path.join(out, "calibration.csv")
+    if os.path.exists(csv):
+        with open(csv) as f:
+            head = f.readline().strip().split(",")
+            for line in f:
+                row = dict(zip(head, line.strip().split(",")))
+                rows.append([float(row[k]) for k in ("t", "r_right", "r_left", "wheel_base")])
+    return rows
 
 
 def kinematics(d):

@@ -42,16 +42,7 @@ impl LaserMotion {
             let p = mount.inverse() * crate::geom::pose(x[0], x[1], x[2]) * mount;
             [p.translation.x, p.translation.y, p.rotation.angle()]
         };
-        let mut j = Matrix3::zeros();
-        for k in 0..3 {
-            let (mut a, mut b) = (x0, x0);
-            a[k] += 1e-6;
-            b[k] -= 1e-6;
-            let (fa, fb) = (f(a), f(b));
-            for r in 0..3 {
-                j[(r, k)] = (fa[r] - fb[r]) / 2e-6;
-            }
-        }
+        let j = crate::geom::jacobian3(f, x0);
         Self {
             t0: m.t0,
             t1: m.t1,

@@ -19,8 +19,8 @@
 //! - where the filters start: the warm-up's estimate, so that nominal
 //!   values 20 % off (or none at all) are found.
 //!
-//! [`window`] holds the window, [`front`] decides when to fit and turns
-//! intervals into velocity observations, [`report`] says what was used.
+//! `window` holds the window, `front` decides when to fit and turns
+//! intervals into velocity observations, `report` says what was used.
 
 mod front;
 mod report;

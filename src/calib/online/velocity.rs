@@ -13,16 +13,7 @@ use nalgebra::Matrix3;
 /// differences), for the mounting `laser` = base_from_laser `[x, y, yaw]`.
 pub fn base_motion(s: P3, cov: &Matrix3<f64>, laser: P3) -> (P3, Matrix3<f64>) {
     let f = |x: P3| oplus(oplus(laser, x), inverse(laser));
-    let mut j = Matrix3::zeros();
-    for k in 0..3 {
-        let (mut a, mut b) = (s, s);
-        a[k] += 1e-6;
-        b[k] -= 1e-6;
-        let (fa, fb) = (f(a), f(b));
-        for r in 0..3 {
-            j[(r, k)] = (fa[r] - fb[r]) / 2e-6;
-        }
-    }
+    let j = crate::geom::jacobian3(f, s);
     (f(s), j * cov * j.transpose())
 }
 

@@ -19,7 +19,7 @@ pub fn fixed_count_label() -> String {
 }
 
 /// The configurations of [Farina, Table II]: adaptive-pf, pf, dkf, akf,
-/// none, and the Adaptive-PF as published ([`PUBLISHED_LABEL`]), so that
+/// none, and the Adaptive-PF as published (`PUBLISHED_LABEL`), so that
 /// what odocal's departures from the paper buy is measured.
 pub fn table2_configs(base: &CalibParams) -> Vec<(String, CalibParams)> {
     let mut out: Vec<(String, CalibParams)> = Method::ALL
