@@ -146,7 +146,7 @@ pub fn run(
     vet(
         &mut summary,
         &done,
-        nominal.kinematics().map(|_| robot.diff_drive()),
+        nominal.kinematics(),
         &params,
         &input.display().to_string(),
     )?;
