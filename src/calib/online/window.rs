@@ -80,12 +80,7 @@ impl GeometryWindow {
         while self.intervals.front().is_some_and(|&(_, t0, _)| t0 < t) {
             self.intervals.pop_front();
         }
-        let Some(&(_, oldest, _)) = self.intervals.front() else {
-            return;
-        };
-        while self.wheels.len() > 2 && self.wheels[1].stamp < oldest - self.margin_s {
-            self.wheels.pop_front();
-        }
+        self.trim_wheels();
     }
 
     /// Intervals in the window.
@@ -107,6 +102,12 @@ impl GeometryWindow {
         {
             self.intervals.pop_front();
         }
+        self.trim_wheels();
+    }
+
+    /// Drops the wheel samples no kept interval can read (those more than
+    /// the margin before the oldest, two always kept).
+    fn trim_wheels(&mut self) {
         let Some(&(_, oldest, _)) = self.intervals.front() else {
             return;
         };
