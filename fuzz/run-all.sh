@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 secs="${1:-480}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(mcap_read cdr_msgs carmen tum kitti relations effect_spec robot_toml pipeline_toml)
+[ ${#targets[@]} -gt 0 ] || targets=(mcap_read cdr_msgs carmen tum kitti relations effect_spec robot_toml pipeline_toml ros1_bag rosbag2_db3 rosbag2_dir censi_tuples ros2_control_yaml)
 mkdir -p fuzz/logs
 printf '%-14s %12s %8s %8s %s\n' target executions seconds exec/s result
 for t in "${targets[@]}"; do

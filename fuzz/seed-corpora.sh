@@ -11,6 +11,7 @@ data="${1:-${ODOCAL_DATA:-$repo/../shared/data}}"
 [ -d "$data" ] || { echo "no data folder at $data" >&2; exit 2; }
 out="$here/corpus"
 mkdir -p "$out"/{mcap_read,cdr_msgs,carmen,tum,kitti,relations,effect_spec,robot_toml,pipeline_toml}
+mkdir -p "$out"/{ros1_bag,rosbag2_db3,rosbag2_dir,censi_tuples,ros2_control_yaml}
 
 # MCAP: small slices (first messages of every channel) of each real bag and of
 # the bundled simulated bag, written chunked+zstd, chunked+lz4 and unchunked;
@@ -59,6 +60,36 @@ for bag in bags:
 print(f"mcap_read: {len(list((out / 'mcap_read').iterdir()))} seeds, "
       f"cdr_msgs: {len(list((out / 'cdr_msgs').iterdir()))} seeds")
 PY
+
+# ROS 1 bags and rosbag2 files and folders: the MCAP slices above rewritten by
+# the `rosbags` package (tools/bag_convert.py; an implementation independent of
+# odocal's readers), the ROS 1 bag in each chunk compression, one written topic
+# after topic (chunks overlapping in time). A folder seed is its metadata.yaml,
+# a NUL, then the storage file's bytes (the target writes both names).
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+for slice in "$out"/mcap_read/*-zstd-chunked.mcap; do
+  stem="$(basename "$slice" -zstd-chunked.mcap)"
+  for comp in none bz2 lz4; do
+    python3 "$repo/tools/bag_convert.py" "$slice" "$tmp/$stem-$comp" --ros1-compression "$comp" \
+      --only bag 2>/dev/null
+    cp "$tmp/$stem-$comp/bag.bag" "$out/ros1_bag/$stem-$comp.bag"
+  done
+  python3 "$repo/tools/bag_convert.py" "$slice" "$tmp/$stem-topic" --by-topic --only bag 2>/dev/null
+  cp "$tmp/$stem-topic/bag.bag" "$out/ros1_bag/$stem-by-topic.bag"
+  python3 "$repo/tools/bag_convert.py" "$slice" "$tmp/$stem-2" --only db3,mcap 2>/dev/null
+  cp "$tmp/$stem-2"/db3/*.db3 "$out/rosbag2_db3/$stem.db3"
+  for kind in db3 mcap; do
+    dir="$tmp/$stem-2/$kind"
+    storage="$(ls "$dir" | grep -v metadata.yaml | head -1)"
+    # The target's storage file is bag_0.<kind>: name it so in the metadata.
+    { sed "s/$storage/bag_0.$kind/" "$dir/metadata.yaml"; printf '\0'; cat "$dir/$storage"; } \
+      > "$out/rosbag2_dir/$stem-$kind"
+  done
+done
+
+# Censi et al.'s tuples: heads of the three real sets.
+for f in "$data"/censi-calibration/*.tuple; do head -n 30 "$f" > "$out/censi_tuples/$(basename "$f")"; done
 
 # CARMEN: the head of the real log (FLASER lines) plus ODOM and ROBOTLASER1 lines.
 for n in 3 20; do head -n "$n" "$data/slam-benchmark/mit-csail.clf" > "$out/carmen/mit-csail-$n.clf"; done

@@ -14,22 +14,7 @@ pub fn tiny_fleet(dir: &Path) {
     for (robot, seed0) in [("chair-a", 10), ("chair-b", 20)] {
         for day in 0..2 {
             let path = dir.join(format!("{robot}/2026-03-0{}/run.mcap", day + 1));
-            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-            let seed = (seed0 + day).to_string();
-            let out = odocal(&[
-                "simulate",
-                "--duration",
-                "20",
-                "--seed",
-                &seed,
-                "--out",
-                path.to_str().unwrap(),
-            ]);
-            assert!(
-                out.status.success(),
-                "{}",
-                String::from_utf8_lossy(&out.stderr)
-            );
+            simulate_at(&path, seed0 + day, None);
         }
     }
 }
@@ -104,6 +89,130 @@ fn a_folder_and_a_manifest_give_one_table_and_reruns_use_the_cache() {
     );
 }
 
+/// Simulates a 20 s corridor run into `path` whose clock starts at `start`
+/// (`None`: at 0 s, a clock that is not a date).
+pub fn simulate_at(path: &Path, seed: u32, start: Option<&str>) {
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    let seed = seed.to_string();
+    let mut args = vec![
+        "simulate",
+        "--duration",
+        "20",
+        "--seed",
+        &seed,
+        "--out",
+        path.to_str().unwrap(),
+    ];
+    if let Some(s) = start {
+        args.extend(["--start", s]);
+    }
+    let out = odocal(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A folder as users name their recordings (no dates, any sub-folder, any
+/// order of names): each recording is placed by its own first stamp, a date
+/// in the path serves only a recording whose clock is not a date, and
+/// `fleet.json` says which was taken.
+#[test]
+fn undated_recordings_are_ordered_by_their_own_clock() {
+    let d = scratch("fleet_undated");
+    let data = d.join("data");
+    // Names sort z-first against time: "a-late" is recorded last.
+    simulate_at(
+        &data.join("chair/a-late.mcap"),
+        1,
+        Some("2026-05-03T09:00:00"),
+    );
+    simulate_at(
+        &data.join("chair/old/z-early.mcap"),
+        2,
+        Some("2026-05-01T08:30:00"),
+    );
+    simulate_at(&data.join("chair/2026-05-02/sim.mcap"), 3, None);
+    let summary = fleet(&data, &d.join("out"));
+    let order: Vec<(String, String, String)> = summary["starts"]
+        .as_array()
+        .expect("starts in fleet.json")
+        .iter()
+        .map(|s| {
+            let name = s["recording"].as_str().unwrap();
+            let name = Path::new(name).file_name().unwrap().to_string_lossy();
+            (
+                name.to_string(),
+                s["start"].as_str().unwrap().to_string(),
+                s["from"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect();
+    let want = [
+        ("z-early.mcap", "2026-05-01T08:30:00Z", "recording"),
+        ("sim.mcap", "2026-05-02T00:00:00Z", "path"),
+        ("a-late.mcap", "2026-05-03T09:00:00Z", "recording"),
+    ];
+    let got: Vec<(&str, &str, &str)> = order
+        .iter()
+        .map(|(a, b, c)| (a.as_str(), b.as_str(), c.as_str()))
+        .collect();
+    assert_eq!(got, want);
+    assert_eq!(summary["epoch"], "2026-05-01");
+    let days: Vec<f64> = summary["table"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["day"].as_f64().unwrap())
+        .collect();
+    assert!(
+        (days[0] - 8.5 / 24.0).abs() < 1e-6 && (days[2] - (2.0 + 9.0 / 24.0)).abs() < 1e-6,
+        "{days:?}"
+    );
+    // Negative control: the same recording with a clock at 0 and no date in
+    // its path cannot be placed, and the fleet says what to do.
+    simulate_at(&data.join("chair/b-undated.mcap"), 4, None);
+    let e = refused(&odocal(&[
+        "fleet",
+        data.to_str().unwrap(),
+        "--out",
+        d.join("out").to_str().unwrap(),
+    ]));
+    assert!(
+        e.contains("b-undated.mcap") && e.contains("its clock is not a date"),
+        "{e}"
+    );
+}
+
+/// The same bytes under two days (a copied file) are calibrated once and
+/// both rows carry that result; before, the two calibrations raced for one
+/// output folder and one came out `insufficient`.
+#[test]
+fn a_copied_recording_is_calibrated_once_for_both_days() {
+    let d = scratch("fleet_copy");
+    let data = d.join("data");
+    let first = data.join("chair/2026-05-01/run.mcap");
+    simulate_at(&first, 5, None);
+    let copy = data.join("chair/2026-05-02/run.mcap");
+    std::fs::create_dir_all(copy.parent().unwrap()).unwrap();
+    std::fs::copy(&first, &copy).unwrap();
+    let summary = fleet(&data, &d.join("out"));
+    assert_eq!(
+        (summary["processed"].as_u64(), summary["cached"].as_u64()),
+        (Some(1), Some(1)),
+        "{summary:#}"
+    );
+    let rows = summary["table"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    assert!(
+        rows.iter().all(|r| r["status"] == "calibrated"),
+        "{rows:#?}"
+    );
+    assert_eq!(rows[0]["r_right"], rows[1]["r_right"]);
+    assert_eq!(summary["alarms"].as_array().map(Vec::len), Some(0));
+}
+
 fn refused(out: &Output) -> String {
     assert_eq!(
         out.status.code(),
@@ -149,7 +258,7 @@ fn bad_fleets_are_refused_naming_what_to_fix() {
         out_dir.to_str().unwrap(),
     ]));
     assert!(
-        e.contains("run.mcap: no date YYYY-MM-DD in its path"),
+        e.contains("run.mcap") && e.contains("holds no date YYYY-MM-DD"),
         "{e}"
     );
     // The Ray engine without a Python that has the package.

@@ -25,24 +25,50 @@ fn dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz-regressions")
 }
 
-/// Decodes with the message type the fuzz target picks from the first byte;
-/// `Ok(())` when it decodes (and re-encodes to something that decodes).
+/// Decodes with the message type and wire the fuzz target picks from the
+/// first byte (bit 3: ROS 1; type 7: the tick arrays); `Ok(())` when it
+/// decodes (and a CDR message re-encodes to something that decodes).
 fn cdr(data: &[u8]) -> Result<(), String> {
-    fn round<M: RosMsg>(d: &[u8]) -> Result<(), String> {
+    fn round<M: RosMsg>(d: &[u8], ros1: bool) -> Result<(), String> {
+        if ros1 {
+            return M::decode_ros1(d).map(|_| ()).map_err(|e| e.to_string());
+        }
         let m = M::decode(d).map_err(|e| e.to_string())?;
         M::decode(&m.encode())
             .map(|_| ())
             .map_err(|e| e.to_string())
     }
+    fn ticks(d: &[u8], ros1: bool, pick: u8) -> Result<(), String> {
+        use odocal::robot::TicksType::*;
+        let types = [
+            Int16MultiArray,
+            UInt16MultiArray,
+            Int32MultiArray,
+            UInt32MultiArray,
+            Int64MultiArray,
+            UInt64MultiArray,
+        ];
+        let ty = types[usize::from(pick) % types.len()];
+        let mut r = if ros1 {
+            odocal::io::cdr::CdrReader::ros1(d)
+        } else {
+            odocal::io::cdr::CdrReader::new(d).map_err(|e| e.to_string())?
+        };
+        odocal::io::ros_msgs::read_int_array(&mut r, ty)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    }
     let (&kind, msg) = data.split_first().ok_or("empty")?;
-    match kind % 7 {
-        0 => round::<LaserScanMsg>(msg),
-        1 => round::<JointStateMsg>(msg),
-        2 => round::<ImuMsg>(msg),
-        3 => round::<OdometryMsg>(msg),
-        4 => round::<PoseStampedMsg>(msg),
-        5 => round::<PointStampedMsg>(msg),
-        _ => round::<TfMessage>(msg),
+    let ros1 = kind & 8 != 0;
+    match kind & 7 {
+        0 => round::<LaserScanMsg>(msg, ros1),
+        1 => round::<JointStateMsg>(msg, ros1),
+        2 => round::<ImuMsg>(msg, ros1),
+        3 => round::<OdometryMsg>(msg, ros1),
+        4 => round::<PoseStampedMsg>(msg, ros1),
+        5 => round::<PointStampedMsg>(msg, ros1),
+        6 => round::<TfMessage>(msg, ros1),
+        _ => ticks(msg, ros1, kind >> 4),
     }
 }
 

@@ -34,6 +34,7 @@ mod eval_reference;
 mod eval_relations;
 mod fleet_cli;
 mod fleet_math;
+mod fleet_real;
 mod fuzz_regressions;
 mod icp_bad_input;
 mod icp_corridor;

@@ -1,13 +1,21 @@
-//! The CDR decoders directly: the first byte picks the message type, the rest
-//! is the message. A decoded message must encode and decode again.
+//! The CDR decoders directly: the first byte picks the message type and the
+//! wire (bit 3: the ROS 1 serialisation), the rest is the message. A message
+//! decoded from CDR must encode and decode again; every decode returns an
+//! error value or a message, never a panic.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
+use odocal::io::cdr::CdrReader;
 use odocal::io::ros_msgs::{
-    ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, PoseStampedMsg, RosMsg,
-    TfMessage,
+    read_int_array, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg,
+    PoseStampedMsg, RosMsg, TfMessage,
 };
+use odocal::robot::TicksType;
 
-fn round<M: RosMsg>(data: &[u8]) {
+fn round<M: RosMsg>(data: &[u8], ros1: bool) {
+    if ros1 {
+        let _ = M::decode_ros1(data);
+        return;
+    }
     if let Ok(m) = M::decode(data) {
         let again = m.encode();
         assert!(
@@ -18,17 +26,40 @@ fn round<M: RosMsg>(data: &[u8]) {
     }
 }
 
+/// The wheel tick arrays (`std_msgs/*MultiArray`), in every element type.
+fn ticks(data: &[u8], ros1: bool, pick: u8) {
+    const TYPES: [TicksType; 6] = [
+        TicksType::Int16MultiArray,
+        TicksType::UInt16MultiArray,
+        TicksType::Int32MultiArray,
+        TicksType::UInt32MultiArray,
+        TicksType::Int64MultiArray,
+        TicksType::UInt64MultiArray,
+    ];
+    let ty = TYPES[usize::from(pick) % TYPES.len()];
+    let reader = if ros1 {
+        Ok(CdrReader::ros1(data))
+    } else {
+        CdrReader::new(data)
+    };
+    if let Ok(mut r) = reader {
+        let _ = read_int_array(&mut r, ty);
+    }
+}
+
 fuzz_target!(|data: &[u8]| {
     let Some((&kind, msg)) = data.split_first() else {
         return;
     };
-    match kind % 7 {
-        0 => round::<LaserScanMsg>(msg),
-        1 => round::<JointStateMsg>(msg),
-        2 => round::<ImuMsg>(msg),
-        3 => round::<OdometryMsg>(msg),
-        4 => round::<PoseStampedMsg>(msg),
-        5 => round::<PointStampedMsg>(msg),
-        _ => round::<TfMessage>(msg),
+    let ros1 = kind & 8 != 0;
+    match (kind & 7, kind >> 4) {
+        (0, _) => round::<LaserScanMsg>(msg, ros1),
+        (1, _) => round::<JointStateMsg>(msg, ros1),
+        (2, _) => round::<ImuMsg>(msg, ros1),
+        (3, _) => round::<OdometryMsg>(msg, ros1),
+        (4, _) => round::<PoseStampedMsg>(msg, ros1),
+        (5, _) => round::<PointStampedMsg>(msg, ros1),
+        (6, _) => round::<TfMessage>(msg, ros1),
+        (_, pick) => ticks(msg, ros1, pick),
     }
 });

@@ -66,3 +66,48 @@ pub fn check_recording(r: &Recording) {
         check_pose("base_from_laser", p);
     }
 }
+
+/// Read options that also take the LEGO and Mines bags' `/reference` topic.
+pub fn with_reference() -> odocal::io::ReadOptions {
+    odocal::io::ReadOptions {
+        topics: odocal::io::TopicConfig {
+            reference: "/reference".into(),
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// A folder of this fuzzing process for the readers that take a path (in
+/// memory when `/dev/shm` exists).
+fn scratch_root() -> std::path::PathBuf {
+    let base = std::path::Path::new("/dev/shm");
+    let base = if base.is_dir() {
+        base.to_path_buf()
+    } else {
+        std::env::temp_dir()
+    };
+    let dir = base.join(format!("odocal-fuzz-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a scratch folder");
+    dir
+}
+
+/// Writes `data` into this process's scratch file `input.EXT` and returns
+/// its path.
+pub fn scratch_file(ext: &str, data: &[u8]) -> std::path::PathBuf {
+    let path = scratch_root().join(format!("input.{ext}"));
+    std::fs::write(&path, data).expect("writing the scratch file");
+    path
+}
+
+/// Writes `files` (name, bytes) into this process's scratch folder `bag/`,
+/// emptied first, and returns it.
+pub fn scratch_dir(files: &[(&str, &[u8])]) -> std::path::PathBuf {
+    let dir = scratch_root().join("bag");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("a scratch folder");
+    for (name, data) in files {
+        std::fs::write(dir.join(name), data).expect("writing a scratch file");
+    }
+    dir
+}

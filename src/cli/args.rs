@@ -266,6 +266,10 @@ pub struct SimulateArgs {
     /// Truth file (JSON): scenario, effects, true parameters and trajectory.
     #[arg(long, value_name = "TRUTH.json")]
     pub truth: Option<PathBuf>,
+    /// The bag's clock at the run's start, `YYYY-MM-DD[THH:MM[:SS]]` (UTC); default: 0 s.
+    /// The truth file's times still count from the start.
+    #[arg(long, value_name = "DATE")]
+    pub start: Option<String>,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -401,6 +405,7 @@ impl SimulateArgs {
             effects: self.effects.clone(),
             out: self.out.clone(),
             truth: self.truth.clone(),
+            start: self.start.clone(),
             common: self.common.files(),
         }
     }

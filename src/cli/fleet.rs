@@ -23,8 +23,9 @@ pub enum Engine {
 
 #[derive(Args)]
 pub struct FleetArgs {
-    /// A fleet folder laid out ROBOT/…/REC (a date YYYY-MM-DD in each path below ROBOT/),
-    /// or a manifest CSV with the columns robot,path,start.
+    /// A fleet folder laid out ROBOT/…/REC (any recording, in any sub-folder; placed in time by
+    /// its first stamp, or by a date YYYY-MM-DD in its path when its clock is not a date), or a
+    /// manifest CSV with the columns robot,path,start.
     #[arg(value_name = "DIR|MANIFEST.csv")]
     pub source: PathBuf,
     /// local (every core here) or ray (the Python package's Ray engine).

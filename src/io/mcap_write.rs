@@ -42,6 +42,9 @@ pub struct WriteOptions {
     pub odom_frame: String,
     /// Parent frame of the reference.
     pub world_frame: String,
+    /// Added to every stamp (s): the clock at the source's time 0 (e.g. a
+    /// date as seconds since 1970-01-01).
+    pub clock_start_s: f64,
 }
 
 impl Default for WriteOptions {
@@ -67,6 +70,7 @@ impl WriteOptions {
             laser_frame: "laser".into(),
             odom_frame: "odom".into(),
             world_frame: "map".into(),
+            clock_start_s: 0.0,
         }
     }
 }
@@ -333,6 +337,7 @@ fn encode_into<W: Write + Seek>(
     let mut seq = [0u32; 6];
     let mut cdr = CdrWriter::new();
     while let Some((stamp, s, j)) = order.next(src) {
+        let stamp = stamp + opts.clock_start_s;
         cdr.clear();
         encode(&mut cdr, src, opts, ref_type, (s, j, stamp));
         let k = s as usize;

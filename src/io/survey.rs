@@ -206,6 +206,51 @@ pub fn survey(path: &Path) -> Result<Survey, InputError> {
     Ok(s)
 }
 
+/// Messages of a bag read by [`first_stamp`]: its first stamp is the
+/// earliest receive time among them (a bag's chunks are written about in
+/// time order, not exactly).
+const FIRST_STAMP_MESSAGES: usize = 256;
+
+/// When a recording began (s since 1970-01-01, UTC, as its clock says): the
+/// earliest receive time of a bag's first messages, a CARMEN log's first
+/// record; `None` when it holds no message or no clock (Censi et al.'s
+/// tuples). Whether the clock is a date is the caller's call (a simulated
+/// or boot-time clock starts near 0).
+pub fn first_stamp(path: &Path) -> Result<Option<f64>, InputError> {
+    let opts = ReadOptions {
+        all_topics: true,
+        ..ReadOptions::default()
+    };
+    match sniff(path)? {
+        Format::Mcap => earliest(super::mcap_stream::raw_messages(path, &opts)?),
+        Format::Ros1Bag => earliest(super::ros1_bag::Ros1Messages::open(path, &opts)?),
+        Format::Rosbag2Sqlite => earliest(super::rosbag2_db3::Db3Messages::open(path, &opts)?),
+        Format::Rosbag2Dir => earliest(super::rosbag2_dir::DirMessages::open(path, &opts)?),
+        Format::Text => {
+            let rec = super::carmen::read_carmen(path, &opts)?;
+            let firsts = [
+                rec.scans.first().map(|s| s.stamp),
+                rec.odom.first().map(|o| o.stamp),
+            ];
+            Ok(firsts.into_iter().flatten().reduce(f64::min))
+        }
+        Format::CensiTuples => Ok(None),
+    }
+}
+
+/// The earliest receive time (s) of the first [`FIRST_STAMP_MESSAGES`].
+fn earliest<M: RawMessages>(mut m: M) -> Result<Option<f64>, InputError> {
+    let mut first: Option<u64> = None;
+    for _ in 0..FIRST_STAMP_MESSAGES {
+        match m.next_raw() {
+            Ok(Some(raw)) => first = Some(first.map_or(raw.log_time, |f| f.min(raw.log_time))),
+            Ok(None) => break,
+            Err(f) => return Err(fail(f, m.name())),
+        }
+    }
+    Ok(first.map(|ns| ns as f64 * 1e-9))
+}
+
 /// Per-topic tallies while the messages go by.
 #[derive(Default)]
 struct Tally {

@@ -170,24 +170,44 @@ fn params(
 fn ros2_control(s: &CalibSummary, robot: &RobotConfig, input: &str) -> Ros2Control {
     let nominal = robot.diff_drive();
     let p = params(&s.final_params, &nominal, robot, s);
+    let mut comments = vec![
+        format!(
+            "diff_drive_controller (ros2_controllers) parameters from `odocal calibrate --method \
+             {}` on {input}.",
+            s.method
+        ),
+        format!(
+            "Effective values: right radius {:.6} ± {:.6} m, left radius {:.6} ± {:.6} m, wheel \
+             separation {:.6} ± {:.6} m",
+            s.final_params.r_right,
+            s.std.r_right,
+            s.final_params.r_left,
+            s.std.r_left,
+            s.final_params.wheel_base,
+            s.std.wheel_base
+        ),
+        "(wheel_radius × left/right_wheel_radius_multiplier, wheel_separation × \
+         wheel_separation_multiplier)."
+            .into(),
+        "Paste all five values together; rename the top key to your controller's name.".into(),
+    ];
+    comments.extend(caveats(s));
+    Ros2Control {
+        controller: CONTROLLER.into(),
+        yaml: controller_yaml(&p, &comments),
+        parameters: p,
+    }
+}
+
+/// The ros2_control YAML of `p` under [`CONTROLLER`], after `comments` (one
+/// `#` line each; a line break inside one starts a new `#` line, so that no
+/// text, e.g. a file name, can leave the comment).
+pub fn controller_yaml(p: &ControllerParams, comments: &[String]) -> String {
     let mut y = String::new();
-    let _ = writeln!(
-        y,
-        "# diff_drive_controller (ros2_controllers) parameters from `odocal calibrate \
-         --method {}` on {input}.\n# Effective values: right radius {:.6} ± {:.6} m, left radius \
-         {:.6} ± {:.6} m, wheel separation {:.6} ± {:.6} m\n# (wheel_radius × \
-         left/right_wheel_radius_multiplier, wheel_separation × wheel_separation_multiplier).\n# \
-         Paste all five values together; rename the top key to your controller's name.",
-        s.method,
-        s.final_params.r_right,
-        s.std.r_right,
-        s.final_params.r_left,
-        s.std.r_left,
-        s.final_params.wheel_base,
-        s.std.wheel_base
-    );
-    for note in caveats(s) {
-        let _ = writeln!(y, "# {note}");
+    for c in comments {
+        for line in c.replace("\r\n", "\n").split(['\n', '\r']) {
+            let _ = writeln!(y, "# {}", yaml_safe(line));
+        }
     }
     let _ = writeln!(y, "{CONTROLLER}:\n  ros__parameters:");
     let _ = writeln!(y, "    wheel_radius: {:.6}", p.wheel_radius);
@@ -211,18 +231,64 @@ fn ros2_control(s: &CalibSummary, robot: &RobotConfig, input: &str) -> Ros2Contr
         let _ = writeln!(y, "    left_wheel_names: [{}]", yaml_names(l));
         let _ = writeln!(y, "    right_wheel_names: [{}]", yaml_names(r));
     }
-    Ros2Control {
-        controller: CONTROLLER.into(),
-        parameters: p,
-        yaml: y,
-    }
+    y
 }
 
 fn yaml_names(v: &[String]) -> String {
     v.iter()
-        .map(|n| serde_json::to_string(n).expect("a string serialises"))
+        .map(|n| yaml_quoted(n))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// Whether YAML 1.2 lets `c` stand in a document as itself, without ending
+/// a line (its printable set less the line breaks NEL, LS and PS; YAML 1.2
+/// §5.1, §5.4).
+fn yaml_plain_char(c: char) -> bool {
+    matches!(c, '\t' | '\u{20}'..='\u{7e}' | '\u{a0}'..='\u{d7ff}' | '\u{e000}'..='\u{fffd}')
+        && !matches!(c, '\u{2028}' | '\u{2029}')
+        || c >= '\u{10000}'
+}
+
+/// `c` as a YAML double-quoted escape (`\u`/`\U` + hex).
+fn yaml_escape(c: char) -> String {
+    match u32::from(c) {
+        n @ 0..=0xffff => format!("\\u{n:04x}"),
+        n => format!("\\U{n:08x}"),
+    }
+}
+
+/// `text` with every character a YAML comment cannot hold as itself (a
+/// control character, a line break) written as its escape: no text can
+/// leave the comment or make the file unreadable.
+fn yaml_safe(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if yaml_plain_char(c) {
+                c.to_string()
+            } else {
+                yaml_escape(c)
+            }
+        })
+        .collect()
+}
+
+/// `text` as a YAML double-quoted scalar that reads back as exactly `text`
+/// (written by hand: JSON's quoting, which serde offers, leaves DEL, C1
+/// controls and the line breaks LS and PS raw, which YAML refuses or folds).
+fn yaml_quoted(text: &str) -> String {
+    let mut q = String::with_capacity(text.len() + 2);
+    q.push('"');
+    for c in text.chars() {
+        match c {
+            '"' => q.push_str("\\\""),
+            '\\' => q.push_str("\\\\"),
+            c if yaml_plain_char(c) && c != '\t' => q.push(c),
+            c => q.push_str(&yaml_escape(c)),
+        }
+    }
+    q.push('"');
+    q
 }
 
 /// What the user should know before pasting: weak parameters, a twist source.
@@ -278,5 +344,44 @@ fn laser(v: [f64; 3], std: [f64; 3], input: &str) -> LaserSnippet {
         std,
         urdf,
         static_transform,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Names and a comment no YAML quoting of JSON's survives (DEL, a C1
+    /// control, the line breaks NEL and LS, a quote, a backslash) read back
+    /// exactly by a YAML parser, and the comment stays a comment.
+    #[test]
+    fn names_and_comments_of_any_text_read_back() {
+        let left = "l\u{7f}\u{85}wheel\"\\\t".to_string();
+        let right = "r\u{2028}\u{9b}\u{1}joint".to_string();
+        let p = ControllerParams {
+            wheel_radius: 0.1,
+            wheel_separation: 0.5,
+            left_wheel_radius_multiplier: 1.0123456,
+            right_wheel_radius_multiplier: 0.98,
+            wheel_separation_multiplier: 1.05,
+            left_wheel_names: Some(vec![left.clone()]),
+            right_wheel_names: Some(vec![right.clone()]),
+        };
+        let note = "on a\u{85}b: x\u{2029}c\r\nd\u{1b}".to_string();
+        let yaml = controller_yaml(&p, &[note]);
+        let doc: serde_yaml_ng::Value = serde_yaml_ng::from_str(&yaml).expect(&yaml);
+        assert_eq!(doc.as_mapping().map(|m| m.len()), Some(1), "{yaml}");
+        let params = &doc[CONTROLLER]["ros__parameters"];
+        assert_eq!(params["left_wheel_names"][0].as_str(), Some(left.as_str()));
+        assert_eq!(
+            params["right_wheel_names"][0].as_str(),
+            Some(right.as_str())
+        );
+        assert_eq!(
+            params["left_wheel_radius_multiplier"].as_f64(),
+            Some(1.012346)
+        );
+        // The note's two lines are two comment lines, nothing else.
+        assert_eq!(yaml.lines().filter(|l| l.starts_with('#')).count(), 2);
     }
 }

@@ -26,6 +26,9 @@ pub struct SimulateSummary {
     pub seed: u64,
     /// Length of the run (s).
     pub duration_s: f64,
+    /// The bag's clock at the run's start (s since 1970-01-01, UTC); the
+    /// truth file's times count from the start.
+    pub clock_start_s: f64,
     /// Laser scans written.
     pub scans: usize,
     /// Encoder samples written.
@@ -55,6 +58,9 @@ pub struct SimulateJob {
     pub out: PathBuf,
     /// The truth file to write, if any.
     pub truth: Option<PathBuf>,
+    /// The bag's clock at the run's start, `YYYY-MM-DD[THH:MM[:SS]]` (UTC);
+    /// `None`: 0 s.
+    pub start: Option<String>,
     /// Configuration and robot files.
     pub common: Common,
 }
@@ -106,15 +112,28 @@ pub fn run(
             Hidden::Fault(f) => cfg.sim.faults.push(f),
         }
     }
-    simulate(
+    let clock_start_s = job.start.as_deref().map(clock_start).transpose()?;
+    simulate_at(
         &cfg.sim,
         &cfg.topics,
         &robot,
         &effects,
-        &job.out,
-        job.truth.as_deref(),
+        clock_start_s.unwrap_or(0.0),
+        (&job.out, job.truth.as_deref()),
         progress,
     )
+}
+
+/// The clock (s since 1970-01-01, UTC) of a date `YYYY-MM-DD[THH:MM[:SS]]`.
+fn clock_start(date: &str) -> Result<f64, PipelineError> {
+    super::fleet::inputs::find_date(date)
+        .filter(|_| date.len() <= 25)
+        .map(|day| day * 86_400.0)
+        .ok_or_else(|| {
+            PipelineError::BadArgument(format!(
+                "--start '{date}' is not a date YYYY-MM-DD[THH:MM[:SS]] (UTC)"
+            ))
+        })
 }
 
 /// What a SPEC of `simulate --effect` hides: a table effect or a fault
@@ -169,9 +188,32 @@ pub fn simulate(
     truth_path: Option<&Path>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimulateSummary, PipelineError> {
+    simulate_at(
+        cfg,
+        topics,
+        robot,
+        effects,
+        0.0,
+        (out, truth_path),
+        progress,
+    )
+}
+
+/// [`simulate`] with the bag's clock at `clock_start_s` (s since
+/// 1970-01-01) when the run starts; the truth's times count from the start.
+pub fn simulate_at(
+    cfg: &SimConfig,
+    topics: &TopicConfig,
+    robot: &RobotConfig,
+    effects: &[Effect],
+    clock_start_s: f64,
+    (out, truth_path): (&Path, Option<&Path>),
+    progress: &mut dyn FnMut(f64),
+) -> Result<SimulateSummary, PipelineError> {
     let run = sim::prepare(cfg, robot, effects)?;
     let mut opts = WriteOptions::for_robot(robot);
     opts.topics = topics.clone();
+    opts.clock_start_s = clock_start_s;
     // The truth goes to its temporary file first and is renamed into place
     // right after the bag, so that a run killed while it writes never
     // leaves a new bag beside an old truth file.
@@ -190,6 +232,7 @@ pub fn simulate(
         scenario: header.scenario,
         seed: header.seed,
         duration_s: header.duration_s,
+        clock_start_s,
         scans: counts[BagStream::Scan as usize],
         wheel_samples: counts[BagStream::Joints as usize],
         gyro_samples: counts[BagStream::Imu as usize],

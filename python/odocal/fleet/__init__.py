@@ -79,7 +79,9 @@ def _on_ray(items: List[Dict[str, Any]], kw: Dict[str, Any], address: Optional[s
             ray.init(address=address, log_to_driver=False)
     try:
         task = ray.remote(num_cpus=1)(_calibrate_task)
-        todo = [k for k, it in enumerate(items) if it["cached"] is None]
+        # Neither cached nor a copy of an earlier recording (calibrated once).
+        todo = [k for k, it in enumerate(items)
+                if it["cached"] is None and it.get("same_as") is None]
         refs = {task.remote(json.dumps(items[k]), kw): k for k in todo}
         results: List[Optional[Dict[str, Any]]] = [None] * len(items)
         pending = list(refs)

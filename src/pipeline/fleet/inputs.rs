@@ -1,10 +1,13 @@
-//! Which recordings a fleet run takes: a directory laid out
-//! `ROBOT/…/*.mcap|bag|db3` (a rosbag2 folder counts as one recording) with
-//! the recording's date in its path, or a manifest CSV `robot,path,start`;
-//! each recording's content hash (the result cache's key).
+//! Which recordings a fleet run takes: a directory laid out `ROBOT/…/REC`
+//! (any recording odocal reads, in any sub-folder; a rosbag2 folder counts as
+//! one recording), each placed in time by its own first stamp, or by the
+//! first date in its path when its clock is not a date; or a manifest CSV
+//! `robot,path,start`. And each recording's content hash (the result cache's
+//! key).
 
 use crate::error::InputError;
 use crate::pipeline::PipelineError;
+use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -18,6 +21,35 @@ pub struct Listed {
     pub path: PathBuf,
     /// When it started (days since 1970-01-01, UTC).
     pub unix_day: f64,
+    /// Where that time was taken from.
+    pub start_from: StartFrom,
+}
+
+/// Where a recording's start time was taken from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum StartFrom {
+    /// The recording's own first stamp.
+    #[default]
+    Recording,
+    /// The first date in its path (its clock is not a date).
+    Path,
+    /// The manifest's `start` column.
+    Manifest,
+}
+
+/// The first second of 2000-01-01 (UTC), s since 1970: a recording whose
+/// first stamp is earlier runs on a clock that counts from 0 or from boot
+/// (a simulator, a robot without time sync), not on a date.
+pub const FIRST_DATE_UNIX_S: f64 = 946_684_800.0;
+
+/// The start of a recording from its own clock (days since 1970-01-01), when
+/// that clock is a date.
+fn stamped_day(path: &Path) -> Result<Option<f64>, PipelineError> {
+    let first = crate::io::survey::first_stamp(path)?;
+    Ok(first
+        .filter(|&s| s >= FIRST_DATE_UNIX_S)
+        .map(|s| s / 86_400.0))
 }
 
 /// Days since 1970-01-01 of a civil date (Hinnant's `days_from_civil` \[Hinnant\]).
@@ -43,6 +75,20 @@ pub fn date_of(day: i64) -> String {
     let m = if mp < 10 { mp + 3 } else { mp - 9 };
     let y = yoe + era * 400 + i64::from(m <= 2);
     format!("{y:04}-{m:02}-{d:02}")
+}
+
+/// `YYYY-MM-DDTHH:MM:SSZ` of a time in days since 1970-01-01 (UTC),
+/// rounded to the second.
+pub fn datetime_of(unix_day: f64) -> String {
+    let secs = (unix_day * 86_400.0).round() as i64;
+    let (day, s) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    format!(
+        "{}T{:02}:{:02}:{:02}Z",
+        date_of(day),
+        s / 3600,
+        s / 60 % 60,
+        s % 60
+    )
 }
 
 /// The first `YYYY-MM-DD[(T| |_)HH(:|-)MM[(:|-)SS]]` in `text`, as days
@@ -82,11 +128,13 @@ pub fn find_date(text: &str) -> Option<f64> {
     })
 }
 
+/// File extensions of recordings: bags, CARMEN logs, Censi et al.'s tuples.
+const RECORDING_EXTENSIONS: [&str; 6] = ["mcap", "bag", "db3", "log", "clf", "tuple"];
+
 fn is_recording_file(p: &Path) -> bool {
-    matches!(
-        p.extension().and_then(|e| e.to_str()),
-        Some("mcap" | "bag" | "db3")
-    )
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| RECORDING_EXTENSIONS.contains(&e))
 }
 
 /// The entries of `dir`, sorted.
@@ -114,8 +162,9 @@ fn walk(dir: &Path, out: &mut Vec<PathBuf>) -> Result<(), PipelineError> {
     Ok(())
 }
 
-/// The recordings of a directory laid out `ROBOT/…/REC`, each dated by the
-/// first date in its path below `ROBOT/`.
+/// The recordings of a directory laid out `ROBOT/…/REC`, each placed by its
+/// first stamp, or by the first date in its path below `ROBOT/` when its
+/// clock is not a date.
 fn from_dir(dir: &Path) -> Result<Vec<Listed>, PipelineError> {
     let mut found = Vec::new();
     walk(dir, &mut found)?;
@@ -135,17 +184,38 @@ fn from_dir(dir: &Path) -> Result<Vec<Listed>, PipelineError> {
             )
             .into());
         };
-        let unix_day = find_date(&below.to_string_lossy()).ok_or_else(|| {
-            InputError::new(
-                path.display().to_string(),
-                "no date YYYY-MM-DD in its path below the robot's folder: put it under \
-                 ROBOT/YYYY-MM-DD/ or give a manifest CSV (robot,path,start)",
-            )
-        })?;
+        // A recording that cannot be read is still placed by its path when
+        // it can be: its calibration then reports what is wrong with it.
+        let (unix_day, start_from) = match (stamped_day(&path), find_date(&below.to_string_lossy()))
+        {
+            (Ok(Some(day)), _) => (day, StartFrom::Recording),
+            (_, Some(day)) => (day, StartFrom::Path),
+            (Err(e), None) => {
+                return Err(InputError::new(
+                    path.display().to_string(),
+                    format!(
+                        "its first stamp cannot be read ({e}) and its path below the robot's \
+                         folder holds no date YYYY-MM-DD: put it under ROBOT/YYYY-MM-DD/ or \
+                         give a manifest CSV (robot,path,start)"
+                    ),
+                )
+                .into())
+            }
+            (Ok(None), None) => {
+                return Err(InputError::new(
+                    path.display().to_string(),
+                    "its clock is not a date (first stamp before 2000-01-01, or none) and \
+                     its path below the robot's folder holds no date YYYY-MM-DD: put it \
+                     under ROBOT/YYYY-MM-DD/ or give a manifest CSV (robot,path,start)",
+                )
+                .into())
+            }
+        };
         listed.push(Listed {
             robot,
             path,
             unix_day,
+            start_from,
         });
     }
     Ok(listed)
@@ -221,6 +291,7 @@ fn from_manifest(csv: &Path) -> Result<Vec<Listed>, PipelineError> {
             robot: robot.to_string(),
             path,
             unix_day,
+            start_from: StartFrom::Manifest,
         });
     }
     Ok(listed)
@@ -237,7 +308,8 @@ pub fn list(source: &Path) -> Result<Vec<Listed>, PipelineError> {
     if listed.is_empty() {
         return Err(InputError::new(
             source.display().to_string(),
-            "no recording found (*.mcap, *.bag, *.db3 or rosbag2 folders under ROBOT/…)",
+            "no recording found (*.mcap, *.bag, *.db3, *.log, *.clf, *.tuple or rosbag2 \
+             folders under ROBOT/…)",
         )
         .into());
     }
@@ -308,5 +380,7 @@ mod tests {
         assert_eq!(date_of(19782), "2024-02-29");
         assert_eq!(find_date("run-2024-13-01.mcap"), None);
         assert_eq!(find_date("12024-01-01"), None);
+        // 1700000000 s is 2023-11-14 22:13:20 UTC (`date -u -d @1700000000`).
+        assert_eq!(datetime_of(1.7e9 / 86_400.0), "2023-11-14T22:13:20Z");
     }
 }

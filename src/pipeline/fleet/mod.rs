@@ -49,10 +49,24 @@ pub struct Item {
     pub recording: String,
     /// When it started (days since 1970-01-01, UTC).
     pub unix_day: f64,
+    /// Where that time was taken from.
+    #[serde(default)]
+    pub start_from: inputs::StartFrom,
     /// SHA-256 of its content.
     pub hash: String,
     /// The cached result, when the cache holds one for these settings.
     pub cached: Option<Outcome>,
+    /// The earlier item of the plan with the same robot and content (a
+    /// copied file): calibrated once, its result shared.
+    #[serde(default)]
+    pub same_as: Option<usize>,
+}
+
+impl Item {
+    /// Whether an engine must calibrate it: neither cached nor a copy.
+    pub fn to_calibrate(&self) -> bool {
+        self.cached.is_none() && self.same_as.is_none()
+    }
 }
 
 /// What [`plan`] found.
@@ -89,10 +103,25 @@ pub struct FleetSummary {
     pub robots: Vec<RobotAnalysis>,
     /// One row per recording (as `fleet.csv`).
     pub table: Vec<Row>,
+    /// When each recording started and where that was read, in the table's
+    /// order.
+    pub starts: Vec<RecordingStart>,
     /// The alarm thresholds used.
     pub thresholds: FleetParams,
     /// The files written.
     pub outputs: Vec<String>,
+}
+
+/// When a recording started, and where that time was read.
+#[derive(Debug, Clone, Serialize)]
+pub struct RecordingStart {
+    /// The recording.
+    pub recording: String,
+    /// Its start, `YYYY-MM-DDTHH:MM:SSZ` (UTC).
+    pub start: String,
+    /// `recording` (its own first stamp), `path` (a date in its path: its
+    /// clock is not a date) or `manifest`.
+    pub from: inputs::StartFrom,
 }
 
 /// The factors the recordings' std were multiplied by.
@@ -128,10 +157,20 @@ pub fn plan(job: &FleetJob) -> Result<Plan, PipelineError> {
                 robot: l.robot,
                 recording: l.path.display().to_string(),
                 unix_day: l.unix_day,
+                start_from: l.start_from,
                 hash,
+                same_as: None,
             })
         })
-        .collect::<Result<Vec<_>, PipelineError>>()?;
+        .collect::<Result<Vec<Item>, PipelineError>>()?;
+    let mut items = items;
+    for i in 0..items.len() {
+        items[i].same_as = (0..i).find(|&j| {
+            items[j].same_as.is_none()
+                && items[j].robot == items[i].robot
+                && items[j].hash == items[i].hash
+        });
+    }
     Ok(Plan { items, settings })
 }
 
@@ -200,16 +239,17 @@ pub fn finish(
     }
     let (cfg, _) = job.common.load_nominal()?;
     let mut processed = 0;
-    let mut resolved = Vec::with_capacity(outcomes.len());
+    let mut resolved: Vec<Outcome> = Vec::with_capacity(outcomes.len());
     for (item, new) in plan.items.iter().zip(outcomes) {
-        let outcome = match (new, &item.cached) {
-            (Some(o), _) => {
+        let outcome = match (new, &item.cached, item.same_as) {
+            (Some(o), _, _) => {
                 cache::store(&job.out, &item.hash, &plan.settings, &o)?;
                 processed += 1;
                 o
             }
-            (None, Some(c)) => c.clone(),
-            (None, None) => {
+            (None, Some(c), _) => c.clone(),
+            (None, None, Some(j)) if j < resolved.len() => resolved[j].clone(),
+            (None, None, _) => {
                 return Err(PipelineError::BadArgument(format!(
                     "{}: neither calibrated nor cached",
                     item.recording
@@ -268,6 +308,15 @@ pub fn finish(
         },
         alarms: analyses.iter().flat_map(|a| a.alarms.clone()).collect(),
         table: report::rows(&entries, epoch),
+        starts: plan
+            .items
+            .iter()
+            .map(|i| RecordingStart {
+                recording: i.recording.clone(),
+                start: inputs::datetime_of(i.unix_day),
+                from: i.start_from,
+            })
+            .collect(),
         robots: analyses,
         thresholds: cfg.fleet.clone(),
         outputs: Vec::new(),
@@ -284,14 +333,14 @@ pub fn run(
 ) -> Result<FleetSummary, PipelineError> {
     let _lock = super::outputs::lock_outputs(&[job.out.as_path()])?;
     let plan = plan(job)?;
-    let todo = plan.items.iter().filter(|i| i.cached.is_none()).count();
+    let todo = plan.items.iter().filter(|i| i.to_calibrate()).count();
     let done = AtomicUsize::new(0);
     progress(0, todo);
     let outcomes = plan
         .items
         .par_iter()
         .map(|item| {
-            if item.cached.is_some() {
+            if !item.to_calibrate() {
                 return Ok(None);
             }
             let o = calibrate_item(job, item)?;
