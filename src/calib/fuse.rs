@@ -90,6 +90,25 @@ mod tests {
     }
 
     #[test]
+    fn the_weight_reads_the_innovation_squared_against_every_variance() {
+        // ν = 0.4 rad/s against S = σ² + model + prediction = 1e-4 + 2e-4 +
+        // 3e-4 = 6e-4: nis = 0.16 / 6e-4 = 266.67, t = 5 / 270.67; the
+        // inlier (ν = 0) keeps t = 1.
+        let s = CalibStep::new(0.0, 0.02, 3.0, 3.0)
+            .with(Kind::W, 0.10, 0.01)
+            .with(Kind::W, 0.50, 0.01);
+        let pred = Prediction {
+            value: [0.0, 0.1],
+            var: [0.0, 3e-4],
+            model_var: [2e-4; 2],
+        };
+        let w = fuse(&s, &pred, 1e-3, 4.0)[1].unwrap();
+        let t = 5.0 / (4.0 + 0.16 / 6e-4);
+        assert!((w.value - (0.10 + t * 0.50) / (1.0 + t)).abs() < 1e-12);
+        assert!((w.var - 1e-4 / (1.0 + t)).abs() < 1e-15);
+    }
+
+    #[test]
     fn an_outlier_loses_weight_against_the_prediction() {
         // ν = 1 rad/s against S ≈ 1e-4 + 1e-4: the Student-t weight
         // (4+1)/(4+5000) leaves the fused value near the inlier.

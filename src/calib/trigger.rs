@@ -69,6 +69,11 @@ mod tests {
         assert!(Trigger::Neff.fires(&peaked, 0.5, 2.0));
         assert!(Trigger::MaxWeight.fires(&flat, 0.5, 2.0));
         assert!(!Trigger::MaxWeight.fires(&peaked, 0.5, 2.0));
+        // At exactly the threshold neither fires (strict comparisons): two
+        // equal weights have N_eff = 1/(0.5² + 0.5²) = 2 = 1.0 · N, and four
+        // equal weights have a largest weight of 1/4 = 1.0 / N.
+        assert!(!Trigger::Neff.fires(&Weights::uniform(2), 1.0, 2.0));
+        assert!(!Trigger::MaxWeight.fires(&Weights::uniform(4), 0.5, 1.0));
         for t in Trigger::ALL {
             assert_eq!(t.as_str().parse::<Trigger>().unwrap(), t);
         }

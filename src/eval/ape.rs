@@ -71,3 +71,59 @@ pub fn ape(m: &Matched) -> Result<Ape, EvalError> {
         rot_errors,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Isometry3, Translation3, Vector3};
+
+    fn pose(x: f64, y: f64, z: f64, yaw: f64) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::new(x, y, z),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw),
+        )
+    }
+
+    #[test]
+    fn rotation_angle_is_the_angle_about_any_axis() {
+        let about_x = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 0.3);
+        assert!((rotation_angle(&about_x) - 0.3).abs() < 1e-12);
+        // 6 rad about z is 2π − 6 ≈ 0.283 rad the short way.
+        let big = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 6.0);
+        assert!((rotation_angle(&big) - (std::f64::consts::TAU - 6.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn errors_of_two_hand_computed_pairs() {
+        // Pair 1: 3-4-5 in the plane and 0.5 rad of yaw. Pair 2: 2 m straight
+        // up (in the translation error, not in RMSE x,y) and yaws 3 and −3,
+        // 6 rad apart, i.e. 2π − 6 the short way (wrapped).
+        let m = Matched {
+            ref_stamps: vec![0.0, 1.0],
+            est_stamps: vec![0.0, 1.0],
+            reference: vec![pose(0.0, 0.0, 0.0, 0.0), pose(1.0, 0.0, 0.0, 3.0)],
+            estimate: vec![pose(3.0, 4.0, 0.0, 0.5), pose(1.0, 0.0, 2.0, -3.0)],
+        };
+        let a = ape(&m).unwrap();
+        let short = std::f64::consts::TAU - 6.0;
+        assert_eq!(a.trans_errors.len(), 2);
+        assert!((a.trans_errors[0] - 5.0).abs() < 1e-12 && (a.trans_errors[1] - 2.0).abs() < 1e-12);
+        assert!((a.rot_errors[0] - 0.5).abs() < 1e-12 && (a.rot_errors[1] - short).abs() < 1e-12);
+        assert!((a.trans.rmse - 14.5f64.sqrt()).abs() < 1e-12);
+        assert!((a.rot_deg.max - 0.5f64.to_degrees()).abs() < 1e-9);
+        // RMSE x,y = √((25 + 0) / 2); RMSE θ = √((0.25 + short²) / 2).
+        assert!((a.rmse_xy - 12.5f64.sqrt()).abs() < 1e-12);
+        assert!((a.rmse_theta - ((0.25 + short * short) / 2.0).sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn no_pairs_is_an_error() {
+        let m = Matched {
+            ref_stamps: vec![],
+            est_stamps: vec![],
+            reference: vec![],
+            estimate: vec![],
+        };
+        assert!(ape(&m).is_err());
+    }
+}

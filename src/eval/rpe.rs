@@ -206,6 +206,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn units_read_back_from_their_words() {
+        for u in [DeltaUnit::Frames, DeltaUnit::Metres, DeltaUnit::Seconds] {
+            assert_eq!(u.word().parse::<DeltaUnit>().unwrap(), u);
+        }
+        assert_eq!(DeltaUnit::Metres.word(), "m");
+        assert_eq!("f".parse::<DeltaUnit>().unwrap(), DeltaUnit::Frames);
+        assert!("km".parse::<DeltaUnit>().is_err());
+    }
+
+    #[test]
     fn pair_selection_follows_evo() {
         assert_eq!(pairs_by_index(7, 3), vec![(0, 3), (3, 6)]);
         let poses: Vec<Pose3> = [0.0, 0.4, 0.8, 1.2, 1.6, 2.0, 2.4]
