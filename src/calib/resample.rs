@@ -200,6 +200,95 @@ mod tests {
     }
 
     #[test]
+    fn words_read_back() {
+        for scheme in Scheme::ALL {
+            assert_eq!(scheme.as_str().parse::<Scheme>().unwrap(), scheme);
+        }
+        assert!("uniform".parse::<Scheme>().is_err());
+    }
+
+    #[test]
+    fn a_uniform_on_a_cumulative_boundary_goes_to_the_next_particle() {
+        // Cumulative weights 0.25, 1.0: u = 0.25 is not below the first.
+        let mut out = vec![];
+        inverse_cdf(&[0.0, 0.25, 0.9], &[0.25, 0.75], &mut out);
+        assert_eq!(out, vec![0, 1, 1]);
+    }
+
+    #[test]
+    fn systematic_points_by_hand() {
+        // u = 0.5, n = 4: points 0.125, 0.375, 0.625, 0.875 against the
+        // cumulative weights 0.1, 0.3, 0.6, 1.0.
+        let mut out = vec![7];
+        systematic(0.5, 4, &[0.1, 0.2, 0.3, 0.4], &mut out);
+        assert_eq!(out, vec![7, 1, 2, 3, 3], "appends after what is there");
+        // n = 2 from four weights: 0.25, 0.75.
+        let mut out = vec![];
+        systematic(0.5, 2, &[0.1, 0.2, 0.3, 0.4], &mut out);
+        assert_eq!(out, vec![1, 3]);
+    }
+
+    #[test]
+    fn sorted_uniforms_are_sorted_in_the_unit_interval_with_mean_one_half() {
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(3);
+        let mut su = vec![9.0];
+        sorted_uniforms(20_000, &mut rng, &mut su);
+        assert_eq!(su.len(), 20_000);
+        assert!(su.windows(2).all(|p| p[0] <= p[1]));
+        assert!(su[0] > 0.0 && su[su.len() - 1] < 1.0);
+        // Mean 1/2 with std 1/√(12·20000) = 0.002; the k-th of n sorted
+        // uniforms has mean k/(n+1): the median sits at 1/2.
+        let mean = su.iter().sum::<f64>() / su.len() as f64;
+        assert!((mean - 0.5).abs() < 0.01, "{mean}");
+        assert!((su[9_999] - 0.5).abs() < 0.01, "{}", su[9_999]);
+    }
+
+    #[test]
+    fn every_scheme_draws_each_particle_in_proportion_to_its_weight() {
+        // 200 draws of n = 50 from weights 0.1…0.4: each count's mean is
+        // n·w within 3 standard errors of the multinomial spread (at most
+        // √(50·0.4·0.6)/√200 = 0.25); the low-variance schemes keep every
+        // single count within one of n·w, and residual above its floor.
+        let w = [0.1, 0.2, 0.3, 0.4];
+        let n = 50;
+        for scheme in Scheme::ALL {
+            let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(11);
+            let mut r = Resampler::new();
+            let mut out = vec![];
+            let mut total = [0usize; 4];
+            for _ in 0..200 {
+                r.resample(scheme, &w, n, &mut rng, &mut out);
+                assert_eq!(out.len(), n, "{scheme:?}");
+                let mut c = [0usize; 4];
+                out.iter().for_each(|&i| c[i] += 1);
+                for i in 0..4 {
+                    total[i] += c[i];
+                    let expect = n as f64 * w[i];
+                    match scheme {
+                        Scheme::Systematic | Scheme::Stratified => {
+                            assert!(
+                                (c[i] as f64 - expect).abs() <= 1.0 + 1e-9,
+                                "{scheme:?} {c:?}"
+                            )
+                        }
+                        Scheme::Residual => {
+                            assert!(c[i] as f64 >= expect.floor() - 1e-9, "{scheme:?} {c:?}")
+                        }
+                        Scheme::Multinomial => {}
+                    }
+                }
+            }
+            for i in 0..4 {
+                let mean = total[i] as f64 / 200.0;
+                assert!(
+                    (mean - n as f64 * w[i]).abs() < 0.75,
+                    "{scheme:?} {i}: {mean}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn systematic_is_deterministic_for_equal_weights() {
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(1);
         let w = vec![0.25; 4];

@@ -193,3 +193,161 @@ pub fn apply_all(matched: &Matched, s: &Similarity3<f64>) -> Matched {
     out.estimate = matched.estimate.iter().map(|p| apply(s, p)).collect();
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::FRAC_PI_2;
+
+    fn pose(x: f64, y: f64, z: f64, yaw: f64) -> Pose3 {
+        Isometry3::from_parts(
+            Translation3::new(x, y, z),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw),
+        )
+    }
+
+    fn near(a: &Pose3, b: &Pose3, tol: f64) -> bool {
+        (a.translation.vector - b.translation.vector).norm() < tol
+            && a.rotation.angle_to(&b.rotation) < tol
+    }
+
+    #[test]
+    fn words_and_auto() {
+        for k in [
+            Alignment::Auto,
+            Alignment::None,
+            Alignment::Origin,
+            Alignment::Se2,
+            Alignment::Sim2,
+            Alignment::Se3,
+            Alignment::Sim3,
+        ] {
+            assert_eq!(k.as_str().parse::<Alignment>().unwrap(), k);
+        }
+        assert!("se4".parse::<Alignment>().is_err());
+        assert_eq!(resolve(Alignment::Auto, true), Alignment::Se2);
+        assert_eq!(resolve(Alignment::Auto, false), Alignment::None);
+        assert_eq!(resolve(Alignment::Sim3, true), Alignment::Sim3);
+        let s = alignment_transform(
+            &[pose(1.0, 2.0, 0.0, 0.3)],
+            &[pose(0.0, 0.0, 0.0, 0.0)],
+            Alignment::Auto,
+        )
+        .unwrap();
+        assert!(near(
+            &apply(&s, &pose(4.0, 5.0, 6.0, 0.7)),
+            &pose(4.0, 5.0, 6.0, 0.7),
+            1e-12
+        ));
+    }
+
+    #[test]
+    fn apply_scales_the_translation_then_moves_it_as_evo_does() {
+        // Scale 2, a quarter turn about z, then 1 m along x: (1, 0, 0) → (2,
+        // 0, 0) → (0, 2, 0) → (1, 2, 0); the heading turns by the quarter.
+        let s = Similarity3::from_parts(
+            Translation3::new(1.0, 0.0, 0.0),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), FRAC_PI_2),
+            2.0,
+        );
+        let got = apply(&s, &pose(1.0, 0.0, 0.0, 0.1));
+        assert!(
+            near(&got, &pose(1.0, 2.0, 0.0, 0.1 + FRAC_PI_2), 1e-12),
+            "{got:?}"
+        );
+    }
+
+    #[test]
+    fn origin_puts_the_first_poses_together() {
+        let reference = [pose(1.0, 2.0, 0.5, 0.3), pose(2.0, 2.0, 0.5, 0.3)];
+        let estimate = [pose(-1.0, 0.0, 0.0, -0.2), pose(0.0, 1.0, 0.0, 0.0)];
+        let s = alignment_transform(&reference, &estimate, Alignment::Origin).unwrap();
+        assert!(near(&apply(&s, &estimate[0]), &reference[0], 1e-12));
+        assert!(alignment_transform(&[], &estimate, Alignment::Origin).is_err());
+    }
+
+    #[test]
+    fn origin_by_heading_turns_the_chord_onto_the_references() {
+        // The reference runs north from the origin, the estimate east from
+        // (5, 5), both 0.6 m a step: the chord to the first pair 1 m along
+        // (index 2) turns the estimate a quarter to the left onto it.
+        let reference: Vec<Pose3> = (0..4)
+            .map(|i| pose(0.0, 0.6 * i as f64, 0.0, 0.0))
+            .collect();
+        let estimate: Vec<Pose3> = (0..4)
+            .map(|i| pose(5.0 + 0.6 * i as f64, 5.0, 0.0, 0.0))
+            .collect();
+        let s = origin_by_heading(&reference, &estimate, 1.0).unwrap();
+        for (r, e) in reference.iter().zip(&estimate) {
+            let got = apply(&s, e).translation.vector;
+            assert!(
+                (got - r.translation.vector).norm() < 1e-12,
+                "{got:?} vs {r:?}"
+            );
+        }
+        assert!((s.isometry.rotation.angle() - FRAC_PI_2).abs() < 1e-12);
+        // A reference that never moves 0.1 m has no heading to align by; one
+        // that moves less than the distance but more than a tenth of it uses
+        // its farthest pair.
+        let still = vec![pose(0.0, 0.0, 0.0, 0.0); 4];
+        assert!(origin_by_heading(&still, &estimate, 1.0).is_err());
+        assert!(origin_by_heading(&reference[..1], &estimate[..1], 1.0).is_err());
+        let short = &reference[..2];
+        let s = origin_by_heading(short, &estimate[..2], 1.0).unwrap();
+        assert!((s.isometry.rotation.angle() - FRAC_PI_2).abs() < 1e-12);
+        assert!(origin_by_heading(short, &estimate[..2], 7.0).is_err());
+    }
+
+    #[test]
+    fn least_squares_fits_recover_a_known_similarity() {
+        // The estimate is the reference seen from a frame turned 0.4 rad,
+        // shifted and (for the Sim fits) shrunk by 1/1.1: each fit maps it
+        // back exactly; the rigid fits keep scale 1.
+        let truth = Similarity3::from_parts(
+            Translation3::new(0.7, -1.2, 0.0),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.4),
+            1.1,
+        );
+        let reference: Vec<Pose3> = [
+            (0.0, 0.0, 0.0),
+            (3.0, 0.5, 0.2),
+            (4.0, 4.0, -0.1),
+            (-1.0, 3.0, 0.3),
+            (1.0, -2.0, 0.0),
+        ]
+        .iter()
+        .map(|&(x, y, z)| pose(x, y, z, 0.1 * x))
+        .collect();
+        let inverse = truth.inverse();
+        let estimate: Vec<Pose3> = reference.iter().map(|p| apply(&inverse, p)).collect();
+        for kind in [Alignment::Sim2, Alignment::Sim3] {
+            let s = alignment_transform(&reference, &estimate, kind).unwrap();
+            assert!(
+                (s.scaling() - 1.1).abs() < 1e-9,
+                "{kind:?}: {}",
+                s.scaling()
+            );
+            for (r, e) in reference.iter().zip(&estimate) {
+                assert!(near(&apply(&s, e), r, 1e-9), "{kind:?}");
+            }
+        }
+        for kind in [Alignment::Se2, Alignment::Se3] {
+            let s = alignment_transform(&reference, &estimate, kind).unwrap();
+            assert_eq!(s.scaling(), 1.0, "{kind:?}");
+            assert!((s.isometry.rotation.angle() - 0.4).abs() < 1e-9, "{kind:?}");
+        }
+        let (aligned, s) = align(
+            &Matched {
+                ref_stamps: vec![0.0; 5],
+                est_stamps: vec![0.0; 5],
+                reference: reference.clone(),
+                estimate: estimate.clone(),
+            },
+            Alignment::Sim2,
+        )
+        .unwrap();
+        assert!((s.scaling() - 1.1).abs() < 1e-9);
+        assert!(near(&aligned.estimate[2], &reference[2], 1e-9));
+        assert!(near(&aligned.reference[2], &reference[2], 0.0 + 1e-15));
+    }
+}

@@ -95,6 +95,24 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_quarter_turn_by_hand() {
+        // (1, 0) turned a quarter left is (0, 1), then moved by (1, 2): (1, 3).
+        let m = Placement::new([1.0, 2.0, std::f64::consts::FRAC_PI_2]).apply([1.0, 0.0]);
+        let close =
+            |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12;
+        assert!(close(m.rp, [0.0, 1.0]) && close(m.x, [1.0, 3.0]), "{m:?}");
+        // 3 m above the line y = 0 (normal (0, 1)) … and 0.5 m right of x = 0.5.
+        let (e, j) = residual_and_jacobian(&m, [0.0, 0.0], [0.0, 1.0]);
+        assert!((e - 3.0).abs() < 1e-12 && (j - Vector3::new(0.0, 1.0, 0.0)).norm() < 1e-12);
+        let (e, j) = residual_and_jacobian(&m, [0.5, 7.0], [1.0, 0.0]);
+        // Turning moves (0, 1) towards −x: ∂e/∂θ = −1.
+        assert!((e - 0.5).abs() < 1e-12 && (j - Vector3::new(1.0, 0.0, -1.0)).norm() < 1e-12);
+        assert_eq!(rotation_derivative([2.0, 3.0]), [-3.0, 2.0]);
+        let r = Placement::new([0.0, 0.0, 0.3]).rotate([0.0, 1.0]);
+        assert!(close(r, [-(0.3f64.sin()), 0.3f64.cos()]));
+    }
+
+    #[test]
     fn the_jacobian_is_the_derivative_of_the_residual() {
         let (p, a, n) = ([2.0, -1.0], [1.5, 0.3], [0.6, 0.8]);
         let pose = [0.2, -0.1, 0.4];

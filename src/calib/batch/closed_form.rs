@@ -135,3 +135,114 @@ pub fn closed_form(rows: &[Row]) -> Result<Unknowns, BatchError> {
         time_offset: 0.0,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Isometry2;
+
+    /// The robot's motion over one sub-step, written out apart from the
+    /// model's `arc`: v and ω from the wheels, then the exact arc.
+    fn arc_by_hand(dl: f64, dr: f64, rr: f64, rl: f64, b: f64) -> Isometry2<f64> {
+        let (ds, dth) = (0.5 * (rr * dr + rl * dl), (rr * dr - rl * dl) / b);
+        let (x, y) = if dth.abs() < 1e-12 {
+            (ds, 0.0)
+        } else {
+            (ds / dth * dth.sin(), ds / dth * (1.0 - dth.cos()))
+        };
+        Isometry2::new(nalgebra::Vector2::new(x, y), dth)
+    }
+
+    /// Intervals of two sub-steps each, driven every way, and the laser's
+    /// displacement `ℓ⁻¹ o ℓ` for the robot r_R = 0.10, r_L = 0.11, b = 0.5
+    /// with the laser at (0.2, 0.05, 0.3).
+    fn intervals() -> (Vec<Vec<[f64; 2]>>, Vec<[f64; 3]>) {
+        let (rr, rl, b) = (0.10, 0.11, 0.5);
+        let laser = Isometry2::new(nalgebra::Vector2::new(0.2, 0.05), 0.3);
+        let drives = [
+            (2.0, 2.5),
+            (3.0, 1.0),
+            (-1.0, 1.5),
+            (1.2, -0.8),
+            (4.0, 4.2),
+            (0.5, 2.5),
+            (2.2, 0.3),
+        ];
+        let mut incs = Vec::new();
+        let mut s = Vec::new();
+        for &(l, r) in &drives {
+            let inc = vec![[l, r], [0.5 * l, 0.8 * r]];
+            let o = inc.iter().fold(Isometry2::identity(), |o, &[dl, dr]| {
+                o * arc_by_hand(dl, dr, rr, rl, b)
+            });
+            let d = laser.inverse() * o * laser;
+            s.push([d.translation.x, d.translation.y, d.rotation.angle()]);
+            incs.push(inc);
+        }
+        (incs, s)
+    }
+
+    #[test]
+    fn recovers_the_robot_and_the_laser_from_exact_intervals() {
+        let (incs, s) = intervals();
+        let rows: Vec<Row> = incs
+            .iter()
+            .zip(&s)
+            .map(|(inc, &s)| Row {
+                inc,
+                s,
+                w_rot: 1.0,
+                w_tr: 1.0,
+            })
+            .collect();
+        let (j21, j22) = rotation_jacobian(&rows).unwrap();
+        assert!((j21 + 0.11 / 0.5).abs() < 1e-12 && (j22 - 0.10 / 0.5).abs() < 1e-12);
+        let u = closed_form(&rows).unwrap();
+        let got = [
+            u.r_right,
+            u.r_left,
+            u.wheel_base,
+            u.laser[0],
+            u.laser[1],
+            u.laser[2],
+        ];
+        let want = [0.10, 0.11, 0.5, 0.2, 0.05, 0.3];
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-9, "{got:?} vs {want:?}");
+        }
+        assert_eq!(u.time_offset, 0.0);
+    }
+
+    #[test]
+    fn a_motion_that_cannot_determine_the_robot_is_named() {
+        static STRAIGHT: [[[f64; 2]; 1]; 3] = [[[1.0, 1.0]], [[2.0, 2.0]], [[-1.0, -1.0]]];
+        static SPIN: [[[f64; 2]; 1]; 3] = [[[1.0, -1.0]], [[-2.0, 2.0]], [[0.5, -0.5]]];
+        let rows = |incs: &'static [[[f64; 2]; 1]; 3]| -> Vec<Row<'static>> {
+            incs.iter()
+                .map(|inc| Row {
+                    inc,
+                    s: [0.1, 0.0, 0.05],
+                    w_rot: 1.0,
+                    w_tr: 1.0,
+                })
+                .collect()
+        };
+        let e = rotation_jacobian(&rows(&STRAIGHT)).unwrap_err().to_string();
+        assert!(e.contains("never turned the robot"), "{e}");
+        let e = rotation_jacobian(&rows(&SPIN)).unwrap_err().to_string();
+        assert!(e.contains("only turned in place"), "{e}");
+        // Turning both ways but never moving the laser while turning: no
+        // laser position.
+        static NO_TURN_MOVE: [[[f64; 2]; 1]; 2] = [[[1.0, 2.0]], [[2.0, 1.0]]];
+        let rows: Vec<Row> = NO_TURN_MOVE
+            .iter()
+            .map(|inc| Row {
+                inc,
+                s: [0.0, 0.0, 0.0],
+                w_rot: 1.0,
+                w_tr: 1.0,
+            })
+            .collect();
+        assert!(closed_form(&rows).is_err());
+    }
+}
