@@ -215,6 +215,89 @@ mod tests {
         assert!("km".parse::<DeltaUnit>().is_err());
     }
 
+    fn straight(n: usize, step: f64, yaw_step: f64) -> Vec<Pose3> {
+        (0..n)
+            .map(|i| {
+                Pose3::from_parts(
+                    nalgebra::Translation3::new(i as f64 * step, 0.0, 0.0),
+                    nalgebra::UnitQuaternion::from_axis_angle(
+                        &nalgebra::Vector3::z_axis(),
+                        i as f64 * yaw_step,
+                    ),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn deltas_that_select_nothing_sensible_are_refused() {
+        let m = Matched {
+            ref_stamps: vec![0.0, 1.0, 2.0],
+            est_stamps: vec![0.0, 1.0, 2.0],
+            reference: straight(3, 1.0, 0.0),
+            estimate: straight(3, 1.0, 0.0),
+        };
+        let d = |value: f64, unit: DeltaUnit| RpeDelta { value, unit };
+        for bad in [
+            d(0.0, DeltaUnit::Frames),
+            d(-1.0, DeltaUnit::Seconds),
+            d(f64::NAN, DeltaUnit::Metres),
+            d(f64::INFINITY, DeltaUnit::Metres),
+            d(1.5, DeltaUnit::Frames),
+        ] {
+            assert!(rpe_pairs(&m, &bad).is_err(), "{bad:?}");
+        }
+        // Half a metre is a valid delta (not whole, but not frames).
+        assert_eq!(rpe_pairs(&m, &d(0.5, DeltaUnit::Metres)).unwrap().len(), 2);
+        // Valid but longer than the run: no pair.
+        assert!(rpe_pairs(&m, &d(5.0, DeltaUnit::Frames)).is_err());
+        assert_eq!(rpe_pairs(&m, &d(2.0, DeltaUnit::Frames)).unwrap(), vec![(0, 2)]);
+    }
+
+    #[test]
+    fn a_turn_the_reference_does_not_make_is_the_rotation_error() {
+        // The estimate turns 0.01 rad a frame more than the reference and
+        // travels the same: each 2-frame pair is 0.02 rad off, and its
+        // translation error is that of the second metre seen 0.01 rad turned:
+        // ‖R(−0.01)·(1, 0) − (1, 0)‖ = 2 sin(0.005).
+        let m = Matched {
+            ref_stamps: (0..5).map(f64::from).collect(),
+            est_stamps: (0..5).map(f64::from).collect(),
+            reference: straight(5, 1.0, 0.0),
+            estimate: (0..5)
+                .map(|i| {
+                    let yaw = 0.01 * f64::from(i);
+                    // Each step of 1 m along the heading it had.
+                    let (x, y) = (0..i).fold((0.0, 0.0), |(x, y), k| {
+                        let h = 0.01 * f64::from(k);
+                        (x + h.cos(), y + h.sin())
+                    });
+                    Pose3::from_parts(
+                        nalgebra::Translation3::new(x, y, 0.0),
+                        nalgebra::UnitQuaternion::from_axis_angle(&nalgebra::Vector3::z_axis(), yaw),
+                    )
+                })
+                .collect(),
+        };
+        let r = rpe(&m, &RpeDelta { value: 2.0, unit: DeltaUnit::Frames }).unwrap();
+        assert_eq!(r.pairs, vec![(0, 2), (2, 4)]);
+        for (&a, &t) in r.rot_errors.iter().zip(&r.trans_errors) {
+            assert!((a - 0.02).abs() < 1e-12, "{a}");
+            assert!((t - 2.0 * 0.005f64.sin()).abs() < 1e-12, "{t}");
+        }
+        assert!((r.rot_deg.unwrap().mean - 0.02f64.to_degrees()).abs() < 1e-9);
+        // Positions only: the distances agree (1 m steps along either path
+        // differ only by the chord), so the error is the chord's shortfall.
+        let p = rpe_positions(&m, &RpeDelta { value: 2.0, unit: DeltaUnit::Frames }).unwrap();
+        let chord = |h0: f64| {
+            let (a, b) = ((h0).cos() + (h0 + 0.01).cos(), (h0).sin() + (h0 + 0.01).sin());
+            (a * a + b * b).sqrt()
+        };
+        assert!((p.trans_errors[0] - (2.0 - chord(0.0))).abs() < 1e-12);
+        assert!((p.trans_errors[1] - (2.0 - chord(0.02))).abs() < 1e-12);
+        assert!(p.rot_rad.is_none() && p.rot_errors.is_empty());
+    }
+
     #[test]
     fn pair_selection_follows_evo() {
         assert_eq!(pairs_by_index(7, 3), vec![(0, 3), (3, 6)]);
