@@ -5,6 +5,7 @@
 # fuzz/artifacts/<target>/ (copy it to tests/fuzz-regressions/<target>/ once
 # fixed). Build the seed corpora first: fuzz/seed-corpora.sh.
 # Usage: fuzz/run-all.sh [SECONDS] [TARGET...]
+#        (FUZZ_NO_BUILD=1: run the binaries already built, without rebuilding)
 set -uo pipefail
 cd "$(dirname "$0")/.."
 secs="${1:-480}"
@@ -16,9 +17,15 @@ printf '%-14s %12s %8s %8s %s\n' target executions seconds exec/s result
 for t in "${targets[@]}"; do
   log="fuzz/logs/$t.log"
   mkdir -p "fuzz/corpus/$t"
-  RUSTC_BOOTSTRAP=1 nice -n 19 cargo fuzz run -O "$t" "fuzz/corpus/$t" -- \
-    -max_total_time="$secs" -timeout=20 -rss_limit_mb=2048 -print_final_stats=1 \
-    >"$log" 2>&1
+  opts=(-max_total_time="$secs" -timeout=20 -rss_limit_mb=2048 -print_final_stats=1)
+  if [ -n "${FUZZ_NO_BUILD:-}" ]; then
+    # The binaries `cargo fuzz build -O` made, as they are: a campaign that
+    # runs while the sources change does not rebuild before each target.
+    bin="fuzz/target/x86_64-unknown-linux-gnu/release/$t"
+    ASAN_OPTIONS="${ASAN_OPTIONS:-detect_odr_violation=0}" nice -n 19 "$bin" -artifact_prefix="fuzz/artifacts/$t/" "fuzz/corpus/$t" "${opts[@]}" >"$log" 2>&1
+  else
+    RUSTC_BOOTSTRAP=1 nice -n 19 cargo fuzz run -O "$t" "fuzz/corpus/$t" -- "${opts[@]}" >"$log" 2>&1
+  fi
   rc=$?
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
   took=$(grep -o 'Done [0-9]* runs in [0-9]* second' "$log" | grep -o 'in [0-9]*' | grep -o '[0-9]*' | tail -1)

@@ -251,7 +251,10 @@ mod tests {
         assert_eq!(rpe_pairs(&m, &d(0.5, DeltaUnit::Metres)).unwrap().len(), 2);
         // Valid but longer than the run: no pair.
         assert!(rpe_pairs(&m, &d(5.0, DeltaUnit::Frames)).is_err());
-        assert_eq!(rpe_pairs(&m, &d(2.0, DeltaUnit::Frames)).unwrap(), vec![(0, 2)]);
+        assert_eq!(
+            rpe_pairs(&m, &d(2.0, DeltaUnit::Frames)).unwrap(),
+            vec![(0, 2)]
+        );
     }
 
     #[test]
@@ -274,12 +277,22 @@ mod tests {
                     });
                     Pose3::from_parts(
                         nalgebra::Translation3::new(x, y, 0.0),
-                        nalgebra::UnitQuaternion::from_axis_angle(&nalgebra::Vector3::z_axis(), yaw),
+                        nalgebra::UnitQuaternion::from_axis_angle(
+                            &nalgebra::Vector3::z_axis(),
+                            yaw,
+                        ),
                     )
                 })
                 .collect(),
         };
-        let r = rpe(&m, &RpeDelta { value: 2.0, unit: DeltaUnit::Frames }).unwrap();
+        let r = rpe(
+            &m,
+            &RpeDelta {
+                value: 2.0,
+                unit: DeltaUnit::Frames,
+            },
+        )
+        .unwrap();
         assert_eq!(r.pairs, vec![(0, 2), (2, 4)]);
         for (&a, &t) in r.rot_errors.iter().zip(&r.trans_errors) {
             assert!((a - 0.02).abs() < 1e-12, "{a}");
@@ -288,9 +301,19 @@ mod tests {
         assert!((r.rot_deg.unwrap().mean - 0.02f64.to_degrees()).abs() < 1e-9);
         // Positions only: the distances agree (1 m steps along either path
         // differ only by the chord), so the error is the chord's shortfall.
-        let p = rpe_positions(&m, &RpeDelta { value: 2.0, unit: DeltaUnit::Frames }).unwrap();
+        let p = rpe_positions(
+            &m,
+            &RpeDelta {
+                value: 2.0,
+                unit: DeltaUnit::Frames,
+            },
+        )
+        .unwrap();
         let chord = |h0: f64| {
-            let (a, b) = ((h0).cos() + (h0 + 0.01).cos(), (h0).sin() + (h0 + 0.01).sin());
+            let (a, b) = (
+                (h0).cos() + (h0 + 0.01).cos(),
+                (h0).sin() + (h0 + 0.01).sin(),
+            );
             (a * a + b * b).sqrt()
         };
         assert!((p.trans_errors[0] - (2.0 - chord(0.0))).abs() < 1e-12);
