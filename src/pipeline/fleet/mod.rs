@@ -164,12 +164,12 @@ pub fn plan(job: &FleetJob) -> Result<Plan, PipelineError> {
         })
         .collect::<Result<Vec<Item>, PipelineError>>()?;
     let mut items = items;
-    for i in 0..items.len() {
-        items[i].same_as = (0..i).find(|&j| {
-            items[j].same_as.is_none()
-                && items[j].robot == items[i].robot
-                && items[j].hash == items[i].hash
-        });
+    let mut first = std::collections::HashMap::new();
+    for (i, item) in items.iter_mut().enumerate() {
+        let j = *first
+            .entry((item.robot.clone(), item.hash.clone()))
+            .or_insert(i);
+        item.same_as = (j != i).then_some(j);
     }
     Ok(Plan { items, settings })
 }
