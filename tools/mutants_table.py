@@ -8,6 +8,9 @@ run; a later folder's outcome of a mutant replaces an earlier one's (a run
 with `--iterate` after new tests re-tests only what the first missed). A
 mutant a run's `--iterate` skipped as caught stays caught.
 
+A mutant the tests hang on (a timeout) counts as noticed, as cargo-mutants
+reports it apart from the missed ones.
+
 Usage: mutants_table.py OUT [OUT ...] [--total FILE=N ...]
        (--total: the mutants `cargo mutants --list` finds in FILE, so that
        a file tested only in part says how much of it was tested)
@@ -53,17 +56,18 @@ def main():
     for file, kind in latest.values():
         per_file[file][kind] += 1
     totals = dict(t.split("=", 1) for t in a.total)
-    print("| module | caught | missed | timeout | unviable | tested of | caught of viable |")
+    print("| module | caught | timeout | missed | unviable | tested of | caught of viable |")
     print("|---|---|---|---|---|---|---|")
     for file in sorted(per_file):
         c = per_file[file]
         viable = c["caught"] + c["missed"] + c["timeout"]
         tested = sum(c.values())
-        share = f"{100.0 * c['caught'] / viable:.0f} %" if viable else "–"
+        # A mutant the tests hang on (timeout) is one they noticed.
+        share = f"{100.0 * (c['caught'] + c['timeout']) / viable:.0f} %" if viable else "–"
         of = totals.get(file, str(tested))
-        print(f"| `{file}` | {c['caught']} | {c['missed']} | {c['timeout']} | "
+        print(f"| `{file}` | {c['caught']} | {c['timeout']} | {c['missed']} | "
               f"{c['unviable']} | {tested} of {of} | {share} |")
-    missed = sorted(n for n, (_, k) in latest.items() if k in ("missed", "timeout"))
+    missed = sorted(n for n, (_, k) in latest.items() if k == "missed")
     if missed:
         print("\nSurvivors:\n")
         for n in missed:

@@ -200,11 +200,54 @@ mod tests {
     }
 
     #[test]
+    fn no_weights_or_no_draws_give_no_ancestors() {
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(5);
+        for scheme in Scheme::ALL {
+            assert!(resample(scheme, &[], 3, &mut rng).is_empty(), "{scheme:?}");
+            assert!(
+                resample(scheme, &[0.5, 0.5], 0, &mut rng).is_empty(),
+                "{scheme:?}"
+            );
+        }
+    }
+
+    #[test]
     fn words_read_back() {
         for scheme in Scheme::ALL {
             assert_eq!(scheme.as_str().parse::<Scheme>().unwrap(), scheme);
         }
         assert!("uniform".parse::<Scheme>().is_err());
+    }
+
+    #[test]
+    fn rounding_never_reaches_past_the_last_weighted_particle() {
+        // Ten weights of 0.1 sum to 0.9999999999999999 in floating point, as
+        // does the largest uniform below 1: the search stops at the last
+        // particle with weight (9), not at the trailing zero (10), and never
+        // past the end when nothing trails.
+        let u = [1.0 - f64::EPSILON / 2.0];
+        let mut w = vec![0.1; 10];
+        assert!(w.iter().sum::<f64>() <= u[0]);
+        let mut out = vec![];
+        inverse_cdf(&u, &w, &mut out);
+        assert_eq!(out, vec![9]);
+        let mut out = vec![];
+        systematic(u[0], 1, &w, &mut out);
+        assert_eq!(out, vec![9]);
+        w.push(0.0);
+        let mut out = vec![];
+        inverse_cdf(&u, &w, &mut out);
+        assert_eq!(out, vec![9]);
+        let mut out = vec![];
+        systematic(u[0], 1, &w, &mut out);
+        assert_eq!(out, vec![9]);
+        // No weight at all (outside the contract): the last index, no panic.
+        let mut out = vec![];
+        inverse_cdf(&[0.5], &[0.0, 0.0], &mut out);
+        assert_eq!(out, vec![1]);
+        let mut out = vec![];
+        systematic(0.5, 1, &[0.0, 0.0], &mut out);
+        assert_eq!(out, vec![1]);
     }
 
     #[test]
