@@ -4,14 +4,15 @@
 //! data)` with CDR payloads and receive times in ns. Messages come in
 //! timestamp order (ties by row id) from one query that a worker thread
 //! steps through, handing rows over a small bounded channel, so memory
-//! stays bounded whatever the file's size. Errors name the file, the topic
-//! and the row id.
+//! stays bounded whatever the file's size. A reader dropped before the end
+//! stops its worker (the query interrupted) and waits for it, so no thread
+//! outlives the reader. Errors name the file, the topic and the row id.
 
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::mpsc::{sync_channel, Receiver};
 
-use rusqlite::{Connection, OpenFlags};
+use rusqlite::{Connection, InterruptHandle, OpenFlags};
 
 use super::bag_stream::{At, Raw, RawMessages};
 use super::mcap_streams::{roles_for, Role, Wire};
@@ -34,6 +35,21 @@ pub(crate) struct Db3Messages {
     /// topic id → topic.
     topics: HashMap<i64, Topic>,
     rows: Receiver<Result<Row, String>>,
+    /// The worker stepping through the query, and the handle that stops it.
+    worker: Option<(std::thread::JoinHandle<()>, InterruptHandle)>,
+}
+
+impl Drop for Db3Messages {
+    /// Stops the worker: the receiver goes first (a worker waiting to hand
+    /// over a row then fails and ends), then the query is interrupted (a
+    /// worker inside a long step, e.g. the first, which sorts, ends too).
+    fn drop(&mut self) {
+        if let Some((worker, interrupt)) = self.worker.take() {
+            self.rows = sync_channel(0).1;
+            interrupt.interrupt();
+            let _ = worker.join();
+        }
+    }
 }
 
 /// A row of table `topics`: name, type and what its messages are for.
@@ -68,7 +84,8 @@ impl Db3Messages {
              ORDER BY timestamp, id",
             wanted.join(",")
         );
-        std::thread::spawn(move || {
+        let interrupt = db.get_interrupt_handle();
+        let worker = std::thread::spawn(move || {
             let run = || -> rusqlite::Result<()> {
                 let mut stmt = db.prepare(&sql)?;
                 let mut it = stmt.query([])?;
@@ -84,7 +101,12 @@ impl Db3Messages {
                 let _ = tx.send(Err(e.to_string()));
             }
         });
-        Ok(Self { name, topics, rows })
+        Ok(Self {
+            name,
+            topics,
+            rows,
+            worker: Some((worker, interrupt)),
+        })
     }
 }
 
