@@ -156,6 +156,27 @@ fn run(target: &str, data: &[u8]) -> Result<(), String> {
         "pipeline_toml" => Config::parse(text(data)?, "fuzz.toml")
             .map(|_| ())
             .map_err(|x| x.to_string()),
+        "rosbag2_dir" => {
+            // As the fuzz target lays it out: metadata.yaml, a NUL, then the
+            // storage file's bytes under both names it may give.
+            let split = data.iter().position(|&b| b == 0).unwrap_or(data.len());
+            let (yaml, rest) = data.split_at(split);
+            let storage = rest.get(1..).unwrap_or(&[]);
+            let dir = std::env::temp_dir().join(format!(
+                "odocal-fuzz-dir-{}-{}",
+                std::process::id(),
+                data.len()
+            ));
+            std::fs::create_dir_all(&dir).unwrap();
+            std::fs::write(dir.join("metadata.yaml"), yaml).unwrap();
+            std::fs::write(dir.join("bag_0.db3"), storage).unwrap();
+            std::fs::write(dir.join("bag_0.mcap"), storage).unwrap();
+            let opts = ReadOptions::default();
+            let read = odocal::io::rosbag2_dir::open(&dir, &opts)
+                .and_then(|mut src| odocal::io::collect(&mut *src));
+            std::fs::remove_dir_all(&dir).unwrap();
+            read.map(|r| assert_sound(&r)).map_err(e)
+        }
         other => panic!("unknown fuzz target folder '{other}'"),
     }
 }
@@ -214,4 +235,30 @@ fn chunk_header_string_length_is_refused_before_any_allocation() {
         assert!(m.contains("claims 2734686212 bytes"), "{m}");
         assert!(m.contains("string-length-in-chunk-header"), "{m}");
     }
+}
+
+#[test]
+fn a_record_longer_than_its_file_is_refused_before_it_is_allocated() {
+    // libFuzzer found a 28 kB MCAP (in a rosbag2 folder) whose record claims
+    // 678 MB: the streaming reader allocated that much (700 MB resident)
+    // before reading. No record is longer than its file, so the limit is the
+    // file's length and the claim is refused from its length field.
+    let case = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fuzz-regressions/rosbag2_dir/record-longer-than-its-file");
+    let data = std::fs::read(&case).unwrap();
+    let split = data.iter().position(|&b| b == 0).unwrap();
+    let dir = std::env::temp_dir().join(format!("odocal-long-record-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("metadata.yaml"), &data[..split]).unwrap();
+    std::fs::write(dir.join("bag_0.mcap"), &data[split + 1..]).unwrap();
+    let opts = ReadOptions::default();
+    let streamed = odocal::io::rosbag2_dir::open(&dir, &opts)
+        .and_then(|mut s| odocal::io::collect(&mut *s))
+        .unwrap_err()
+        .to_string();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(
+        streamed.contains("length exceeds limit") && streamed.contains("678037049"),
+        "{streamed}"
+    );
 }

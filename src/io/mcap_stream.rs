@@ -45,21 +45,33 @@ struct Catalog<'o> {
 /// Largest record (or decompressed chunk) the streaming reader accepts (bytes).
 const MAX_RECORD_BYTES: usize = 1 << 30;
 
+/// The record length limit for a file of `file_len` bytes: no record is
+/// longer than the file that holds it.
+fn record_limit(file_len: u64) -> usize {
+    usize::try_from(file_len).map_or(MAX_RECORD_BYTES, |n| n.min(MAX_RECORD_BYTES))
+}
+
 impl<'o> Messages<'o> {
     fn open(path: &Path, opts: &'o ReadOptions) -> Result<Self, Fail> {
         let name = path.display().to_string();
         let mut file = File::open(path)
             .map_err(|e| Fail::Input(InputError::new(&name, format!("cannot read: {e}"))))?;
         check_footer(&mut file).map_err(Fail::Format)?;
+        let file_len = file
+            .metadata()
+            .map_err(|e| Fail::Input(InputError::new(&name, format!("cannot read: {e}"))))?
+            .len();
         Ok(Self {
             file,
             // A corrupt length field must be an error, not an allocation of
-            // petabytes: no record or chunk of a real bag comes near this.
-            // Chunks come whole and are opened by `mcap_guard`, which checks
-            // every length in them before anything is parsed.
+            // petabytes: no record of a real bag comes near this, and none
+            // is longer than its file (the reader allocates a record's
+            // claimed length before reading it). Chunks come whole and are
+            // opened by `mcap_guard`, which checks every length in them
+            // before anything is parsed.
             reader: LinearReader::new_with_options(
                 LinearReaderOptions::default()
-                    .with_record_length_limit(MAX_RECORD_BYTES)
+                    .with_record_length_limit(record_limit(file_len))
                     .with_emit_chunks(true),
             ),
             chunk: Vec::new(),
