@@ -156,6 +156,9 @@ fn run(target: &str, data: &[u8]) -> Result<(), String> {
         "pipeline_toml" => Config::parse(text(data)?, "fuzz.toml")
             .map(|_| ())
             .map_err(|x| x.to_string()),
+        "censi_tuples" => odocal::io::censi::parse(text(data)?, "fuzz.tuple")
+            .map(|_| ())
+            .map_err(e),
         "rosbag2_dir" => {
             // As the fuzz target lays it out: metadata.yaml, a NUL, then the
             // storage file's bytes under both names it may give.

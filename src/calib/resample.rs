@@ -228,19 +228,15 @@ mod tests {
         let u = [1.0 - f64::EPSILON / 2.0];
         let mut w = vec![0.1; 10];
         assert!(w.iter().sum::<f64>() <= u[0]);
-        let mut out = vec![];
-        inverse_cdf(&u, &w, &mut out);
-        assert_eq!(out, vec![9]);
-        let mut out = vec![];
-        systematic(u[0], 1, &w, &mut out);
-        assert_eq!(out, vec![9]);
+        let both = |w: &[f64]| {
+            let (mut a, mut b) = (vec![], vec![]);
+            inverse_cdf(&u, w, &mut a);
+            systematic(u[0], 1, w, &mut b);
+            (a, b)
+        };
+        assert_eq!(both(&w), (vec![9], vec![9]));
         w.push(0.0);
-        let mut out = vec![];
-        inverse_cdf(&u, &w, &mut out);
-        assert_eq!(out, vec![9]);
-        let mut out = vec![];
-        systematic(u[0], 1, &w, &mut out);
-        assert_eq!(out, vec![9]);
+        assert_eq!(both(&w), (vec![9], vec![9]));
         // No weight at all (outside the contract): the last index, no panic.
         let mut out = vec![];
         inverse_cdf(&[0.5], &[0.0, 0.0], &mut out);

@@ -59,8 +59,13 @@ fn line_of(text: &str, offset: usize) -> usize {
         + 1
 }
 
+/// Shortest interval a tuple may span (s): no laser scan interval is shorter
+/// than a microsecond, and a shorter one would not move a clock of seconds
+/// laid end to end (0.8 s + 1e-201 s is 0.8 s).
+pub const MIN_INTERVAL_S: f64 = 1e-6;
+
 /// Parses a tuple stream; `file` names the source in errors. Every tuple must
-/// have T > 0 and finite values.
+/// have T ≥ [`MIN_INTERVAL_S`] and finite values.
 pub fn parse(text: &str, file: &str) -> Result<Vec<CensiTuple>, InputError> {
     let mut out = Vec::new();
     let mut stream = serde_json::Deserializer::from_str(text).into_iter::<CensiTuple>();
@@ -74,18 +79,21 @@ pub fn parse(text: &str, file: &str) -> Result<Vec<CensiTuple>, InputError> {
                     .at(format!("object {} (line {})", out.len() + 1, e.line())));
             }
             Some(Ok(t)) => {
-                let ok = t.t > 0.0
+                let ok = t.t >= MIN_INTERVAL_S
                     && [t.t, t.phi_l, t.phi_r, t.sm[0], t.sm[1], t.sm[2]]
                         .iter()
                         .all(|x| x.is_finite());
                 if !ok {
-                    return Err(InputError::new(file, "T must be > 0 and all values finite")
-                        .topic("tuple")
-                        .at(format!(
-                            "object {} (line {})",
-                            out.len() + 1,
-                            line_of(text, start + 1)
-                        )));
+                    return Err(InputError::new(
+                        file,
+                        format!("T must be ≥ {MIN_INTERVAL_S} s and all values finite"),
+                    )
+                    .topic("tuple")
+                    .at(format!(
+                        "object {} (line {})",
+                        out.len() + 1,
+                        line_of(text, start + 1)
+                    )));
                 }
                 out.push(t);
             }
