@@ -72,6 +72,32 @@ fn cdr(data: &[u8]) -> Result<(), String> {
     }
 }
 
+/// Reads `data` as the `rosbag2_dir` fuzz target lays it out (metadata.yaml,
+/// a NUL, then the storage file's bytes under both names it may give) in a
+/// scratch folder named by `tag`, removed afterwards.
+fn read_as_rosbag2_dir(
+    data: &[u8],
+    tag: &str,
+) -> Result<odocal::recording::Recording, odocal::InputError> {
+    let split = data.iter().position(|&b| b == 0).unwrap_or(data.len());
+    let (yaml, rest) = data.split_at(split);
+    let storage = rest.get(1..).unwrap_or(&[]);
+    let dir = std::env::temp_dir().join(format!(
+        "odocal-fuzz-dir-{tag}-{}-{}",
+        std::process::id(),
+        data.len()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("metadata.yaml"), yaml).unwrap();
+    std::fs::write(dir.join("bag_0.db3"), storage).unwrap();
+    std::fs::write(dir.join("bag_0.mcap"), storage).unwrap();
+    let opts = ReadOptions::default();
+    let read = odocal::io::rosbag2_dir::open(&dir, &opts)
+        .and_then(|mut src| odocal::io::collect(&mut *src));
+    std::fs::remove_dir_all(&dir).unwrap();
+    read
+}
+
 fn text(data: &[u8]) -> Result<&str, String> {
     std::str::from_utf8(data).map_err(|e| e.to_string())
 }
@@ -159,27 +185,9 @@ fn run(target: &str, data: &[u8]) -> Result<(), String> {
         "censi_tuples" => odocal::io::censi::parse(text(data)?, "fuzz.tuple")
             .map(|_| ())
             .map_err(e),
-        "rosbag2_dir" => {
-            // As the fuzz target lays it out: metadata.yaml, a NUL, then the
-            // storage file's bytes under both names it may give.
-            let split = data.iter().position(|&b| b == 0).unwrap_or(data.len());
-            let (yaml, rest) = data.split_at(split);
-            let storage = rest.get(1..).unwrap_or(&[]);
-            let dir = std::env::temp_dir().join(format!(
-                "odocal-fuzz-dir-{}-{}",
-                std::process::id(),
-                data.len()
-            ));
-            std::fs::create_dir_all(&dir).unwrap();
-            std::fs::write(dir.join("metadata.yaml"), yaml).unwrap();
-            std::fs::write(dir.join("bag_0.db3"), storage).unwrap();
-            std::fs::write(dir.join("bag_0.mcap"), storage).unwrap();
-            let opts = ReadOptions::default();
-            let read = odocal::io::rosbag2_dir::open(&dir, &opts)
-                .and_then(|mut src| odocal::io::collect(&mut *src));
-            std::fs::remove_dir_all(&dir).unwrap();
-            read.map(|r| assert_sound(&r)).map_err(e)
-        }
+        "rosbag2_dir" => read_as_rosbag2_dir(data, "regression")
+            .map(|r| assert_sound(&r))
+            .map_err(e),
         other => panic!("unknown fuzz target folder '{other}'"),
     }
 }
@@ -249,17 +257,9 @@ fn a_record_longer_than_its_file_is_refused_before_it_is_allocated() {
     let case = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fuzz-regressions/rosbag2_dir/record-longer-than-its-file");
     let data = std::fs::read(&case).unwrap();
-    let split = data.iter().position(|&b| b == 0).unwrap();
-    let dir = std::env::temp_dir().join(format!("odocal-long-record-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("metadata.yaml"), &data[..split]).unwrap();
-    std::fs::write(dir.join("bag_0.mcap"), &data[split + 1..]).unwrap();
-    let opts = ReadOptions::default();
-    let streamed = odocal::io::rosbag2_dir::open(&dir, &opts)
-        .and_then(|mut s| odocal::io::collect(&mut *s))
+    let streamed = read_as_rosbag2_dir(&data, "long-record")
         .unwrap_err()
         .to_string();
-    std::fs::remove_dir_all(&dir).unwrap();
     assert!(
         streamed.contains("length exceeds limit") && streamed.contains("678037049"),
         "{streamed}"
