@@ -213,12 +213,13 @@ def diagnose(rec: Union[PathLike, Recording], *, holdout: Optional[float] = None
 def simulate(out: PathLike, *, scenario: Optional[str] = None, seed: Optional[int] = None,
              duration: Optional[float] = None, effects: Iterable[str] = (),
              truth: Optional[PathLike] = None, robot: Optional[PathLike] = None,
-             config: Optional[PathLike] = None) -> Dict[str, Any]:
+             config: Optional[PathLike] = None, start: Optional[str] = None) -> Dict[str, Any]:
     """Simulate the wheelchair and write a ROS 2 bag (``odocal simulate``);
     ``effects`` are SPECs such as ``"radius_scale:right=0.01,left=-0.005"``;
-    the truth goes to ``truth`` (JSON), kept apart from the bag."""
+    the truth goes to ``truth`` (JSON), kept apart from the bag; ``start``
+    (``YYYY-MM-DD[THH:MM[:SS]]``, UTC) is the bag's clock at the run's start."""
     return json.loads(_core.simulate(os.fspath(out), scenario, seed, duration, list(effects),
-                                     _p(truth), _p(robot), _p(config)))
+                                     _p(truth), _p(robot), _p(config), start))
 
 
 from . import fleet  # noqa: E402  (uses the functions above)

@@ -302,7 +302,7 @@ fn diagnose(
 /// `odocal simulate --json`.
 #[pyfunction]
 #[pyo3(signature = (out, scenario=None, seed=None, duration=None, effects=Vec::new(), truth=None,
-    robot=None, config=None))]
+    robot=None, config=None, start=None))]
 #[allow(clippy::too_many_arguments)]
 fn simulate(
     py: Python<'_>,
@@ -314,6 +314,7 @@ fn simulate(
     truth: Option<PathBuf>,
     robot: Option<PathBuf>,
     config: Option<PathBuf>,
+    start: Option<String>,
 ) -> PyResult<String> {
     let job = SimulateJob {
         scenario,
@@ -322,6 +323,7 @@ fn simulate(
         effects,
         out,
         truth,
+        start,
         common: common(robot, config),
     };
     let s = py
