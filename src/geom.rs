@@ -2,6 +2,8 @@
 //! interpolate and wrap angles. Frames are named `parent_from_child` where it
 //! matters (a pose maps child-frame points into the parent frame). Units: m, rad.
 
+pub mod cells;
+
 use nalgebra::{Isometry2, Point2, Vector2};
 use std::f64::consts::PI;
 

@@ -15,6 +15,7 @@ Blocks (tools/figlib/; about 2 minutes on 2 cores, the slow ones only with --all
 or --only):
   icp-truth         motion sums against the simulator's truth (tools/icp_bias.py)
   relations         the four benchmark logs' relation errors, odocal and CSM
+  icp-metrics       point-to-line against point-to-point: relations and truth
   run-to-run        the same over the five convergence bounds 0.8-1.2 x default
   bound-sweep       iterations and relations from a 1 m to the default 10 µm bound
   real-calibration  the real recordings' batch and filter calibrations
@@ -56,6 +57,7 @@ RESULTS = os.path.join(ROOT, "docs", "results")
 BLOCKS = {
     "icp-truth": (scan_matching.block_icp_truth, False),
     "relations": (scan_matching.block_relations, False),
+    "icp-metrics": (scan_matching.block_icp_metrics, False),
     "run-to-run": (scan_matching.block_run_to_run, False),
     "bound-sweep": (scan_matching.block_bound_sweep, False),
     "real-calibration": (calibration.block_real_calibration, False),

@@ -16,8 +16,10 @@
 //! keyframes put five points where a scan has one, and a query scans them
 //! all in its cells (~17 points, ~14 instructions each).
 
-/// Points binned into square cells; cell `c` holds
-/// `xy[start[c]..start[c + 1]]`, whose original indices are in `idx`.
+use crate::geom::cells::Bins;
+
+/// Points binned into square cells ([`Bins`]: cell `c` holds the points
+/// `xy[bins.range(c)]`, whose original indices are `bins.items()` there).
 #[derive(Debug, Clone, Default)]
 pub struct PointGrid {
     x0: f64,
@@ -26,13 +28,12 @@ pub struct PointGrid {
     inv: f64,
     nx: usize,
     ny: usize,
-    start: Vec<u32>,
+    bins: Bins,
+    /// The points in storage order (cell by cell), copied for the searches
+    /// to read without indirection.
     xy: Vec<[f64; 2]>,
-    idx: Vec<u32>,
-    /// Next free slot of each cell while binning (scratch).
-    fill: Vec<u32>,
-    /// Cell of each point while binning (scratch).
-    cell_of: Vec<u32>,
+    /// `(cell, index)` of each finite point while binning (scratch).
+    pairs: Vec<(u32, u32)>,
 }
 
 /// Cells per point at most (bounds the grid over sparse, wide maps).
@@ -50,8 +51,6 @@ impl PointGrid {
     /// left out (never found).
     pub fn build(&mut self, pts: &[[f64; 2]], cell: f64) {
         self.xy.clear();
-        self.idx.clear();
-        self.start.clear();
         let mut b = [f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY];
         let mut finite = 0usize;
         // Plain comparisons: the points are finite, so `f64::min`'s NaN
@@ -87,11 +86,9 @@ impl PointGrid {
         self.bin(pts, finite);
     }
 
-    /// The counting sort: each point's cell and the cells' counts in one
-    /// pass, their prefix sums, then the points.
+    /// Each finite point's cell, then [`Bins`]' counting sort, then the
+    /// points copied in storage order.
     fn bin(&mut self, pts: &[[f64; 2]], finite: usize) {
-        let cells = self.nx * self.ny;
-        self.start.resize(cells + 1, 0);
         let (x0, y0, inv) = (self.x0, self.y0, self.inv);
         let (nx, ny) = (self.nx as i64, self.ny as i64);
         // A finite point lies at or beyond (x0, y0): its scaled offsets are
@@ -100,41 +97,18 @@ impl PointGrid {
         let cell_of = |p: &[f64; 2]| {
             let ix = (((p[0] - x0) * inv) as i64).min(nx - 1);
             let iy = (((p[1] - y0) * inv) as i64).min(ny - 1);
-            (iy * nx + ix) as usize
+            (iy * nx + ix) as u32
         };
-        // Each point's cell, once (`u32::MAX`: not finite, left out).
-        self.cell_of.clear();
-        for p in pts {
-            let c = if p[0].is_finite() && p[1].is_finite() {
-                let c = cell_of(p);
-                self.start[c + 1] += 1;
-                c as u32
-            } else {
-                u32::MAX
-            };
-            self.cell_of.push(c);
-        }
-        let mut total = 0;
-        for s in &mut self.start {
-            total += *s;
-            *s = total;
-        }
-        self.xy.resize(finite, [0.0; 2]);
-        self.idx.resize(finite, 0);
-        // Fill from each cell's end backwards, leaving `start` as it was.
-        self.fill.clear();
-        self.fill.extend_from_slice(&self.start[1..]);
-        let cells_of = self.cell_of.iter().copied();
-        for (i, (p, c)) in pts.iter().zip(cells_of).enumerate().rev() {
-            if c == u32::MAX {
-                continue;
+        self.pairs.clear();
+        self.pairs.reserve(finite);
+        for (i, p) in pts.iter().enumerate() {
+            if p[0].is_finite() && p[1].is_finite() {
+                self.pairs.push((cell_of(p), i as u32));
             }
-            let c = c as usize;
-            self.fill[c] -= 1;
-            let k = self.fill[c] as usize;
-            self.xy[k] = *p;
-            self.idx[k] = i as u32;
         }
+        self.bins.build(self.nx * self.ny, &self.pairs);
+        self.xy
+            .extend(self.bins.items().iter().map(|&i| pts[i as usize]));
     }
 
     /// Index and squared distance (m²) of the point nearest to `q` among
@@ -190,7 +164,7 @@ impl PointGrid {
     /// distance).
     #[inline]
     fn found(&self, best: (usize, f64)) -> Option<(usize, f64)> {
-        (best.0 != usize::MAX).then(|| (self.idx[best.0] as usize, best.1))
+        (best.0 != usize::MAX).then(|| (self.bins.items()[best.0] as usize, best.1))
     }
 
     /// Rings 0 and 1 around cell (`cx`, `cy`), which lies in the grid, where
@@ -307,7 +281,7 @@ impl PointGrid {
     /// closer one.
     #[inline]
     fn search_cells(&self, q: [f64; 2], c_lo: usize, c_hi: usize, best: &mut (usize, f64)) {
-        let (a, b) = (self.start[c_lo] as usize, self.start[c_hi + 1] as usize);
+        let std::ops::Range { start: a, end: b } = self.bins.span(c_lo, c_hi);
         // Locals rather than `best` in the loop: no store per point.
         let (mut slot, mut d2_min) = *best;
         let xy = &self.xy[..b];

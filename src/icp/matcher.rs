@@ -119,7 +119,7 @@ impl ScanMatcher {
                 p.min_motion,
                 p.threshold_range,
             ),
-            reference: Reference::new(p.normal_window, p.normal_length),
+            reference: Reference::new(p.normal_window, p.normal_length).with_search(p.neighbours),
             ref_from_last: Pose2::identity(),
             last_cov: Matrix3::zeros(),
             misses: 0,
@@ -524,6 +524,7 @@ impl ScanMatcher {
             convergence: p.convergence,
             min_correspondences: p.min_correspondences,
             cov_inflation: p.cov_inflation,
+            metric: p.metric,
             prior_precision: if hold {
                 let prec = |s: f64| if s > 0.0 { 1.0 / (s * s) } else { 0.0 };
                 let pt = prec(if source == PriorSource::Given {

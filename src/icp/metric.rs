@@ -18,8 +18,58 @@
 //!
 //! The error moves only across the line: a point sliding along a wall
 //! changes nothing, which is why a corridor leaves its axis unconstrained.
+//!
+//! The point-to-point error (`[icp] metric = "point-to-point"`) is the
+//! distance `|x − q|` of the moved point from its nearest reference point
+//! `q` itself, with the Jacobian `[I | ∂(R p)/∂θ]` of `x − q`. It is the
+//! point-to-line error twice over: once along the unit vector `u` from `q`
+//! to `x` (residual `|x − q|`) and once across it (residual 0, the same
+//! sum of squares in any orthonormal basis). So the registration and the
+//! covariance treat a point-to-point correspondence as a line through `q`
+//! with normal `u`, plus a second row of normal `u⊥` ([`rows`]); a robust
+//! kernel of the distance then weighs both rows alike.
 
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// Which error ICP minimises (`[icp] metric`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Metric {
+    /// Distance of the moved point from the nearest reference point's fitted
+    /// line \[Censi2008, PL-ICP\].
+    #[default]
+    PointToLine,
+    /// Distance of the moved point from the nearest reference point
+    /// \[BeslMcKay1992\].
+    PointToPoint,
+}
+
+/// The point-to-point error of the moved point `x` against the reference
+/// point `q`: the unit vector `u` from `q` to `x` (any unit vector when
+/// they coincide) and the distance `|x − q|` (m). As a point-to-line
+/// correspondence: the line through `q` with normal `u`, residual `|x − q|`.
+pub fn point_to_point(x: [f64; 2], q: [f64; 2]) -> ([f64; 2], f64) {
+    let r = [x[0] - q[0], x[1] - q[1]];
+    let d = r[0].hypot(r[1]);
+    if d > 0.0 {
+        ([r[0] / d, r[1] / d], d)
+    } else {
+        ([1.0, 0.0], 0.0)
+    }
+}
+
+/// The rows `(normal, residual)` of one correspondence in `metric`, given its
+/// normal `n` and residual `e` as the registration stores them (for
+/// point-to-point, `u` and `|x − q|` of [`point_to_point`]): point-to-line
+/// one row, point-to-point two (the second across `u`, residual 0).
+pub fn rows(metric: Metric, n: [f64; 2], e: f64) -> ([([f64; 2], f64); 2], usize) {
+    let across = ([-n[1], n[0]], 0.0);
+    match metric {
+        Metric::PointToLine => ([(n, e), across], 1),
+        Metric::PointToPoint => ([(n, e), across], 2),
+    }
+}
 
 /// A pose `[x, y, θ]` ready to move points: its rotation's sine and cosine
 /// (computed once per pose) and its translation.
@@ -110,6 +160,37 @@ mod tests {
         assert_eq!(rotation_derivative([2.0, 3.0]), [-3.0, 2.0]);
         let r = Placement::new([0.0, 0.0, 0.3]).rotate([0.0, 1.0]);
         assert!(close(r, [-(0.3f64.sin()), 0.3f64.cos()]));
+    }
+
+    /// The two rows of a point-to-point correspondence carry the squared
+    /// distance and the Gauss–Newton information `Jᵀ J` of `x − q` with
+    /// `J = [I | ∂(R p)/∂θ]`, computed here by hand.
+    #[test]
+    fn point_to_point_rows_are_the_distance_and_its_full_jacobian() {
+        let (p, q) = ([2.0, -1.0], [1.0, 0.5]);
+        let at = Placement::new([0.3, -0.2, 0.5]);
+        let m = at.apply(p);
+        let (u, d) = point_to_point(m.x, q);
+        let r = [m.x[0] - q[0], m.x[1] - q[1]];
+        assert!((d * d - (r[0] * r[0] + r[1] * r[1])).abs() < 1e-12);
+        assert!((u[0] * d - r[0]).abs() < 1e-12 && (u[1] * d - r[1]).abs() < 1e-12);
+        let (rows2, n) = rows(Metric::PointToPoint, u, d);
+        assert_eq!(n, 2);
+        let mut h = nalgebra::Matrix3::zeros();
+        let mut ss = 0.0;
+        for &(nr, e) in &rows2[..n] {
+            let j = jacobian(m.rp, nr);
+            h += j * j.transpose();
+            ss += e * e;
+        }
+        assert!((ss - d * d).abs() < 1e-12);
+        // By hand: ∂(x − q)/∂(x, y, θ) = [[1, 0, −(Rp)_y], [0, 1, (Rp)_x]].
+        let (a, b) = (-m.rp[1], m.rp[0]);
+        let want = nalgebra::Matrix3::new(1.0, 0.0, a, 0.0, 1.0, b, a, b, a * a + b * b);
+        assert!((h - want).norm() < 1e-12, "{h}");
+        // Point-to-line keeps one row; coincident points give residual 0.
+        assert_eq!(rows(Metric::PointToLine, u, d).1, 1);
+        assert_eq!(point_to_point(q, q), ([1.0, 0.0], 0.0));
     }
 
     #[test]

@@ -9,10 +9,11 @@
 //!   optional beam stride / voxel thinning of the source scan.
 //! - `reference`: the local map (or previous scan) with a line fitted through
 //!   every point's surface neighbourhood (at most `normal_window + 1` beams,
-//!   and about `normal_length` m of surface) and a grid for nearest-neighbour
-//!   queries (`grid`), built once.
-//! - `metric`: the point-to-line error and its Jacobian, the one metric of
-//!   registration and covariance.
+//!   and about `normal_length` m of surface) and a nearest-neighbour index
+//!   (`neighbours`: the uniform grid of `grid`, or kiddo's k-d tree), built once.
+//! - `metric`: the point-to-line error and its Jacobian, shared by
+//!   registration and covariance; point-to-point (`[icp] metric`) as the
+//!   same error twice over.
 //! - `register`: foot on the nearest point's fitted line + Geman–McClure
 //!   weights + Gauss–Newton steps, until the pose change is below
 //!   `convergence`, with a weak prior term at the odometry guess that holds
@@ -55,6 +56,7 @@ mod covariance;
 mod grid;
 mod matcher;
 mod metric;
+mod neighbours;
 mod params;
 mod preprocess;
 mod prior_model;
@@ -68,6 +70,8 @@ mod time_offset;
 
 pub use covariance::MIN_RESIDUAL_STD;
 pub use matcher::{MatchInfo, PriorSource, ScanMatcher};
+pub use metric::Metric;
+pub use neighbours::NeighbourSearch;
 pub use params::{IcpParams, IcpParamsError, PriorChoice};
 pub use preprocess::{Preprocessor, ScanPoints};
 pub use prior_scale::PriorScale;

@@ -1,7 +1,7 @@
 //! What a scan is matched against: points in a fixed frame with their surface
 //! links, a local line fitted through every point's surface neighbourhood, and
-//! a grid for nearest-neighbour queries (`grid`); all built once per
-//! reference (never per iteration).
+//! a nearest-neighbour index (`neighbours`: kiddo's k-d tree or the grid);
+//! all built once per reference (never per iteration).
 //!
 //! Why fitted lines rather than the polyline through the raw points: range
 //! noise turns the polyline into a zigzag whose segments tilt by
@@ -12,8 +12,8 @@
 //! reference noise. A line fitted through `2k + 1` linked neighbours averages
 //! the noise out of both its position and its direction.
 
-use super::grid::PointGrid;
 use super::metric;
+use super::neighbours::{NeighbourIndex, NeighbourSearch};
 use super::preprocess::ScanPoints;
 
 /// The local surface of one reference point.
@@ -64,21 +64,14 @@ const SCATTER_LIMIT: f64 = 9.0;
 /// Floor of the typical fit scatter (m), for noise-free scans.
 const MIN_SCATTER: f64 = 1e-3;
 
-/// Cell size (m) of the nearest-neighbour grid: a few beam spacings at
-/// indoor ranges, so that a query on a wall finds its neighbour in the 3 × 3
-/// cells around it.
-const GRID_CELL: f64 = 0.2;
-
 /// A reference point set with its local lines and nearest-neighbour index.
 #[derive(Default)]
 pub struct Reference {
     pts: Vec<[f64; 2]>,
     link: Vec<bool>,
     lines: Vec<Line>,
-    /// Nearest-neighbour index over `pts`; `None` until built.
-    grid: Option<PointGrid>,
-    /// The last grid, kept to reuse its buffers.
-    spare: PointGrid,
+    /// Nearest-neighbour index over `pts` (empty until built).
+    index: NeighbourIndex,
     /// Most points after the first in one line fit.
     window: usize,
     /// Surface length (m) a line fit should span; 0 = always `window`.
@@ -128,9 +121,21 @@ impl Reference {
         }
     }
 
+    /// The same, its nearest-neighbour queries answered by `search`
+    /// (default: kiddo's k-d tree).
+    pub fn with_search(mut self, search: NeighbourSearch) -> Self {
+        self.index = NeighbourIndex::new(search);
+        self
+    }
+
     /// Number of reference points.
     pub fn len(&self) -> usize {
         self.pts.len()
+    }
+
+    /// Reference point `j` (m).
+    pub fn point(&self, j: usize) -> [f64; 2] {
+        self.pts[j]
     }
 
     /// Unit normal of the local surface line at point `j`, if one was fitted.
@@ -140,10 +145,10 @@ impl Reference {
 
     /// True when there is nothing to match against.
     pub fn is_empty(&self) -> bool {
-        self.pts.is_empty() || self.grid.as_ref().is_none_or(PointGrid::is_empty)
+        self.pts.is_empty() || self.index.is_empty()
     }
 
-    /// Replaces the content with `scan`'s points and rebuilds lines and search grid.
+    /// Replaces the content with `scan`'s points and rebuilds lines and search index.
     pub fn set(&mut self, scan: &ScanPoints) {
         self.set_lines(scan);
         self.rebuild_index();
@@ -162,9 +167,7 @@ impl Reference {
 
     /// Forgets the search index, keeping its buffers for the next one.
     fn drop_index(&mut self) {
-        if let Some(g) = self.grid.take() {
-            self.spare = g;
-        }
+        self.index.clear();
     }
 
     /// Replaces the content with several references whose lines are
@@ -220,10 +223,7 @@ impl Reference {
     }
 
     fn rebuild_index(&mut self) {
-        self.drop_index();
-        let mut g = std::mem::take(&mut self.spare);
-        g.build(&self.pts, GRID_CELL);
-        self.grid = Some(g);
+        self.index.build(&self.pts);
     }
 
     /// Fits a line through each point's surface neighbourhood: of all the
@@ -405,15 +405,15 @@ impl Reference {
     }
 
     /// Index and squared distance (m²) of the reference point nearest to `q`
-    /// among those closer than `max_dist` m (grid search); `None` when there is
+    /// among those closer than `max_dist` m (index search); `None` when there is
     /// none.
     pub fn nearest(&self, q: [f64; 2], max_dist: f64) -> Option<(usize, f64)> {
-        self.grid.as_ref()?.nearest(q, max_dist)
+        self.index.nearest(q, max_dist)
     }
 
     /// Same as [`nearest`](Self::nearest) when the nearest point is known to
     /// be near index `hint` (the previous iteration's): walks along the
-    /// linked surface to the locally nearest point, no grid search. Only
+    /// linked surface to the locally nearest point, no index search. Only
     /// valid while the query moves little between calls.
     #[inline]
     pub fn walk(&self, q: [f64; 2], hint: usize) -> Option<(usize, f64)> {
@@ -732,7 +732,7 @@ mod tests {
         assert!(r.closest([5.2, 5.1]).is_none());
         assert!(r.closest([-0.2, 0.1]).is_none());
         assert!(r.closest([1.2, 0.1]).is_none());
-        // the walk from a hint finds the same point as the grid
+        // the walk from a hint finds the same point as the index
         let (j, d2) = r.walk([0.9, 0.1], 0).unwrap();
         assert_eq!((j, d2), r.nearest([0.9, 0.1], 1.0).unwrap());
         let w = r.correspondence([0.9, 0.1], j, d2).unwrap();

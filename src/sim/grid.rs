@@ -2,6 +2,8 @@
 //! the segments crossing it, and a ray walks the cells in order
 //! \[AmanatidesWoo1987\], stopping at the first cell that holds a hit.
 
+use crate::geom::cells::Bins;
+
 /// Segments binned into square cells (m, world frame).
 #[derive(Debug, Clone)]
 pub(crate) struct Grid {
@@ -10,9 +12,8 @@ pub(crate) struct Grid {
     cell: f64,
     nx: usize,
     ny: usize,
-    /// Cell `c` holds `items[start[c]..start[c + 1]]`.
-    start: Vec<u32>,
-    items: Vec<u32>,
+    /// Cell `c` holds the segments `bins.cell(c)`.
+    bins: Bins,
     /// Segments as origin and direction `[px, py, ex, ey]`.
     segs: Vec<[f64; 4]>,
 }
@@ -39,7 +40,7 @@ impl Grid {
             .max((area / 4e6).sqrt());
         let nx = ((w / cell).ceil() as usize).max(1);
         let ny = ((h / cell).ceil() as usize).max(1);
-        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); nx * ny];
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
         for (k, s) in segments.iter().enumerate() {
             let ix0 = (((s[0].min(s[2]) - x0) / cell).floor() as usize).min(nx - 1);
             let ix1 = (((s[0].max(s[2]) - x0) / cell).floor() as usize).min(nx - 1);
@@ -57,18 +58,13 @@ impl Grid {
                         y0 + (iy + 1) as f64 * cell + eps,
                     ];
                     if segment_touches_box(s, bx, by) {
-                        lists[iy * nx + ix].push(k as u32);
+                        pairs.push(((iy * nx + ix) as u32, k as u32));
                     }
                 }
             }
         }
-        let mut start = Vec::with_capacity(nx * ny + 1);
-        let mut items = Vec::new();
-        start.push(0);
-        for l in &lists {
-            items.extend_from_slice(l);
-            start.push(items.len() as u32);
-        }
+        let mut bins = Bins::default();
+        bins.build(nx * ny, &pairs);
         let segs = segments
             .iter()
             .map(|s| [s[0], s[1], s[2] - s[0], s[3] - s[1]])
@@ -79,8 +75,7 @@ impl Grid {
             cell,
             nx,
             ny,
-            start,
-            items,
+            bins,
             segs,
         }
     }
@@ -164,7 +159,7 @@ impl Grid {
     #[inline(always)]
     fn nearest_in_cell(&self, c: usize, ox: f64, oy: f64, dx: f64, dy: f64, best: f64) -> f64 {
         let mut best = best;
-        for &k in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+        for &k in self.bins.cell(c) {
             let [sx, sy, ex, ey] = self.segs[k as usize];
             // o + t d = s + u e  →  t = (w × e) / (d × e), u = (w × d) / (d × e).
             let den = dx * ey - dy * ex;

@@ -33,6 +33,17 @@ PAGES = {
         "and run: [performance](../performance.md#how-csm-was-built-and-run)).",
         "scan-matching",
     ),
+    "icp-metrics": (
+        "Point-to-line and point-to-point ICP side by side",
+        "The same matcher, correspondences and robust kernel with `[icp] metric` set to each "
+        "error in a `--config` file: the Freiburg benchmark logs' relation errors (as on "
+        "[relations](relations.md): `odocal icp`, then `odocal eval --relations`; translation "
+        "mean ± std, rotation mean, iterations per pair), then the motions summed against the "
+        "simulator's truth (as on [icp-truth](icp-truth.md): `odocal icp --motions M.csv`, "
+        "then `python3 tools/icp_bias.py M.csv TRUTH.json`); scan to scan is `[icp] "
+        "local_map = false`.",
+        "scan-matching",
+    ),
     "run-to-run": (
         "Benchmark relations over five convergence bounds",
         "The same relation errors with the convergence bound at 0.8, 0.9, 1, 1.1 and 1.2 "

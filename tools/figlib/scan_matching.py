@@ -252,3 +252,64 @@ def record_csm(runner, folder):
                 run["iterations_per_pair"] = float(re.search(r"iters_per_pair ([0-9.]+)", f.read()).group(1))
             csm.setdefault("runs", {}).setdefault(log, {})[factor] = run
     write_atomically(CSM_FILE, json.dumps(csm, indent=1) + "\n")
+
+
+# The metrics of the side-by-side: `[icp] metric` values and their labels.
+METRICS = [("point-to-line", "point-to-line (default)"), ("point-to-point", "point-to-point")]
+
+
+def metric_relations(runner, log, metric):
+    """`relations` of one log matched with `[icp] metric = metric` (the
+    default bound), with its iterations per pair; point-to-line is the
+    default run itself."""
+    if metric == "point-to-line":
+        return relations(runner, log, "1.0")
+    bag = runner.data_file(f"slam-benchmark/{log}.mcap")
+
+    def work():
+        cfg = runner.scratch_file(f"metric-{metric}.toml", f'[icp]\nmetric = "{metric}"\n')
+        tum = runner.path(f"{log}-{metric}.tum")
+        icp = runner.run(["icp", "--input", bag, "--out", tum, "--json", "--config", cfg])
+        rel = os.path.join(runner.data, "slam-benchmark", f"{log}.relations")
+        out = runner.run(["eval", "--estimate", tum, "--relations", rel, "--json"])
+        return dict(json.loads(out)["relations"], iterations_per_pair=json.loads(icp)["mean_iterations"])
+
+    return runner.once(("metric-relations", log, metric), work)
+
+
+# Simulated recordings of the metrics' truth rows: label and `simulate` arguments.
+METRIC_SIMS = [
+    ("corridor loop, scan to scan", ["--scenario", "corridor-loop", "--seed", "5"], True),
+    ("corridor loop, local map", ["--scenario", "corridor-loop", "--seed", "5"], False),
+    ("square room, scan to scan", ["--scenario", "square", "--duration", "60", "--seed", "3"], True),
+]
+
+
+def block_icp_metrics(runner, csm):
+    rows = [
+        "| metric | recording | local | all | iterations per pair |",
+        "|---|---|---|---|---|",
+    ]
+    futures = {(log, m): metric_relations(runner, log, m) for log in LOGS for m, _ in METRICS}
+    for metric, label in METRICS:
+        for log in LOGS:
+            r = futures[(log, metric)].result()
+            local, whole = relations_cells(r)
+            rows.append(f"| {label} | {log} | {local} | {whole} | {r['iterations_per_pair']:.1f} |")
+    rows += [
+        "",
+        "| metric | simulated recording | Σdx ICP/true | Σdθ ICP/true | error per pair | flagged pairs |",
+        "|---|---|---|---|---|---|",
+    ]
+    sims = {tuple(sim) for _, sim, _ in METRIC_SIMS}
+    for fut in [runner.pool.submit(simulate, runner, list(sim)) for sim in sorted(sims)]:
+        fut.result()
+    jobs = []
+    for metric, label in METRICS:
+        for k, (name, sim, scan_to_scan) in enumerate(METRIC_SIMS):
+            cfg = f'[icp]\nmetric = "{metric}"\n' + ("local_map = false\n" if scan_to_scan else "")
+            key = f"metric-{metric}-{k}"
+            jobs.append((label, name, runner.pool.submit(truth_row, runner, key, sim, cfg)))
+    for label, name, fut in jobs:
+        rows.append(f"| {label} | {name} | {' | '.join(fut.result())} |")
+    return rows
