@@ -41,6 +41,7 @@ fn history_stating(seed: u64, truth: impl Fn(f64) -> (f64, f64), overstated: f64
                         r_left: SIGMA * overstated,
                         wheel_base: 3.0 * SIGMA * overstated,
                     },
+                    mounting: None,
                 },
             }
         })
@@ -120,6 +121,47 @@ fn a_fault_that_persists_is_one_alarm_from_its_first_day() {
         "{}",
         a.alarms[1].evidence
     );
+}
+
+/// A laser knocked out of place on day 4: every calibration from then on
+/// says the scans contradict the stated mounting. One fault alarm from day
+/// 4, however the radii look; one contradicted day alone raises none (the
+/// same assertion fails on it), nor does a run broken by a consistent day.
+#[test]
+fn a_contradicted_mounting_that_persists_is_a_fault_from_its_first_day() {
+    let p = FleetParams::default();
+    let contradict = |entries: &mut Vec<Entry>, days: &[f64]| {
+        for e in entries.iter_mut().filter(|e| days.contains(&e.day)) {
+            if let Outcome::Calibrated { mounting, .. } = &mut e.outcome {
+                *mounting = Some("the recording mounting yaw 0.0000 rad against 0.0412".into());
+            }
+        }
+    };
+    let faults = |entries: &[Entry]| -> Vec<(f64, f64)> {
+        let a = analyse_robot("chair", entries, &p, [1.0; 3]);
+        a.alarms
+            .iter()
+            .filter(|a| a.kind == AlarmKind::Fault)
+            .map(|a| (a.day, a.values["recordings"]))
+            .collect()
+    };
+    let mut knocked = history(3, |_| (0.0, 0.0));
+    contradict(&mut knocked, &[4.0, 5.0, 6.0, 7.0]);
+    assert_eq!(faults(&knocked), vec![(4.0, 4.0)]);
+    let a = analyse_robot("chair", &knocked, &p, [1.0; 3]);
+    assert!(
+        a.alarms[0].evidence.contains("laser mounting contradicted"),
+        "{:?}",
+        a.alarms
+    );
+    // Negative controls: one day alone, and two days apart.
+    let mut once = history(3, |_| (0.0, 0.0));
+    contradict(&mut once, &[4.0]);
+    assert_ne!(faults(&once), vec![(4.0, 4.0)]);
+    assert!(faults(&once).is_empty());
+    let mut apart = history(3, |_| (0.0, 0.0));
+    contradict(&mut apart, &[2.0, 4.0, 6.0]);
+    assert!(faults(&apart).is_empty());
 }
 
 #[test]

@@ -5,7 +5,9 @@
 //! radii shrink at a drawn rate), a step (one radius changes on a drawn
 //! day: a new user, a repair), a wiring swap (from a drawn day the encoder
 //! joints are swapped in the bag, as after a repair), a short recording (one
-//! day drives only 8 s straight: too little motion), or nothing.
+//! day drives only 8 s straight: too little motion), a knocked laser (from a
+//! drawn day the laser is turned by a drawn yaw while the bag still states
+//! its old mounting), or nothing.
 
 use super::inputs::{bad, ExperimentInputs};
 use super::output::ExperimentOutput;
@@ -37,6 +39,8 @@ pub struct FleetSimParams {
     pub spread: f64,
     /// Length of the short recording (s).
     pub short_duration_s: f64,
+    /// Yaw range of a knocked laser (rad, either sign).
+    pub knock_rad: [f64; 2],
     /// The date of day 0.
     pub start_date: String,
 }
@@ -51,6 +55,7 @@ impl Default for FleetSimParams {
             step_mm: [2.0, 4.0],
             spread: 0.005,
             short_duration_s: 8.0,
+            knock_rad: [0.04, 0.08],
             start_date: "2026-01-05".into(),
         }
     }
@@ -84,6 +89,14 @@ pub enum History {
         /// Its day.
         day: usize,
     },
+    /// The laser is turned by `yaw` from `day` on; the bags still state
+    /// its old mounting.
+    Knocked {
+        /// First day turned.
+        day: usize,
+        /// Its turn (rad).
+        yaw: f64,
+    },
     /// Nothing happens.
     Nothing,
 }
@@ -100,14 +113,14 @@ pub struct RobotTruth {
     pub radius_scale: [f64; 2],
 }
 
-/// The histories of `n` robots: wear, step, swap, short, nothing, nothing,
-/// repeated, each with its numbers drawn from `seed`.
+/// The histories of `n` robots: wear, step, swap, short, knocked, nothing,
+/// nothing, repeated, each with its numbers drawn from `seed`.
 pub fn draw_histories(n: usize, seed: u64, p: &FleetSimParams) -> Vec<RobotTruth> {
     let mut rng = StdRng::seed_from_u64(seed);
     let last = p.days.saturating_sub(1).max(2);
     (0..n)
         .map(|i| {
-            let history = match i % 6 {
+            let history = match i % 7 {
                 0 => History::Wear {
                     mm_per_day: rng.random_range(p.wear_mm_per_day[0]..=p.wear_mm_per_day[1]),
                 },
@@ -128,6 +141,11 @@ pub fn draw_histories(n: usize, seed: u64, p: &FleetSimParams) -> Vec<RobotTruth
                 3 => History::Short {
                     day: rng.random_range(1..=last),
                 },
+                4 => History::Knocked {
+                    day: rng.random_range(2..=last.saturating_sub(1).max(2)),
+                    yaw: rng.random_range(p.knock_rad[0]..=p.knock_rad[1])
+                        * if rng.random_bool(0.5) { 1.0 } else { -1.0 },
+                },
                 _ => History::Nothing,
             };
             RobotTruth {
@@ -140,6 +158,14 @@ pub fn draw_histories(n: usize, seed: u64, p: &FleetSimParams) -> Vec<RobotTruth
             }
         })
         .collect()
+}
+
+/// The true laser yaw offset (rad) of `t` on `day`.
+fn knock_on(t: &RobotTruth, day: usize) -> f64 {
+    match &t.history {
+        History::Knocked { day: s, yaw } if day >= *s => *yaw,
+        _ => 0.0,
+    }
 }
 
 /// The true radii changes (m) of `t` on `day`, and whether its joints are
@@ -196,7 +222,12 @@ fn simulate_day(
         scale(0, robot.r_right),
         scale(1, robot.r_left)
     );
-    let effect = Effect::parse(&spec).map_err(|e| bad(e.to_string()))?;
+    let mut effects = vec![Effect::parse(&spec).map_err(|e| bad(e.to_string()))?];
+    let yaw = knock_on(t, day);
+    if yaw != 0.0 {
+        let knock = format!("laser_offset:yaw={yaw:.9}");
+        effects.push(Effect::parse(&knock).map_err(|e| bad(e.to_string()))?);
+    }
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| PipelineError::write(dir, e))?;
     }
@@ -204,7 +235,7 @@ fn simulate_day(
         &cfg.sim,
         &cfg.topics,
         &sim_robot,
-        &[effect],
+        &effects,
         path,
         None,
         &mut |_| {},
@@ -274,6 +305,7 @@ fn expected(t: &RobotTruth) -> Vec<(AlarmKind, Option<usize>)> {
         History::Step { day, .. } => vec![(AlarmKind::Step, Some(*day))],
         History::Swap { day } => vec![(AlarmKind::Fault, Some(*day))],
         History::Short { day } => vec![(AlarmKind::Insufficient, Some(*day))],
+        History::Knocked { day, .. } => vec![(AlarmKind::Fault, Some(*day))],
         History::Nothing => Vec::new(),
     }
 }
@@ -333,6 +365,7 @@ fn describe(h: &History) -> String {
         History::Step { day, wheel, mm } => format!("step {mm:+.2} mm {wheel} on day {day}"),
         History::Swap { day } => format!("wiring swap from day {day}"),
         History::Short { day } => format!("short recording on day {day}"),
+        History::Knocked { day, yaw } => format!("laser knocked {yaw:+.3} rad on day {day}"),
         History::Nothing => "nothing".into(),
     }
 }

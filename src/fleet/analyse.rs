@@ -57,7 +57,7 @@ fn points(entries: &[Entry], parameter: &str, std_factor: f64) -> Vec<Point> {
     entries
         .iter()
         .filter_map(|e| match &e.outcome {
-            Outcome::Calibrated { params, std } => {
+            Outcome::Calibrated { params, std, .. } => {
                 let pick = |d: &crate::robot::DiffDrive| match parameter {
                     "r_right" => d.r_right,
                     "r_left" => d.r_left,
@@ -290,6 +290,58 @@ fn refusal_alarms(robot: &str, entries: &[Entry]) -> Vec<Alarm> {
     alarms
 }
 
+/// One fault alarm per run of at least `min_run` consecutive calibrated
+/// recordings whose stated laser mounting the scans contradicted (a laser
+/// knocked out of place persists; one contradicted recording alone is left
+/// to chance), from its first day. Refused recordings neither extend nor
+/// break a run. `entries` in order of day.
+fn mounting_alarms(robot: &str, entries: &[Entry], min_run: usize) -> Vec<Alarm> {
+    let mut alarms = Vec::new();
+    let mut run: Vec<&Entry> = Vec::new();
+    let calibrated = entries.iter().filter_map(|e| match &e.outcome {
+        Outcome::Calibrated { mounting, .. } => Some((e, mounting)),
+        Outcome::Refused { .. } => None,
+    });
+    let mut close = |run: &mut Vec<&Entry>| {
+        if run.len() >= min_run.max(1) {
+            let (first, last) = (run[0], run[run.len() - 1]);
+            let note = match &first.outcome {
+                Outcome::Calibrated {
+                    mounting: Some(m), ..
+                } => m.clone(),
+                _ => String::new(),
+            };
+            alarms.push(Alarm {
+                robot: robot.to_string(),
+                kind: AlarmKind::Fault,
+                day: first.day,
+                recording: first.recording.clone(),
+                evidence: format!(
+                    "laser mounting contradicted by the scans in {} consecutive recordings \
+                     (days {}–{}): {note}",
+                    run.len(),
+                    first.day,
+                    last.day
+                ),
+                values: BTreeMap::from([
+                    ("recordings".into(), run.len() as f64),
+                    ("last_day".into(), last.day),
+                ]),
+            });
+        }
+        run.clear();
+    };
+    for (e, mounting) in calibrated {
+        if mounting.is_some() {
+            run.push(e);
+        } else {
+            close(&mut run);
+        }
+    }
+    close(&mut run);
+    alarms
+}
+
 /// Analyses one robot's recordings (any order): its trends, when it has
 /// `min_recordings` calibrations, and its alarms ordered by day. Each
 /// recording's std is multiplied by `std_factor` (`[r_right, r_left,
@@ -313,6 +365,7 @@ pub fn analyse_robot(
         Vec::new()
     };
     let mut alarms = refusal_alarms(robot, &entries);
+    alarms.extend(mounting_alarms(robot, &entries, p.min_side));
     alarms.extend(step_alarms(robot, &entries, &trends));
     alarms.extend(wear_alarm(robot, &entries, &trends, p));
     alarms.sort_by(|a, b| a.day.total_cmp(&b.day));

@@ -3,8 +3,10 @@
 //! uncertainty, and the alarms it supports — a slow trend (tyre wear: a
 //! regression of radius on time with its confidence), a step between
 //! recordings (a new user, a repair: a change-point beyond the recordings'
-//! combined uncertainty), a wiring or mounting fault and a recording that
-//! cannot support calibration (what the single-recording checks refuse).
+//! combined uncertainty), a wiring or mounting fault (a laser mounting the
+//! scans contradict in `min_side` consecutive recordings: a knocked laser)
+//! and a recording that cannot support calibration (what the
+//! single-recording checks refuse).
 //! No files here: `pipeline::fleet` reads, caches and writes.
 
 mod analyse;
@@ -32,7 +34,9 @@ pub struct FleetParams {
     pub min_wear_m_per_day: f64,
     /// Fewest calibrated recordings a trend or a step is judged on.
     pub min_recordings: usize,
-    /// Fewest calibrated recordings on each side of a step.
+    /// Fewest calibrated recordings on each side of a step, and in a run of
+    /// recordings whose stated laser mounting the scans contradict for that
+    /// run to be a fault.
     pub min_side: usize,
     /// At most this many steps per parameter and robot.
     pub max_steps: usize,
@@ -104,6 +108,11 @@ pub enum Outcome {
         params: DiffDrive,
         /// Its std (m).
         std: DiffDrive,
+        /// What the scans said of the recording's stated laser mounting when
+        /// they contradicted it (the online front end's check); `None` when
+        /// it was consistent, estimated or not checked.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mounting: Option<String>,
     },
     /// A refusal, with the single-recording check's message.
     Refused {

@@ -334,9 +334,9 @@ def fleet_alarm_cell(found, alarms):
             name = {"r_left": "R_L", "r_right": "R_R"}[side]
             size = pm(values[f"{side}_step_m"], values[f"{side}_step_std_m"], 1000, 2, "mm")
             return f"{found}: {name} {size}"
-        m = re.match(r"(\d+) consecutive recordings refused", a.get("evidence", ""))
-        if a["kind"] == "fault" and m:
-            return found.replace(")", f", {m.group(1)} recordings)")
+        spans = values.get("recordings", 1)
+        if a["kind"] == "fault" and spans > 1:
+            return found.replace(")", f", {spans:.0f} recordings)")
     return found
 
 

@@ -67,6 +67,8 @@ pub struct FrontEnd {
     laser: P3,
     laser_std: Option<[f64; 3]>,
     laser_estimated: bool,
+    /// Whether the last fit contradicted the stated mounting.
+    laser_contradicted: bool,
     laser_check: Option<String>,
     /// The residuals' σ's of the last fit (untimed tuples carry none).
     noise: Option<[f64; 3]>,
@@ -116,6 +118,7 @@ impl FrontEnd {
             offset: 0.0,
             laser_std: None,
             laser_estimated: false,
+            laser_contradicted: false,
             laser_check: None,
             noise: None,
             scales: [1.0; 3],
@@ -319,9 +322,9 @@ impl FrontEnd {
     fn choose_mount(&mut self, e: &BatchEstimate) -> Option<P3> {
         let (est, cov) = self.mount_mean(e);
         let std = [0, 1, 2].map(|i| cov[(i, i)].max(0.0).sqrt());
-        let (use_estimate, check) = match (&self.stated, self.p.mount) {
-            (_, MountChoice::Estimate) => (true, None),
-            (None, _) => (true, None),
+        let (use_estimate, check, contradicted) = match (&self.stated, self.p.mount) {
+            (_, MountChoice::Estimate) => (true, None, false),
+            (None, _) => (true, None, false),
             (Some((s, src)), choice) => {
                 let d = Vector3::new(est[0] - s[0], est[1] - s[1], wrap_angle(est[2] - s[2]));
                 let chi2 = cov
@@ -354,10 +357,12 @@ impl FrontEnd {
                 (
                     contradicted && choice == MountChoice::Check,
                     Some(format!("{words}, {verdict}")),
+                    contradicted,
                 )
             }
         };
         self.laser_check = check;
+        self.laser_contradicted = contradicted;
         self.laser_estimated = use_estimate;
         if use_estimate {
             self.laser = est;
@@ -462,6 +467,7 @@ impl FrontEnd {
                 yaw: v(2),
                 source: source(self.laser_estimated),
                 check: self.laser_check.clone(),
+                contradicted: self.laser_contradicted,
             },
             warmup: self.started.map(|s| WarmupReport {
                 t: s.t,

@@ -62,6 +62,9 @@ pub struct LaserReport {
     /// the window was fitted.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub check: Option<String>,
+    /// Whether the last fit contradicted the stated mounting (its χ² beyond
+    /// the limit), whether or not the estimate was then used.
+    pub contradicted: bool,
 }
 
 /// What the online front end did (flattened into `calibrate`'s JSON).

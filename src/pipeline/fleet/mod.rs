@@ -211,6 +211,12 @@ pub fn calibrate_item(job: &FleetJob, item: &Item) -> Result<Outcome, PipelineEr
         Ok(done) => Ok(Outcome::Calibrated {
             params: done.summary.final_params,
             std: done.summary.std,
+            mounting: done
+                .summary
+                .online
+                .as_ref()
+                .filter(|o| o.laser.contradicted)
+                .and_then(|o| o.laser.check.clone()),
         }),
         Err(e @ PipelineError::Write { .. }) => Err(e),
         Err(e) => {

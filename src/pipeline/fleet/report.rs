@@ -50,10 +50,15 @@ pub fn rows(entries: &[(String, Entry)], epoch: f64) -> Vec<Row> {
                 message: None,
             };
             match &e.outcome {
-                Outcome::Calibrated { params, std } => {
+                Outcome::Calibrated {
+                    params,
+                    std,
+                    mounting,
+                } => {
                     row.r_right = Some([params.r_right, std.r_right]);
                     row.r_left = Some([params.r_left, std.r_left]);
                     row.wheel_base = Some([params.wheel_base, std.wheel_base]);
+                    row.message = mounting.clone();
                 }
                 Outcome::Refused { kind, message } => {
                     row.status = serde_json::to_value(kind)
