@@ -25,7 +25,7 @@ pub enum NeighbourSearch {
     /// kiddo's k-d tree in its immutable layout (Eytzinger stems, arena
     /// leaves of `LEAF` points).
     KdTree,
-    /// A uniform grid of square cells searched ring by ring ([`PointGrid`]).
+    /// A uniform grid of square cells searched ring by ring (`icp::grid`).
     #[default]
     Grid,
 }
