@@ -16,7 +16,7 @@ mkdir -p fuzz/logs
 printf '%-14s %12s %8s %8s %s\n' target executions seconds exec/s result
 for t in "${targets[@]}"; do
   log="fuzz/logs/$t.log"
-  mkdir -p "fuzz/corpus/$t"
+  mkdir -p "fuzz/corpus/$t" "fuzz/artifacts/$t"
   opts=(-max_total_time="$secs" -timeout=20 -rss_limit_mb=2048 -print_final_stats=1)
   if [ -n "${FUZZ_NO_BUILD:-}" ]; then
     # The binaries `cargo fuzz build -O` made, as they are: a campaign that
