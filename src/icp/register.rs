@@ -272,7 +272,8 @@ fn associate(
         if !ns[0].is_finite() {
             continue;
         }
-        let Some(cl) = find(reference, at.apply(p).x, hint, line, memory.search, reach) else {
+        let x = at.apply(p).x;
+        let Some(cl) = find(reference, x, hint, line, memory.search, reach) else {
             continue;
         };
         if !admits(&cl, at.rotate(ns), set) {
@@ -282,7 +283,7 @@ fn associate(
             metric::Metric::PointToLine => (cl.target, cl.normal, cl.residual),
             metric::Metric::PointToPoint => {
                 let q = reference.point(cl.index);
-                let (u, d) = metric::point_to_point(at.apply(p).x, q);
+                let (u, d) = metric::point_to_point(x, q);
                 (q, u, d)
             }
         };
