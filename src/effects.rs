@@ -8,6 +8,7 @@
 //! effects amount to at a time, and the laws by which that changes the
 //! robot, forward for the simulator and inverse for the diagnosis).
 
+pub mod change;
 mod departures;
 mod faults;
 

@@ -8,7 +8,8 @@
 //! 4. [`calib`] estimates the wheel radii and the wheel base, online or in batch;
 //! 5. [`eval`] scores the calibrated odometry, [`diagnose`] names what the nominal model misses.
 //!
-//! [`pipeline`] wires these stages through one driver for every command; the
+//! [`pipeline`] wires these stages through one driver for every command, and
+//! [`live`] feeds it a robot's topics over ROS 2 instead of a recording; the
 //! manual is `docs/` in the repository.
 //!
 //! Math modules (`geom`, `scan`, `robot`, `icp`, `calib`, `classic`, `sim`,
@@ -32,6 +33,7 @@ pub mod fleet;
 pub mod geom;
 pub mod icp;
 pub mod io;
+pub mod live;
 pub mod motion;
 pub mod pipeline;
 pub mod recording;

@@ -41,12 +41,39 @@ pub enum WheelValues {
     Ticks,
 }
 
+/// Which stream carries the wheel motion (the robot file's `[wheels]
+/// source`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WheelSourceKind {
+    /// `sensor_msgs/msg/JointState`: the wheel joints' positions (rad), or
+    /// their velocities (rad/s) when the messages carry no positions.
+    #[default]
+    JointStates,
+    /// `nav_msgs/msg/Odometry`: the robot's own odometry, whose twist
+    /// (V m/s, W rad/s) is turned back into wheel rates with the nominal robot.
+    Odometry,
+    /// Encoder tick counters in a `std_msgs` integer array.
+    Ticks,
+}
+
+impl WheelSourceKind {
+    /// The word the robot file uses.
+    pub fn word(self) -> &'static str {
+        match self {
+            WheelSourceKind::JointStates => "joint_states",
+            WheelSourceKind::Odometry => "odometry",
+            WheelSourceKind::Ticks => "ticks",
+        }
+    }
+}
+
 /// Which stream a run's wheel samples came from, and what that stream
 /// cannot show (JSON `wheel_source`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct WheelSource {
     /// `joint_states`, `odometry` or `ticks`.
-    pub kind: crate::robot::WheelSourceKind,
+    pub kind: WheelSourceKind,
     /// The topic read.
     pub topic: String,
     /// Its message type (`pkg/msg/Type`).

@@ -58,6 +58,9 @@ mod io_sense;
 mod io_stream;
 mod io_time;
 mod io_wheel_sources;
+#[cfg(feature = "dds")]
+mod live_dds;
+mod live_source;
 mod paste;
 mod record_stream;
 mod sim_effects;

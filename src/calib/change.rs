@@ -56,8 +56,8 @@ pub struct ChangeParams {
     /// jump when larger.
     pub jump_sigma: [f64; 3],
     /// Naming of what changed at each firing, after the run
-    /// ([`crate::diagnose::onset`]).
-    pub naming: crate::diagnose::onset::OnsetParams,
+    /// (`diagnose::onset`).
+    pub naming: crate::effects::change::OnsetParams,
 }
 
 impl Default for ChangeParams {

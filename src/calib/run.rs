@@ -95,9 +95,9 @@ pub struct CalibSummary {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub start: Option<super::batch::BatchEstimate>,
     /// What changed at each firing of the change detector (set by the
-    /// command that ran; [`crate::diagnose::onset`]).
+    /// command that ran; `diagnose::onset`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub changes: Vec<crate::diagnose::onset::NamedChange>,
+    pub changes: Vec<crate::effects::change::NamedChange>,
 }
 
 /// Result of [`crate::calib::run()`].

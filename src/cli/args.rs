@@ -47,6 +47,11 @@ pub enum Command {
     Experiment(ExperimentArgs),
     /// Calibrate a fleet's recordings; per robot the parameter history and its alarms.
     Fleet(super::fleet::FleetArgs),
+    /// Calibrate live as a ROS 2 node (DDS, no ROS installation): the robot's topics in;
+    /// calibrated odometry, diagnostics and multiplier parameters out; outputs when stopped.
+    Live(super::live::LiveArgs),
+    /// Publish a recording onto a ROS 2 domain as its robot did (topics, types, stamps).
+    Play(super::live::PlayArgs),
     /// Print the command reference as markdown (docs/commands.md), generated from these
     /// definitions.
     #[command(name = "help-markdown", hide = true)]

@@ -4,6 +4,7 @@
 pub mod args;
 mod fleet;
 mod inspect_print;
+mod live;
 mod print;
 
 use args::{
@@ -25,6 +26,8 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Experiment(a) => experiment(a),
         Command::Inspect(a) => inspect(a),
         Command::Fleet(a) => fleet::run(a),
+        Command::Live(a) => live::live(a),
+        Command::Play(a) => live::play(a),
         Command::HelpMarkdown => {
             print!("{}", args::reference_markdown());
             Ok(())

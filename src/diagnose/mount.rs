@@ -22,63 +22,9 @@
 //! lever arm of the walls, leans the motions far more.
 
 use crate::motion::Motion;
-use serde::{Deserialize, Serialize};
 
-/// Settings of the laser-mounting watch (`[calib.change.naming.mount]`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct MountParams {
-    /// Whether the watch runs.
-    pub enabled: bool,
-    /// Block length (s).
-    pub block_s: f64,
-    /// Probability that one block beyond the threshold is chance (sets the
-    /// χ²₁ threshold; a firing needs two blocks in a row).
-    pub false_alarm: f64,
-    /// Smallest change of the lean that fires (rad).
-    pub min_turn_rad: f64,
-    /// Shortest reference (s of blocks) before a block is tested.
-    pub min_reference_s: f64,
-    /// Fewest scan-matching rows in a tested block.
-    pub min_rows: usize,
-}
-
-impl Default for MountParams {
-    fn default() -> Self {
-        Self {
-            enabled: true,
-            block_s: 5.0,
-            false_alarm: 1e-6,
-            min_turn_rad: 0.01,
-            min_reference_s: 10.0,
-            min_rows: 20,
-        }
-    }
-}
-
-impl MountParams {
-    /// Checks ranges; the message names the bad field.
-    pub fn validate(&self) -> Result<(), String> {
-        if !(self.block_s.is_finite() && self.block_s > 0.0) {
-            return Err("change.naming.mount.block_s must be > 0 s".into());
-        }
-        if !(self.false_alarm > 0.0 && self.false_alarm < 1.0) {
-            return Err("change.naming.mount.false_alarm must be in (0, 1)".into());
-        }
-        for (k, v) in [
-            ("min_reference_s", self.min_reference_s),
-            ("min_turn_rad", self.min_turn_rad),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("change.naming.mount.{k} must be ≥ 0, got {v}"));
-            }
-        }
-        if self.min_rows < 3 {
-            return Err("change.naming.mount.min_rows must be ≥ 3".into());
-        }
-        Ok(())
-    }
-}
+/// Settings of the laser-mounting watch (defined with the change vocabulary).
+pub use crate::effects::change::MountParams;
 
 /// Sums of the least-squares lean ℓ = a dx over some rows.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

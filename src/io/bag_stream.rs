@@ -9,8 +9,9 @@
 
 use std::collections::VecDeque;
 
-use super::mcap_streams::{RateIntegrator, Role, State, Wire};
+use super::mcap_streams::{released, RateIntegrator, Role, State, Wire};
 use super::options::ReadOptions;
+use super::reorder::Reorder;
 use super::source::{Item, SampleSource, StreamInfo};
 use crate::error::InputError;
 
@@ -82,32 +83,6 @@ pub(crate) trait RawMessages {
     fn wire(&self) -> Wire;
     /// The next message of a topic that plays a role (others are skipped).
     fn next_raw(&mut self) -> Result<Option<Raw>, Fail>;
-}
-
-/// A stream's reorder buffer: sorted by stamp (ties in arrival order).
-#[derive(Default)]
-struct Reorder {
-    items: VecDeque<Item>,
-    latest: Option<f64>,
-}
-
-impl Reorder {
-    fn insert(&mut self, item: Item) {
-        let t = item.stamp();
-        let at = self.items.partition_point(|i| i.stamp() <= t);
-        self.items.insert(at, item);
-        self.latest = Some(self.latest.map_or(t, |l: f64| l.max(t)));
-    }
-
-    /// The front item, if no message still to come can be earlier.
-    fn pop_ready(&mut self, tolerance: f64) -> Option<Item> {
-        let bound = self.latest? - tolerance;
-        if self.items.front()?.stamp() < bound {
-            self.items.pop_front()
-        } else {
-            None
-        }
-    }
 }
 
 /// A bag's samples, stream by stream in stamp order, in bounded memory.
@@ -233,12 +208,7 @@ impl<'o, M: RawMessages> BagStream<'o, M> {
     }
 
     fn release(&mut self, item: Item) {
-        let item = match item {
-            Item::Wheel(w) if self.state.wheel_rates() => {
-                Item::Wheel(self.rates.get_or_insert_with(Default::default).angles(w))
-            }
-            other => other,
-        };
+        let item = released(item, self.state.wheel_rates(), &mut self.rates);
         self.ready.push_back(item);
     }
 }

@@ -20,6 +20,9 @@ use crate::recording::{GyroSample, Recording, StampedPose, WheelSample};
 use crate::robot::WheelSourceKind;
 use crate::scan::LaserScan;
 
+/// `base_from_laser`, where it came from, and why there is none.
+pub type StreamMount = (Option<Pose2>, Option<Origin>, Option<String>);
+
 /// What a channel's messages become.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Role {
@@ -186,6 +189,13 @@ impl<'a> State<'a> {
     /// The stamp of a message in `stream` (see [`stamp_of`]); refuses one
     /// further back than the tolerance from the latest stamp of its stream.
     fn stamp(&mut self, stream: &'static str, stamp: &Time, log_time: u64) -> Result<f64, String> {
+        if stamp.is_zero() && !self.opts.log_time_for_unset {
+            return Err(
+                "header stamp unset (zero), and no log time on the stamps' clock to \
+                 stand in for it (a live stream's timestamps are its writer's clock)"
+                    .into(),
+            );
+        }
         let (t, from_log) = stamp_of(stamp, log_time)?;
         self.in_order(stream, t, from_log)
     }
@@ -409,6 +419,25 @@ impl<'a> State<'a> {
         &mut self.rec
     }
 
+    /// `base_from_laser` as the transforms decoded so far give it (with its
+    /// origin, or a note saying why there is none), for a stream that does
+    /// not end: see [`Self::finish`].
+    pub(crate) fn mount_so_far(&mut self) -> Result<StreamMount, InputError> {
+        if let Some(laser) = self.laser_frame.clone() {
+            self.resolve_mount(&laser)?;
+        }
+        Ok((
+            self.rec.base_from_laser,
+            self.rec.mount_origin,
+            self.rec.mount_note.clone(),
+        ))
+    }
+
+    /// What the wheel messages carry, once one was decoded.
+    pub(crate) fn wheel_values(&self) -> Option<crate::recording::WheelValues> {
+        self.wheels.values()
+    }
+
     /// Whether the wheel values are rates (rad/s) rather than angles.
     pub(crate) fn wheel_rates(&self) -> bool {
         self.wheels.rates()
@@ -531,6 +560,22 @@ impl RateIntegrator {
             left: self.left,
             right: self.right,
         }
+    }
+}
+
+/// `item` as released to a reader: a wheel sample whose values are rates
+/// (`rates`) integrated into angles by `integrator` (made on first use).
+pub(crate) fn released(
+    item: super::source::Item,
+    rates: bool,
+    integrator: &mut Option<RateIntegrator>,
+) -> super::source::Item {
+    use super::source::Item;
+    match item {
+        Item::Wheel(w) if rates => {
+            Item::Wheel(integrator.get_or_insert_with(Default::default).angles(w))
+        }
+        other => other,
     }
 }
 

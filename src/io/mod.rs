@@ -56,9 +56,11 @@ pub mod mcap_stream;
 mod mcap_streams;
 pub mod mcap_topics;
 pub mod mcap_write;
+pub mod messages;
 mod options;
 pub mod out_lock;
 pub mod relations;
+mod reorder;
 pub mod ros1_bag;
 mod ros1_records;
 pub mod ros_msgs;
@@ -67,6 +69,7 @@ pub mod rosbag2_db3;
 pub mod rosbag2_dir;
 pub mod seed_tables;
 pub mod source;
+pub mod stored;
 pub mod stream_out;
 pub mod survey;
 pub mod tum;
@@ -80,6 +83,7 @@ pub use mcap_write::{
     encode_mcap, write_mcap, write_mcap_streaming, BagSource, BagStream, WheelRates, WriteError,
     WriteOptions,
 };
+pub use messages::MessageDecoder;
 pub use options::{ReadOptions, TopicConfig};
 pub use source::{Item, RecordingSource, SampleSource, StreamInfo};
 

@@ -67,6 +67,11 @@ pub struct ReadOptions {
     /// `odocal inspect`'s survey); the streams above are then not decoded.
     #[serde(skip)]
     pub all_topics: bool,
+    /// Whether a zero (unset) header stamp is replaced by the message's log
+    /// time (a bag's: the recorder's clock); off for a live stream, whose
+    /// only other time is its writer's clock, not the stamps'.
+    #[serde(skip)]
+    pub log_time_for_unset: bool,
 }
 
 impl Default for ReadOptions {
@@ -81,6 +86,7 @@ impl Default for ReadOptions {
             ticks_per_rev: robot.ticks_per_rev,
             wheels: robot.wheels,
             all_topics: false,
+            log_time_for_unset: true,
         }
     }
 }

@@ -106,6 +106,12 @@ pub trait SampleSource {
     fn scan_topic(&self) -> &str {
         "laser scans"
     }
+    /// Whether the gyro stream has ended before its announced count (a live
+    /// source whose gyro went silent): the run then goes on without it.
+    /// Asked after each sample.
+    fn gyro_ended(&mut self) -> bool {
+        false
+    }
 }
 
 /// A recording in memory (borrowed or owned) as a [`SampleSource`]: the

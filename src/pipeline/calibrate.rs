@@ -98,6 +98,36 @@ pub fn run(
     job: &CalibrateJob,
     watch: &mut dyn RunObserver,
 ) -> Result<CalibrateOutcome, PipelineError> {
+    run_on(job, None, watch)
+}
+
+/// A stream that is no file (a robot's live topics) as `odocal calibrate`'s
+/// input, with where its wheels come from.
+pub struct LiveInput<'s> {
+    /// The samples; the run ends when the source does.
+    pub source: &'s mut dyn crate::io::SampleSource,
+    /// How the wheel angles were read from the stream, asked once it ends.
+    pub wheels: Box<dyn FnOnce() -> crate::recording::WheelSource + 's>,
+    /// Told each change as soon as it is named.
+    pub on_named: Option<super::outputs::OnNamed>,
+}
+
+/// [`run`] over a live stream (`job.input` is [`CalibSource::Live`]): the
+/// same ICP, online filters, change naming, vetting and outputs, written
+/// when the source ends.
+pub fn run_live(
+    job: &CalibrateJob,
+    input: LiveInput<'_>,
+    watch: &mut dyn RunObserver,
+) -> Result<CalibrateOutcome, PipelineError> {
+    run_on(job, Some(input), watch)
+}
+
+fn run_on(
+    job: &CalibrateJob,
+    mut live: Option<LiveInput<'_>>,
+    watch: &mut dyn RunObserver,
+) -> Result<CalibrateOutcome, PipelineError> {
     let (mut cfg, nominal) = job.common.load_nominal_open()?;
     job.choice.apply(&mut cfg.calib);
     if cfg.calib.method == calib::Method::Batch {
@@ -132,6 +162,9 @@ pub fn run(
     if params.change.naming.enabled {
         files = files.naming_changes(robot, &params.change.naming);
     }
+    if let Some(f) = live.as_mut().and_then(|l| l.on_named.take()) {
+        files = files.telling(f);
+    }
     let mut obs = Observers(vec![&mut files, rec_obs, watch]);
     let run = Run {
         cfg: &cfg,
@@ -139,7 +172,10 @@ pub fn run(
         robot,
         params: &params,
     };
-    let (done, assumptions, input, wheel_source) = run.input(job, started.as_ref(), &mut obs)?;
+    let (done, assumptions, input, wheel_source) = match live {
+        Some(l) => run.live(job, l, &mut obs)?,
+        None => run.input(job, started.as_ref(), &mut obs)?,
+    };
     drop(obs);
     let mut summary = done.summary.clone();
     summary.assumptions = assumptions;
@@ -245,6 +281,11 @@ fn start(
         (Start::Batch, CalibSource::Recording(path)) => Ok(Some(super::start::from_batch(
             path, cfg, nominal, &cfg.calib,
         )?)),
+        (Start::Batch, CalibSource::Live { .. }) => Err(PipelineError::BadArgument(
+            "--init batch fits a whole recording first; a live stream has none (the online \
+             front end estimates the time offset and mounting on the stream)"
+                .into(),
+        )),
         (Start::Batch, CalibSource::Csv { .. }) => Err(PipelineError::BadArgument(
             "--init batch needs --input REC (the batch estimate reads the scans and wheels); \
              CSV motions carry no laser frame or wheel clock"
@@ -278,6 +319,22 @@ impl Run<'_> {
         self.nominal.kinematics().map(|_| self.robot.diff_drive())
     }
 
+    /// The calibration of a live stream.
+    fn live<'j>(
+        &self,
+        job: &'j CalibrateJob,
+        input: LiveInput<'_>,
+        obs: &mut dyn RunObserver,
+    ) -> Result<Ran<'j>, PipelineError> {
+        let CalibSource::Live { name } = &job.input else {
+            return Err(PipelineError::BadArgument(
+                "a live stream needs a job whose input is CalibSource::Live".into(),
+            ));
+        };
+        let (done, a) = self.recording(input.source, obs)?;
+        Ok((done, a, Path::new(name.as_str()), Some((input.wheels)())))
+    }
+
     /// The calibration of the job's input, by its kind: a recording (from
     /// the batch start's shifted copy with `--init batch`), Censi's tuples,
     /// or CSV motions and wheels.
@@ -303,6 +360,11 @@ impl Run<'_> {
             (CalibSource::Recording(path), None) => {
                 let (done, a, wheels) = self.file(path, obs)?;
                 (done, a, path, Some(wheels))
+            }
+            (CalibSource::Live { name }, _) => {
+                return Err(PipelineError::BadArgument(format!(
+                    "{name}: a live stream is calibrated by `odocal live`"
+                )))
             }
             (CalibSource::Csv { motions, wheels }, _) => {
                 let input = read_csv_input(motions, wheels, &self.cfg.icp)?;
@@ -640,6 +702,7 @@ fn check_job_outputs(job: &CalibrateJob) -> Result<Vec<OutputLock>, PipelineErro
     let inputs: Vec<&Path> = match &job.input {
         CalibSource::Recording(p) => vec![p],
         CalibSource::Csv { motions, wheels } => vec![motions, wheels],
+        CalibSource::Live { .. } => Vec::new(),
     };
     let mut files = CalibFiles::paths(&job.out).to_vec();
     files.extend(Paste::paths(&job.out, false));

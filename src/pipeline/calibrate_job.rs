@@ -57,6 +57,13 @@ pub enum CalibSource {
         /// Wheel angles `t,left,right` or rates `t0,t1,omega_right,omega_left`.
         wheels: PathBuf,
     },
+    /// A stream that never was a file (a robot's live topics), handed to
+    /// [`super::calibrate::run_live`] beside the job.
+    Live {
+        /// Where the stream comes from, in messages and the summary (e.g.
+        /// "ROS 2 domain 7").
+        name: String,
+    },
 }
 
 /// What `odocal calibrate` is asked to do.

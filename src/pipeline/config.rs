@@ -34,6 +34,8 @@ pub struct Config {
     pub diagnose: DiagnoseParams,
     /// Fleet alarm thresholds.
     pub fleet: crate::fleet::FleetParams,
+    /// `odocal live`: the network and its waits.
+    pub live: crate::live::LiveParams,
 }
 
 fn read_text(path: &Path) -> Result<String, PipelineError> {
@@ -72,6 +74,7 @@ impl Config {
         self.calib.validate().map_err(|e| e.to_string())?;
         self.diagnose.validate().map_err(|e| e.to_string())?;
         self.fleet.validate()?;
+        self.live.validate()?;
         let m = &self.measurements;
         if !(m.gyro_sigma.is_finite() && m.gyro_sigma > 0.0) {
             return Err(format!(

@@ -563,6 +563,7 @@ fn run_step(
             if e.changed {
                 front.changed_at(s.t1);
             }
+            obs.front(s.t1, front.time_offset(), front.laser());
             let mut pose = |t: f64, p: &Pose2| obs.calibrated_pose(t, p);
             odometry.advance(s.t1, front.time_offset(), &e.drive(), &mut pose);
         }
@@ -688,6 +689,9 @@ pub fn run_calibration_from(
         obs.item(&item);
         ends.feed(&item, &info, &mut stage);
         icp_stage.feed(&item, &info, obs, &mut |m| stage.push_motion(m));
+        if source.gyro_ended() {
+            stage.end_gyro();
+        }
         stage.poll(false, obs)?;
     }
     icp_stage.finish(obs, &mut |m| stage.push_motion(m));

@@ -18,6 +18,9 @@ pub enum PipelineError {
     /// A simulation that cannot be set up with these settings.
     #[error(transparent)]
     Sim(#[from] crate::sim::SimError),
+    /// The network side of a live run could not be set up (DDS).
+    #[error("network: {0}")]
+    Network(String),
     /// Writing an output failed (disk full, permissions).
     #[error("cannot write {path}: {message}")]
     Write {
@@ -33,7 +36,7 @@ impl PipelineError {
     pub fn exit_code(&self) -> i32 {
         match self {
             Self::Input(_) | Self::BadArgument(_) | Self::Eval(_) | Self::Sim(_) => 2,
-            Self::Write { .. } => 1,
+            Self::Write { .. } | Self::Network(_) => 1,
         }
     }
 

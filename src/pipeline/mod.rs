@@ -15,11 +15,15 @@ pub mod evaluate;
 pub mod fleet;
 pub mod icp;
 pub mod inspect;
+#[cfg(feature = "dds")]
+pub mod live;
 pub mod nominal;
 pub mod observe;
 pub mod odometry;
 pub mod outputs;
 pub mod paste;
+#[cfg(feature = "dds")]
+pub mod play;
 pub mod recorder;
 pub mod sense;
 pub mod simulate;

@@ -22,6 +22,10 @@ pub trait RunObserver {
     fn step(&mut self, _estimate: &Estimate, _cloud: Option<CloudView<'_>>) {}
     /// A pose of the calibrated odometry (odometry frame) at `t` (s).
     fn calibrated_pose(&mut self, _t: f64, _pose: &Pose2) {}
+    /// After a filter step ending at `t` (s) behind the online front end:
+    /// the time offset in use (s, wheel stamp minus laser stamp of one
+    /// instant) and the laser mounting `[x (m), y (m), yaw (rad)]`.
+    fn front(&mut self, _t: f64, _time_offset_s: f64, _laser: [f64; 3]) {}
 }
 
 /// An observer that ignores the run.
@@ -51,6 +55,11 @@ impl RunObserver for Observers<'_> {
     }
     fn calibrated_pose(&mut self, t: f64, pose: &Pose2) {
         self.0.iter_mut().for_each(|o| o.calibrated_pose(t, pose));
+    }
+    fn front(&mut self, t: f64, time_offset_s: f64, laser: [f64; 3]) {
+        self.0
+            .iter_mut()
+            .for_each(|o| o.front(t, time_offset_s, laser));
     }
 }
 

@@ -233,7 +233,12 @@ pub struct CalibFiles {
     names: RowNames,
     /// Every firing named so far, in order.
     changes: Vec<crate::diagnose::onset::NamedChange>,
+    /// Told each change as soon as it is named (a live run's status).
+    on_named: Option<OnNamed>,
 }
+
+/// What is told each change as soon as it is named.
+pub type OnNamed = Box<dyn FnMut(&crate::diagnose::onset::NamedChange) + Send>;
 
 impl CalibFiles {
     /// The files written into `dir`: history, trajectory, summary.
@@ -256,7 +261,14 @@ impl CalibFiles {
             held: Default::default(),
             names: RowNames::default(),
             changes: Vec::new(),
+            on_named: None,
         })
+    }
+
+    /// Tells `f` each change as soon as it is named, during the run.
+    pub fn telling(mut self, f: OnNamed) -> Self {
+        self.on_named = Some(f);
+        self
     }
 
     /// Names the changes of a filter started from `robot` by `p` (the
@@ -284,6 +296,9 @@ impl CalibFiles {
     /// Records newly named firings and writes the rows they complete.
     fn take_names(&mut self, named: Vec<crate::diagnose::onset::NamedChange>) {
         for c in named {
+            if let Some(f) = self.on_named.as_mut() {
+                f(&c);
+            }
             self.names.named(&c);
             // A firing on a change already reported is reported once, there.
             let first = c

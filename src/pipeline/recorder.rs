@@ -24,6 +24,10 @@ use crate::traj::Trajectory;
 use crate::viz::{CalibEstimate, Logger, Stamp, TrajectoryKind, VizError};
 use nalgebra::Point2;
 
+/// Scans between two particle clouds logged on a live stream (no end to
+/// spread `max_clouds` over).
+const LIVE_CLOUD_EVERY: usize = 10;
+
 /// `world_from_estimate` that puts the estimate's first pose on the reference.
 pub fn anchor(est: &Trajectory, reference: Option<&Trajectory>) -> Pose2 {
     match (est.stamps.first(), est.poses.first(), reference) {
@@ -389,7 +393,12 @@ impl RunObserver for StreamRecorder<'_> {
             self.base_from_laser = b;
         }
         // About one filter step per scan pair.
-        self.cloud_every = info.scans.div_ceil(self.opts.max_clouds.max(1)).max(1);
+        // A live stream has no count: one cloud every few scans.
+        self.cloud_every = if info.scans == usize::MAX {
+            LIVE_CLOUD_EVERY
+        } else {
+            info.scans.div_ceil(self.opts.max_clouds.max(1)).max(1)
+        };
     }
 
     fn item(&mut self, item: &Item) {

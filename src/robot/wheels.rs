@@ -5,31 +5,9 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Which stream carries the wheel motion.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum WheelSourceKind {
-    /// `sensor_msgs/msg/JointState`: the wheel joints' positions (rad), or
-    /// their velocities (rad/s) when the messages carry no positions.
-    #[default]
-    JointStates,
-    /// `nav_msgs/msg/Odometry`: the robot's own odometry, whose twist
-    /// (V m/s, W rad/s) is turned back into wheel rates with the nominal robot.
-    Odometry,
-    /// Encoder tick counters in a `std_msgs` integer array.
-    Ticks,
-}
-
-impl WheelSourceKind {
-    /// The word the robot file uses.
-    pub fn word(self) -> &'static str {
-        match self {
-            WheelSourceKind::JointStates => "joint_states",
-            WheelSourceKind::Odometry => "odometry",
-            WheelSourceKind::Ticks => "ticks",
-        }
-    }
-}
+/// Which stream carries the wheel motion (defined with the recording's
+/// wheel source, which names it).
+pub use crate::recording::WheelSourceKind;
 
 /// The message type of a tick topic: a `std_msgs` array whose elements
 /// `data[left_index]` and `data[right_index]` are the counters.

@@ -4,10 +4,12 @@
 
 use super::cdr::{CdrError, CdrReader, CdrWriter};
 
+mod diagnostic;
 mod geometry;
 mod int_arrays;
 mod sensor;
 
+pub use diagnostic::{DiagnosticArrayMsg, DiagnosticStatusMsg, KeyValueMsg};
 pub use geometry::{OdometryMsg, PointStampedMsg, PoseStampedMsg, TfMessage, TransformStamped};
 pub use int_arrays::read_int_array;
 pub use sensor::{ImuMsg, JointStateMsg, LaserScanMsg};
