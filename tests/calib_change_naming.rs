@@ -72,6 +72,8 @@ fn a_radius_step_on_the_right_wheel_is_named_with_its_size() {
     let changes = json["changes"].as_array().expect("the detector fired");
     let first = &changes[0];
     assert_eq!(first["effect"], "radius_step", "{first}");
+    // Named against a converged filter, which tells the wheel.
+    assert_eq!(first["baseline"], "converged", "{first}");
     assert_eq!(first["parameter"], "right", "{first}");
     let est = first["estimate"].as_f64().unwrap();
     assert!(
@@ -92,6 +94,57 @@ fn a_radius_step_on_the_right_wheel_is_named_with_its_size() {
     let rows = named_rows(&csv);
     assert_eq!(rows.len(), changes.len());
     assert!((rows[0].0 - t).abs() < 1e-6 && rows[0].1 == "radius_step");
+}
+
+/// A step 20 s into a corridor run, as the filters begin: the estimate at
+/// the start of its window is still spreading from the front end's start
+/// (radius std 0.8–5 % of the radius), and against it the step came out on
+/// the wrong wheel (left +5.8 mm where the right changed by −5 mm and the
+/// left by +4 mm). It is named `radius_step` against an `unconverged`
+/// baseline and names no wheel; the step at 30 s above, against a converged
+/// one, names it (the negative control).
+#[test]
+fn a_step_named_against_an_unconverged_filter_names_no_wheel() {
+    let d = scratch("change-naming-unconverged");
+    let bag = d.join("run.mcap");
+    let out = d.join("cal");
+    let s = odocal(&[
+        "simulate",
+        "--scenario",
+        "corridor-loop",
+        "--seed",
+        "11",
+        "--duration",
+        "70",
+        "--effect",
+        "radius_step:time=20,right=-0.005,left=0.004",
+        "--out",
+        bag.to_str().unwrap(),
+    ]);
+    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let c = odocal(&[
+        "calibrate",
+        "--input",
+        bag.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&c.stdout).unwrap();
+    let changes = json["changes"].as_array().expect("the detector fired");
+    let steps: Vec<&serde_json::Value> = changes
+        .iter()
+        .filter(|c| c["effect"] == "radius_step")
+        .collect();
+    assert!(!steps.is_empty(), "{changes:?}");
+    for c in steps {
+        assert_eq!(c["baseline"], "unconverged", "{c}");
+        assert!(c["baseline_rel_std"].as_f64().unwrap() > 0.005, "{c}");
+        assert_eq!(c["parameter"], "", "a wheel named: {c}");
+        // The fit's sizes stay, for what they are worth.
+        assert!(c["parameters"]["right"].is_number(), "{c}");
+    }
 }
 
 /// A latency that appears during the run (at 15 s, before the robot turns)

@@ -10,6 +10,11 @@ use std::collections::BTreeMap;
 /// Name given when no candidate beats "nothing changed" by the margin.
 pub const UNDETERMINED: &str = "undetermined";
 
+/// A change named against a converged baseline.
+pub const CONVERGED: &str = "converged";
+/// A change named against a baseline that had not converged.
+pub const UNCONVERGED: &str = "unconverged";
+
 /// The calibration filter's change detector.
 pub const FILTER: &str = "filter";
 /// The laser-mounting watch (`diagnose::mount`).
@@ -44,6 +49,9 @@ pub struct OnsetParams {
     /// The watch for a laser moved on the robot, whose firings are named
     /// like the filter's (`diagnose::mount`).
     pub mount: MountParams,
+    /// A baseline whose radius std is above this fraction of the radius has
+    /// not converged: a radius step named against it names no wheel.
+    pub converged_rel_std: f64,
 }
 
 impl Default for OnsetParams {
@@ -59,6 +67,7 @@ impl Default for OnsetParams {
             margin: 0.25,
             max_iter: 30,
             mount: Default::default(),
+            converged_rel_std: 0.005,
         }
     }
 }
@@ -83,6 +92,12 @@ impl OnsetParams {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("change.naming.{k} must be ≥ 0 s, got {v}"));
             }
+        }
+        if !(self.converged_rel_std.is_finite() && self.converged_rel_std > 0.0) {
+            return Err(format!(
+                "change.naming.converged_rel_std must be > 0, got {}",
+                self.converged_rel_std
+            ));
         }
         if self.max_iter == 0 || self.min_rows == 0 {
             return Err("change.naming.max_iter and min_rows must be ≥ 1".into());
@@ -152,6 +167,16 @@ pub struct NamedChange {
     /// it is then reported once, under the earlier firing.
     #[serde(skip)]
     pub continues: Option<f64>,
+    /// Whether the filter's estimate the change is named against (at the
+    /// start of the window) had converged: `converged`, or `unconverged`
+    /// (its radius std above `converged_rel_std` of the radius, or no
+    /// estimate yet: the robot file's values). Against an unconverged
+    /// baseline a radius step names no wheel: which wheel changed cannot
+    /// be told from a baseline that is itself that far off.
+    pub baseline: String,
+    /// The larger radius std of the baseline over its radius (`null` when
+    /// the baseline is the robot file's values).
+    pub baseline_rel_std: Option<f64>,
 }
 
 impl NamedChange {
@@ -173,6 +198,8 @@ impl NamedChange {
             rows: [0, 0],
             refired_s: Vec::new(),
             continues: None,
+            baseline: CONVERGED.into(),
+            baseline_rel_std: None,
         }
     }
 }

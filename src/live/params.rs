@@ -60,6 +60,11 @@ impl Default for LiveParams {
 impl LiveParams {
     /// Checks the values; the message names the bad one.
     pub fn validate(&self) -> Result<(), String> {
+        if let Some(d) = self.domain_id.filter(|d| *d > 232) {
+            return Err(format!(
+                "live.domain_id must be a ROS 2 domain (0 to 232), got {d}"
+            ));
+        }
         if self.queue == 0 {
             return Err("live.queue must be at least 1 message".into());
         }
@@ -150,6 +155,11 @@ mod tests {
             ..LiveParams::default()
         };
         assert!(p.validate().unwrap_err().contains("diagnostics_hz"));
+        let p = LiveParams {
+            domain_id: Some(233),
+            ..LiveParams::default()
+        };
+        assert!(p.validate().unwrap_err().contains("domain_id"));
         assert!(LiveParams::default().validate().is_ok());
     }
 }

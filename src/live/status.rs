@@ -247,6 +247,12 @@ impl StatusBoard {
 
 /// "radius_step right −4.9 mm at 40.0 s": a named change in a line.
 pub fn change_line(c: &NamedChange) -> String {
+    if c.parameter.is_empty() {
+        return format!(
+            "{} at {:.1} s, wheel not told (baseline unconverged)",
+            c.effect, c.onset_s
+        );
+    }
     let unit = crate::effects::EffectKind::from_name(&c.effect)
         .and_then(|k| k.params().iter().find(|p| p.key == c.parameter))
         .map_or("", |p| p.unit);
@@ -344,7 +350,7 @@ mod tests {
         // Multipliers against the nominal mean radius 0.32.
         assert_eq!(
             value("left_wheel_radius_multiplier").as_deref(),
-            Some("0.993750")
+            Some("0.996875")
         );
         assert_eq!(
             value("wheel_separation_multiplier").as_deref(),

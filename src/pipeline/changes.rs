@@ -19,6 +19,7 @@ use crate::diagnose::onset::{
     name_change, NamedChange, OnsetParams, CANDIDATES, FILTER, FILTER_CANDIDATES, MOUNT,
 };
 use crate::diagnose::Measured;
+use crate::effects::change::UNCONVERGED;
 use crate::io::Item;
 use crate::motion::Motion;
 use crate::recording::{GyroSample, WheelSample};
@@ -40,8 +41,9 @@ pub struct ChangeWatch {
     wheels: VecDeque<WheelSample>,
     gyro: VecDeque<GyroSample>,
     motions: VecDeque<Motion>,
-    /// (end of step (s), estimated radii and wheel base (m)).
-    steps: VecDeque<(f64, [f64; 3])>,
+    /// (end of step (s), estimated radii and wheel base (m), the larger
+    /// radius std over its radius).
+    steps: VecDeque<(f64, [f64; 3], f64)>,
     /// Firings (time (s), detector) whose window is not complete yet, in
     /// time order.
     pending: VecDeque<(f64, &'static str)>,
@@ -106,8 +108,9 @@ impl ChangeWatch {
     /// window is now complete, named, in firing order.
     pub fn step(&mut self, e: &Estimate) -> Vec<NamedChange> {
         self.now = self.now.max(e.t);
+        let rel_std = (e.std_r_right / e.r_right).max(e.std_r_left / e.r_left);
         self.steps
-            .push_back((e.t, [e.r_right, e.r_left, e.wheel_base]));
+            .push_back((e.t, [e.r_right, e.r_left, e.wheel_base], rel_std));
         if e.changed {
             let at = self.pending.partition_point(|p| p.0 <= e.t);
             self.pending.insert(at, (e.t, FILTER));
@@ -160,8 +163,10 @@ impl ChangeWatch {
     fn name(&mut self, t: f64, detector: &str) -> NamedChange {
         let start = t - self.p.before_s;
         let mut base = self.robot.clone();
-        if let Some((_, [rr, rl, d])) = self.steps.iter().take_while(|s| s.0 <= start).last() {
+        let mut rel_std = None;
+        if let Some((_, [rr, rl, d], r)) = self.steps.iter().take_while(|s| s.0 <= start).last() {
             (base.r_right, base.r_left, base.wheel_base) = (*rr, *rl, *d);
+            rel_std = Some(*r);
         }
         let measured = Measured {
             wheels: self.wheels.make_contiguous(),
@@ -174,8 +179,9 @@ impl ChangeWatch {
         } else {
             &FILTER_CANDIDATES
         };
-        name_change(&base, &measured, t, candidates, &self.p)
-            .unwrap_or_else(|| NamedChange::undetermined(t))
+        let named = name_change(&base, &measured, t, candidates, &self.p)
+            .unwrap_or_else(|| NamedChange::undetermined(t));
+        against_baseline(named, rel_std, self.p.converged_rel_std)
     }
 
     /// Marks a firing that continues the last change reported: the same
@@ -220,6 +226,8 @@ impl ChangeWatch {
                         candidates: std::mem::take(&mut c.candidates),
                         rows: c.rows,
                         detector: c.detector,
+                        baseline: c.baseline.clone(),
+                        baseline_rel_std: c.baseline_rel_std,
                         ..NamedChange::undetermined(c.time_s)
                     };
                     c.standing.clone()
@@ -257,6 +265,43 @@ impl ChangeWatch {
             self.steps.pop_front();
         }
     }
+}
+
+/// Why a named change names no parameter: its baseline had not converged
+/// (the fitted sizes given as they are).
+pub fn untold(c: &NamedChange) -> String {
+    let how = c.baseline_rel_std.map_or(
+        "no estimate yet, the robot file's values".to_string(),
+        |r| format!("radius std {:.2} % of the radius", 100.0 * r),
+    );
+    let sizes: Vec<String> = c
+        .parameters
+        .iter()
+        .map(|(k, v)| format!("{k} {v:+.6}"))
+        .collect();
+    format!(
+        "wheel not told: the baseline had not converged ({how}); fitted {}",
+        sizes.join(", ")
+    )
+}
+
+/// `c` as named against a baseline whose larger radius std over its radius
+/// is `rel_std` (`None`: no estimate yet, the robot file's values): above
+/// `converged` it has not converged, and a radius step then names no wheel
+/// (its fitted right and left changes stay in `parameters`).
+fn against_baseline(mut c: NamedChange, rel_std: Option<f64>, converged: f64) -> NamedChange {
+    c.baseline_rel_std = rel_std;
+    let settled = rel_std.is_some_and(|r| r <= converged);
+    if settled {
+        return c;
+    }
+    c.baseline = UNCONVERGED.into();
+    if c.effect == "radius_step" {
+        c.parameter = String::new();
+        c.estimate = f64::NAN;
+        c.stderr = f64::NAN;
+    }
+    c
 }
 
 /// The recording's text entries of `changes`: (time (s), text) of every
@@ -298,6 +343,16 @@ pub fn describe(c: &NamedChange) -> String {
             "no candidate lowers BIC by the margin"
         };
         return format!("change at {:.2} s{by}: undetermined ({why})", c.time_s);
+    }
+    if c.parameter.is_empty() {
+        return format!(
+            "change at {:.2} s{by} (onset {:.2} s): {} ({}), ΔBIC {:.1}",
+            c.time_s,
+            c.onset_s,
+            c.effect,
+            untold(c),
+            c.delta_bic
+        );
     }
     let unit = crate::effects::EffectKind::from_name(&c.effect)
         .and_then(|k| k.params().iter().find(|p| p.key == c.parameter))

@@ -195,36 +195,7 @@ impl LiveObserver {
         } else {
             (0.0, 0.0)
         };
-        let [x, y, th] = geom::xyt(&self.pose);
-        let m = msgs::Odometry {
-            header: msgs::Header {
-                stamp: msgs::Time::from_seconds(w.stamp),
-                frame_id: self.frames.0.clone(),
-            },
-            child_frame_id: self.frames.1.clone(),
-            pose: msgs::PoseWithCovariance {
-                pose: msgs::Pose {
-                    position: msgs::Vector3 { x, y, z: 0.0 },
-                    orientation: msgs::Quaternion::from_yaw(th),
-                },
-                covariance: msgs::Covariance([0.0; 36]),
-            },
-            twist: msgs::TwistWithCovariance {
-                twist: msgs::Twist {
-                    linear: msgs::Vector3 {
-                        x: v,
-                        y: 0.0,
-                        z: 0.0,
-                    },
-                    angular: msgs::Vector3 {
-                        x: 0.0,
-                        y: 0.0,
-                        z: wz,
-                    },
-                },
-                covariance: msgs::Covariance([0.0; 36]),
-            },
-        };
+        let m = odometry_msg(w.stamp, &self.pose, (v, wz), &self.frames);
         if self.odometry.publish(m).is_ok() {
             if let Ok(mut b) = self.board.lock() {
                 b.odometry += 1;
@@ -234,6 +205,40 @@ impl LiveObserver {
                 self.wheel_latency_ms.push(a.elapsed().as_secs_f64() * 1e3);
             }
         }
+    }
+}
+
+/// `nav_msgs/Odometry` of `pose` at `stamp` (s) with the body velocity
+/// `(v (m/s), w (rad/s))`, in `frames` (parent, child); covariances zero:
+/// not estimated.
+fn odometry_msg(
+    stamp: f64,
+    pose: &Pose2,
+    (v, w): (f64, f64),
+    frames: &(String, String),
+) -> msgs::Odometry {
+    let [x, y, th] = geom::xyt(pose);
+    let vector = |x, z| msgs::Vector3 { x, y: 0.0, z };
+    msgs::Odometry {
+        header: msgs::Header {
+            stamp: msgs::Time::from_seconds(stamp),
+            frame_id: frames.0.clone(),
+        },
+        child_frame_id: frames.1.clone(),
+        pose: msgs::PoseWithCovariance {
+            pose: msgs::Pose {
+                position: msgs::Vector3 { x, y, z: 0.0 },
+                orientation: msgs::Quaternion::from_yaw(th),
+            },
+            covariance: msgs::Covariance([0.0; 36]),
+        },
+        twist: msgs::TwistWithCovariance {
+            twist: msgs::Twist {
+                linear: vector(v, 0.0),
+                angular: vector(0.0, w),
+            },
+            covariance: msgs::Covariance([0.0; 36]),
+        },
     }
 }
 
