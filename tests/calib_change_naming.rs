@@ -29,6 +29,16 @@ fn run(dir: &Path, effect: &str) -> (serde_json::Value, String) {
     }
     let s = odocal(&args);
     assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let json = calibrate(&bag, &out);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["changes"], summary["changes"]);
+    let csv = std::fs::read_to_string(out.join("calibration.csv")).unwrap();
+    (json, csv)
+}
+
+/// `odocal calibrate --json` of `bag` into `out`.
+fn calibrate(bag: &Path, out: &Path) -> serde_json::Value {
     let c = odocal(&[
         "calibrate",
         "--input",
@@ -38,12 +48,7 @@ fn run(dir: &Path, effect: &str) -> (serde_json::Value, String) {
         "--json",
     ]);
     assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
-    let json: serde_json::Value = serde_json::from_slice(&c.stdout).unwrap();
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(json["changes"], summary["changes"]);
-    let csv = std::fs::read_to_string(out.join("calibration.csv")).unwrap();
-    (json, csv)
+    serde_json::from_slice(&c.stdout).unwrap()
 }
 
 /// The `change` column's non-empty entries, with their row's time.
@@ -122,16 +127,7 @@ fn a_step_named_against_an_unconverged_filter_names_no_wheel() {
         bag.to_str().unwrap(),
     ]);
     assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
-    let c = odocal(&[
-        "calibrate",
-        "--input",
-        bag.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
-    let json: serde_json::Value = serde_json::from_slice(&c.stdout).unwrap();
+    let json = calibrate(&bag, &out);
     let changes = json["changes"].as_array().expect("the detector fired");
     let steps: Vec<&serde_json::Value> = changes
         .iter()
