@@ -416,12 +416,14 @@ def discovery(args):
     with open(cfg, "w") as f:
         f.write("[live]\nlocalhost_only = true\n")
     out = {"peer_joins_s": [], "odocal_joins_s": []}
+    import tempfile
+    scratch = tempfile.mkdtemp(prefix="odocal-discovery-")
     for k in range(args.trials):
         for order in ("peer_joins_s", "odocal_joins_s"):
             d = args.domain + 2 * k + (order == "odocal_joins_s")
             env = dict(os.environ, ROS_DOMAIN_ID=str(d))
             start = lambda: subprocess.Popen(
-                [args.odocal, "live", "--out", os.devnull + ".d", "--config", cfg], env=env,
+                [args.odocal, "live", "--out", scratch, "--config", cfg], env=env,
                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
             node = start() if order == "peer_joins_s" else None
             if node:

@@ -131,7 +131,7 @@ pub fn play<'o>(
         if !opts.looped || played.messages == 0 {
             return Ok(finish(played, clock));
         }
-        // The next round starts one mean message gap after this one ended.
+        // The next round starts 1 ms after this one ended (stamps stay increasing).
         shift_ns += round + 1_000_000;
     }
 }
