@@ -26,6 +26,7 @@ or --only):
   table-ii-scans    [Farina, Table II] on simulated scans through ICP, 30 runs
                     (slow: ~1.5 min; its time per step is not compared)
   blind-suite       the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
+  independent-laws  clean bags rewritten by tools/rewrite_effects.py, diagnosed (slow: ~5 min)
   fleet             a simulated fleet, 12 chairs over 10 days (slow: ~3 min)
 
 CSM's figures are recorded measurements (tools/figures_csm.json: Censi's
@@ -67,6 +68,7 @@ BLOCKS = {
     "real-firings": (changes.block_real_firings, False),
     "table-ii-scans": (calibration.block_table_ii_scans, True),
     "blind-suite": (diagnosis.block_blind_suite, True),
+    "independent-laws": (diagnosis.block_independent_laws, True),
     "fleet": (calibration.block_fleet, True),
 }
 

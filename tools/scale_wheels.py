@@ -18,9 +18,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from mcap.reader import make_reader
-from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_typestore
+
+from mcap_rewrite import rewrite
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 
@@ -49,27 +49,13 @@ def main():
         sys.exit("--scale must be > 0")
     joints = set(a.joints.split(",")) if a.joints else None
     store = get_typestore(Stores.ROS2_HUMBLE)
-    changed = 0
-    with open(a.src, "rb") as f, open(a.dst, "wb") as out:
-        w = Writer(out, compression=CompressionType.ZSTD)
-        w.start("ros2", "scale_wheels")
-        schemas, channels = {}, {}
-        for schema, channel, msg in make_reader(f).iter_messages(log_time_order=True):
-            if schema is not None and schema.id not in schemas:
-                schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
-            if channel.id not in channels:
-                channels[channel.id] = w.register_channel(
-                    channel.topic,
-                    channel.message_encoding,
-                    schemas.get(channel.schema_id, 0),
-                    channel.metadata,
-                )
-            data = msg.data
-            if schema is not None and schema.name == JOINT_STATE:
-                data = scaled(store, data, a.scale, joints)
-                changed += 1
-            w.add_message(channels[channel.id], msg.log_time, data, msg.publish_time, msg.sequence)
-        w.finish()
+
+    def change(kind, topic, log_time, data):
+        if kind != JOINT_STATE:
+            return None
+        return log_time, scaled(store, data, a.scale, joints)
+
+    changed = rewrite(a.src, a.dst, "scale_wheels", change)
     print(f"{changed} JointState messages scaled by 1/{a.scale}", file=sys.stderr)
 
 

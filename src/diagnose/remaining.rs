@@ -132,16 +132,11 @@ fn rows(all: Part, x: &Departures, g: usize) -> Rows {
     let mut push = |t0: f64, t1: f64, s: f64| {
         let tm = 0.5 * (t0 + t1);
         let (v, w) = all.replay.body(&nominal, t0, t1);
-        let (a0, b0) = all.replay.angles_at(t0);
-        let (a1, b1) = all.replay.angles_at(t1);
-        let (pr, pl) = (0.5 * (a0 + a1), 0.5 * (b0 + b1));
-        let (wr, wl) = ((a1 - a0) / (t1 - t0), (b1 - b0) / (t1 - t0));
         r.t.push(tm);
         r.sigma.push(s);
         r.speed.push(v);
         r.turn.push(w);
-        r.wheel
-            .push([wr * pr.cos(), wr * pr.sin(), wl * pl.cos(), wl * pl.sin()]);
+        r.wheel.push(wheel_regressors(all.replay, t0, t1));
     };
     if g < 3 {
         for row in all.icp {
@@ -153,6 +148,17 @@ fn rows(all: Part, x: &Departures, g: usize) -> Rows {
         }
     }
     r
+}
+
+/// The periodic structure's regressors over `[t0, t1]`: each wheel's mean
+/// rate times the cosine and sine of its mid-interval angle, `[ω_R cos φ_R,
+/// ω_R sin φ_R, ω_L cos φ_L, ω_L sin φ_L]` (rad/s).
+pub fn wheel_regressors(replay: &super::model::Replay, t0: f64, t1: f64) -> [f64; 4] {
+    let (a0, b0) = replay.angles_at(t0);
+    let (a1, b1) = replay.angles_at(t1);
+    let (pr, pl) = (0.5 * (a0 + a1), 0.5 * (b0 + b1));
+    let (wr, wl) = ((a1 - a0) / (t1 - t0), (b1 - b0) / (t1 - t0));
+    [wr * pr.cos(), wr * pr.sin(), wl * pl.cos(), wl * pl.sin()]
 }
 
 /// Weighted least squares of `y` on the columns of `x` (rows weighted by

@@ -2,14 +2,16 @@
 //! a training and a held-out part, forward selection confirmed on the
 //! held-out part, then the gain, the structure tests and the verdict.
 
-use super::data::{drop_outliers, gyro_rows, icp_rows, merge_motions, GyroRow, IcpRow, Part};
+use super::data::{
+    drop_outliers, gyro_rows, icp_rows, merge_motions, GyroRow, IcpRow, Part, GROUPS,
+};
 use super::diagnosis::{Cause, Diagnosis, Fault, Remaining, Verdict};
 use super::faults;
 use super::fit::Fit;
 use super::floor::{self, FloorSettings};
 use super::gain::heldout_gain;
 use super::model::Replay;
-use super::remaining::{remaining_tests, RemainingTest, PERIODIC};
+use super::remaining::{remaining_tests, wheel_regressors, RemainingTest, PERIODIC};
 use super::residuals::{stream_stats, structure};
 use super::select::{forward, SelectSettings, Selection};
 use super::series::series;
@@ -50,7 +52,70 @@ pub fn run(
         return Ok(pass.diagnosis(&replay, m, p, robot, found));
     }
     let pass = select_twice(&rows, &icp0, &gyro0, p)?;
+    if let Some((pass, fault)) = out_of_round(&rows, &pass, &icp0, &gyro0, robot, p) {
+        found.push(fault);
+        return Ok(pass.diagnosis(&replay, m, p, robot, found));
+    }
     Ok(pass.diagnosis(&replay, m, p, robot, found))
+}
+
+/// An out-of-round wheel, looked for in what the selected model leaves:
+/// when a stream's residuals follow the wheel angles once per revolution,
+/// the table effects are selected again on the rows with that periodic part
+/// taken out of every stream (each by its own fit), so that no constant
+/// effect stands in for part of it (a wobble seen through the turns the run
+/// made reads as turn slip or a wheel base). Returns the pass on the
+/// corrected rows and the fault, sized from the stream that shows it most
+/// clearly.
+fn out_of_round(
+    r: &Rows,
+    pass: &Pass,
+    icp0: &[IcpRow],
+    gyro0: &[GyroRow],
+    robot: &RobotConfig,
+    p: &DiagnoseParams,
+) -> Option<(Pass, Fault)> {
+    let all = Part {
+        replay: r.replay,
+        icp: &pass.icp,
+        gyro: &pass.gyro,
+    };
+    let xm = Departures::of(&pass.model().effects);
+    let tests = structure_tests(all, &xm, robot, p);
+    let mut faults = Vec::new();
+    leftover(&tests, robot, &mut faults);
+    let fault = faults.pop()?;
+    let periodic: Vec<Option<[f64; 4]>> = GROUPS
+        .iter()
+        .map(|g| {
+            tests
+                .iter()
+                .find(|t| t.found.stream == *g && t.found.structure == PERIODIC)
+                .and_then(|t| t.coefficients.get(1..5)?.try_into().ok())
+        })
+        .collect();
+    let wobble = |t0: f64, t1: f64, g: usize| {
+        periodic[g].map_or(0.0, |b| {
+            let x = wheel_regressors(r.replay, t0, t1);
+            (0..4).map(|j| b[j] * x[j]).sum::<f64>()
+        })
+    };
+    let icp: Vec<IcpRow> = icp0
+        .iter()
+        .map(|row| IcpRow {
+            z: std::array::from_fn(|g| row.z[g] - wobble(row.t0, row.t1, g)),
+            ..*row
+        })
+        .collect();
+    let gyro: Vec<GyroRow> = gyro0
+        .iter()
+        .map(|row| GyroRow {
+            w: row.w - wobble(row.t0, row.t1, 3),
+            ..*row
+        })
+        .collect();
+    let pass = select_twice(r, &icp, &gyro, p).ok()?;
+    Some((pass, fault))
 }
 
 /// What every selection pass shares: the replay, the wheel span, the time
@@ -222,14 +287,7 @@ impl Pass {
         };
         faults.extend(stability::latency_change(all, &xm, &st));
         faults.extend(stability::laser_knock(all, model, m.motions, &st));
-        let tests = remaining_tests(
-            all,
-            &xm,
-            p.structure_alpha,
-            p.structure_lag,
-            &p.floors,
-            robot,
-        );
+        let tests = structure_tests(all, &xm, robot, p);
         let remaining = leftover(&tests, robot, &mut faults);
         let verdict = verdict(&causes, &remaining, &faults);
         let all_b = all.physical(&nominal);
@@ -258,6 +316,17 @@ impl Pass {
             series: series(replay, icp, gyro, &all_b, &all_a, split.time),
         }
     }
+}
+
+/// Every structure test of what the model `x` leaves in `all`, at the
+/// diagnosis's settings.
+fn structure_tests(
+    all: Part,
+    x: &Departures,
+    robot: &RobotConfig,
+    p: &DiagnoseParams,
+) -> Vec<RemainingTest> {
+    remaining_tests(all, x, p.structure_alpha, p.structure_lag, &p.floors, robot)
 }
 
 /// The significant structures the model leaves; a periodic one in the

@@ -134,6 +134,18 @@ PAGES = {
         "counting as out.",
         "blind-diagnosis-suite",
     ),
+    "independent-laws": (
+        "The diagnosis against laws it does not share",
+        "`python3 tools/figures.py --write --only independent-laws`: for each scenario a clean "
+        "150 s bag (`odocal simulate --scenario S --seed N --duration 150`, seeds 301–304), "
+        "rewritten by `tools/rewrite_effects.py LAW` (Python `mcap` and `rosbags`, its own "
+        "arithmetic: nothing of odocal's effect laws), then `odocal diagnose --measured BAG "
+        "--json` on the nominal chair. ✓ = a table effect named alone with its size within "
+        "20 %; a catalogued fault named at its size within 20 % with no table effect beside it; "
+        "for a departure outside the table, no table effect named; for the clean bag, nothing "
+        "named. Each cell gives the verdict and everything named.",
+        "blind-diagnosis-suite",
+    ),
     "fleet": (
         "A simulated fleet",
         "`odocal experiment fleet --runs 12 --seed 7 --settings big.toml` with `days = 10`: "
