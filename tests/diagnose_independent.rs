@@ -3,8 +3,9 @@
 //! arithmetic, nothing of odocal's `effects::Departures`), then `odocal
 //! diagnose` on the rewritten bag. Table effects are named with their sizes
 //! within 20 %; a fault outside the table is named as that fault and never
-//! as a table effect. Each case's assertion is also run on the clean bag,
-//! where it must fail.
+//! as a table effect; `calibrate`'s online mounting check finds a laser
+//! shifted where `/tf_static` does not say. Each case's assertion is also
+//! run on the clean bag, where it must fail.
 
 use crate::support::{odocal, ok_json, python_tool, python_with, scratch};
 use serde_json::Value;
@@ -119,4 +120,47 @@ fn effects_written_by_an_independent_tool_are_named_and_faults_stay_faults() {
     let d = rewritten(&py, &dir, &bag, "gyro_scale:0.02");
     assert!(reported(&d), "{} {}", d["verdict"], d["causes"]);
     assert!(!reported(&none), "the clean bag leaves nothing to report");
+}
+
+#[test]
+fn the_online_check_finds_a_laser_two_centimetres_from_its_stated_mounting() {
+    let Some(py) = python_with("diagnose_independent_online", &["mcap", "rosbags"]) else {
+        return;
+    };
+    let dir = scratch("diagnose_independent_online");
+    let bag = clean(&dir);
+    let calibrate = |bag: &Path| {
+        ok_json(&odocal(&[
+            "calibrate",
+            "--input",
+            bag.to_str().unwrap(),
+            "--out",
+            dir.join("out").to_str().unwrap(),
+            "--json",
+        ]))
+    };
+    // The chair's laser sits at x −0.45 m, y 0 (turned by π); the rewritten
+    // /tf_static says 2 cm to the right of that, or 2 cm behind it.
+    let found = |d: &Value| {
+        let l = &d["laser"];
+        let (x, y) = (
+            l["x"]["value"].as_f64().unwrap(),
+            l["y"]["value"].as_f64().unwrap(),
+        );
+        l["contradicted"] == true && (x + 0.45).abs() < 0.005 && y.abs() < 0.005
+    };
+    for law in ["mounting:0,0.02,0", "mounting:0.02,0,0"] {
+        let dst = dir.join(format!("{}.mcap", law.replace([':', ','], "_")));
+        python_tool(
+            &py,
+            "rewrite_effects.py",
+            &[bag.to_str().unwrap(), dst.to_str().unwrap(), law],
+        );
+        let d = calibrate(&dst);
+        assert!(found(&d), "{law}: {}", d["laser"]);
+    }
+    // Negative control: the clean bag's stated mounting is kept.
+    let d = calibrate(&bag);
+    assert_eq!(d["laser"]["contradicted"], false, "{}", d["laser"]);
+    assert!(!found(&d));
 }
