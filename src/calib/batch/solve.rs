@@ -302,4 +302,30 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn the_fit_returns_from_a_far_start_that_needs_damping() {
+        // Radii and wheel base 30 % off, the laser 0.3 m and a radian away:
+        // undamped steps overshoot here, the damped ones still land on the
+        // truth.
+        let ivs = exact_intervals();
+        let d = data(&ivs, Matrix3::identity(), [true; 6]);
+        let p0 = [0.13, 0.077, 0.65, -0.1, 0.35, 1.3];
+        let f = fit(&d, &p0, 200);
+        for (g, w) in f.p.iter().zip(TRUTH) {
+            assert!((g - w).abs() < 1e-8, "{:?}", f.p);
+        }
+    }
+
+    #[test]
+    fn a_start_where_the_model_is_undefined_comes_back_as_it_is() {
+        // A wheel base of 0 turns every arc by ±∞: no residual, no step;
+        // the fit gives up at once instead of searching forever.
+        let ivs = exact_intervals();
+        let d = data(&ivs, Matrix3::identity(), [true; 6]);
+        let p0 = [0.1, 0.11, 0.0, 0.2, 0.05, 0.3];
+        let f = fit(&d, &p0, 10);
+        assert_eq!(f.p, p0);
+        assert!(f.chi2.is_nan());
+    }
 }
