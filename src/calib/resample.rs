@@ -340,4 +340,51 @@ mod tests {
             vec![0, 0, 1, 1, 2, 2, 3, 3]
         );
     }
+
+    #[test]
+    fn residual_draws_the_fractions_in_proportion_after_the_whole_copies() {
+        // n = 3 from 0.5, 0.3, 0.2: n·w = 1.5, 0.9, 0.6, so one whole copy of
+        // particle 0, then two draws from the fractions 0.5, 0.9, 0.6
+        // (normalised 0.25, 0.45, 0.30). Every draw holds particle 0 at least
+        // once; the counts' means are n·w (the scheme is unbiased), within
+        // 0.05 of them over 4000 draws (five standard errors: each count's
+        // standard deviation is at most √(2·0.45·0.55) = 0.70).
+        let w = [0.5, 0.3, 0.2];
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(17);
+        let mut r = Resampler::new();
+        let mut out = vec![];
+        let mut total = [0usize; 3];
+        for _ in 0..4000 {
+            r.resample(Scheme::Residual, &w, 3, &mut rng, &mut out);
+            assert_eq!(out.len(), 3);
+            assert!(out.contains(&0), "{out:?}");
+            out.iter().for_each(|&i| total[i] += 1);
+        }
+        for (i, want) in [1.5, 0.9, 0.6].into_iter().enumerate() {
+            let mean = total[i] as f64 / 4000.0;
+            assert!((mean - want).abs() < 0.05, "{i}: {mean} vs {want}");
+        }
+    }
+
+    #[test]
+    fn residual_with_only_whole_copies_draws_no_random_numbers() {
+        // n·w = 2 for each of four equal weights: the copies are the whole
+        // answer and the generator is left as it was.
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(23);
+        let mut untouched = rng.clone();
+        let out = resample(Scheme::Residual, &[0.25; 4], 8, &mut rng);
+        assert_eq!(out, vec![0, 0, 1, 1, 2, 2, 3, 3]);
+        assert_eq!(rng.next_u64(), untouched.next_u64());
+    }
+
+    #[test]
+    fn residual_without_fractions_draws_the_rest_from_the_weights() {
+        // Weights summing to one half (outside the contract) with n·w whole:
+        // two copies of particle 1 leave two to draw and no fraction to draw
+        // them from; they come from the weights, so never a particle of
+        // weight 0.
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(29);
+        let out = resample(Scheme::Residual, &[0.0, 0.5, 0.0], 4, &mut rng);
+        assert_eq!(out, vec![1, 1, 1, 1]);
+    }
 }

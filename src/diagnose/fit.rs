@@ -257,3 +257,231 @@ pub fn wald(f: &Fit, index: usize) -> f64 {
         0.0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::data::{GyroRow, IcpRow};
+    use crate::diagnose::model::Replay;
+    use crate::recording::WheelSample;
+    use crate::robot::RobotConfig;
+
+    /// A robot standing still for 10 s (wheel samples at 10 Hz).
+    fn standing() -> Replay {
+        let wheels: Vec<WheelSample> = (0..=100)
+            .map(|i| WheelSample {
+                stamp: i as f64 / 10.0,
+                left: 0.0,
+                right: 0.0,
+            })
+            .collect();
+        Replay::new(&RobotConfig::default(), &wheels, 0.0, 0.0)
+    }
+
+    /// Five one-second gyro windows reading 0.01, 0.03, 0.02, 0.04, 0 rad/s
+    /// with σ 0.01: mean 0.02, squared deviations summing to 1e-3.
+    fn gyro_rows() -> Vec<GyroRow> {
+        [0.01, 0.03, 0.02, 0.04, 0.0]
+            .iter()
+            .enumerate()
+            .map(|(i, &w)| GyroRow {
+                t0: i as f64,
+                t1: i as f64 + 1.0,
+                w,
+                sigma: 0.01,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn bic_and_scales_by_hand() {
+        // 3 parameters over 7 rows: 3 ln 7, plus 2 ln(2/2) + 4 ln(8/4) +
+        // 1 ln(1/1); the empty group adds nothing.
+        let b = bic(&[2.0, 8.0, 5.0, 1.0], &[2, 4, 0, 1], 3);
+        assert!(
+            (b - (3.0 * 7f64.ln() + 4.0 * 2f64.ln())).abs() < 1e-12,
+            "{b}"
+        );
+        // No rows at all: no penalty, no term.
+        assert_eq!(bic(&[0.0; 4], &[0; 4], 2), 0.0);
+        // √(rss/n) per group, 1 for an empty one, never below 1e-9.
+        let s = scales(&[10.0, 3.0, 8.0, 0.0], &[5, 0, 2, 4]);
+        assert!((s[0] - 2f64.sqrt()).abs() < 1e-15 && (s[2] - 2.0).abs() < 1e-15);
+        assert_eq!((s[1], s[3]), (1.0, 1e-9));
+    }
+
+    #[test]
+    fn a_gyro_bias_of_a_robot_standing_still_by_hand() {
+        // The model predicts the bias alone: least squares gives the mean
+        // 0.02, normalised residuals (−1, 1, 0, 2, −2) with RSS 10, σ scale
+        // √(10/5), standard error σ·scale/√5 = √(4e-5), Wald 0.02²/4e-5 = 10
+        // and BIC 5 ln(10/5) + 1·ln 5. The nominal model has RSS
+        // 1 + 9 + 4 + 16 + 0 = 30 and BIC 5 ln 6.
+        let replay = standing();
+        let gyro = gyro_rows();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        for rounds in [1, 2] {
+            let f = fit(
+                part,
+                &[Effect::GyroBias { bias: 0.0 }],
+                [1.0; 4],
+                50,
+                rounds,
+            );
+            let Effect::GyroBias { bias } = f.effects[0] else {
+                panic!("{:?}", f.effects)
+            };
+            assert!((bias - 0.02).abs() < 1e-9, "{bias}");
+            assert!((f.rss[3] - 10.0).abs() < 1e-6, "{:?}", f.rss);
+            assert_eq!(&f.rss[..3], &[0.0; 3]);
+            assert!((f.scale[3] - 2f64.sqrt()).abs() < 1e-7, "{:?}", f.scale);
+            assert_eq!(&f.scale[..3], &[1.0; 3]);
+            assert!(
+                (f.stderr[0][0] - 4e-5f64.sqrt()).abs() < 1e-9,
+                "{:?}",
+                f.stderr
+            );
+            assert!((f.cov[(0, 0)] - 4e-5).abs() < 1e-11, "{}", f.cov);
+            assert!(
+                (f.bic - (5.0 * 2f64.ln() + 5f64.ln())).abs() < 1e-6,
+                "{}",
+                f.bic
+            );
+            assert!((wald(&f, 0) - 10.0).abs() < 1e-5, "{}", wald(&f, 0));
+            assert!(f.identifiable);
+        }
+        let nominal = fit(part, &[], [1.0; 4], 50, 1);
+        assert!(nominal.effects.is_empty() && nominal.cov.is_empty());
+        assert!((nominal.rss[3] - 30.0).abs() < 1e-9, "{:?}", nominal.rss);
+        assert!(
+            (nominal.bic - 5.0 * 6f64.ln()).abs() < 1e-9,
+            "{}",
+            nominal.bic
+        );
+        assert!(nominal.identifiable);
+    }
+
+    /// Wheel rates (right, left; rad/s) over 0–10 s and 10–20 s, sampled at
+    /// 100 Hz on the default robot (radii 0.32 m, wheel base 0.65 m).
+    fn drive(first: (f64, f64), second: (f64, f64)) -> Replay {
+        let angle = |rate: (f64, f64), t: f64| {
+            let (a, b) = (rate.0 * t.min(10.0), rate.1 * (t - 10.0).max(0.0));
+            a + b
+        };
+        let wheels: Vec<WheelSample> = (0..=2000)
+            .map(|i| {
+                let t = i as f64 / 100.0;
+                WheelSample {
+                    stamp: t,
+                    right: angle((first.0, second.0), t),
+                    left: angle((first.1, second.1), t),
+                }
+            })
+            .collect();
+        Replay::new(&RobotConfig::default(), &wheels, 0.0, 0.0)
+    }
+
+    /// ICP rows over half seconds and gyro rows over seconds of [`drive`]
+    /// with radii 0.32·(1 + scale) and a gyro bias (rad/s): v and ω from the
+    /// wheels, the arc's chord over the half second.
+    fn measured(
+        first: (f64, f64),
+        second: (f64, f64),
+        scale: (f64, f64),
+        bias: f64,
+    ) -> (Vec<IcpRow>, Vec<GyroRow>) {
+        let (rr, rl, d) = (0.32 * (1.0 + scale.0), 0.32 * (1.0 + scale.1), 0.65);
+        let rates = |t: f64| if t < 10.0 { first } else { second };
+        let body = |t: f64| {
+            let (wr, wl) = rates(t);
+            (0.5 * (wr * rr + wl * rl), (wr * rr - wl * rl) / d)
+        };
+        let icp = (0..40)
+            .map(|k| {
+                let (t0, dt) = (0.5 * k as f64, 0.5);
+                let (v, w) = body(t0);
+                let (x, y) = if w == 0.0 {
+                    (v * dt, 0.0)
+                } else {
+                    (v / w * (w * dt).sin(), v / w * (1.0 - (w * dt).cos()))
+                };
+                IcpRow {
+                    t0,
+                    t1: t0 + dt,
+                    z: [x / dt, y / dt, w],
+                    sigma: [0.01, 0.01, 0.004],
+                }
+            })
+            .collect();
+        let gyro = (0..20)
+            .map(|k| GyroRow {
+                t0: k as f64,
+                t1: k as f64 + 1.0,
+                w: body(k as f64).1 + bias,
+                sigma: 0.1,
+            })
+            .collect();
+        (icp, gyro)
+    }
+
+    #[test]
+    fn radius_scales_and_a_gyro_bias_are_recovered_from_two_curves() {
+        let (first, second) = ((4.0, 2.0), (2.0, 4.0));
+        let replay = drive(first, second);
+        let (icp, gyro) = measured(first, second, (0.02, -0.01), 0.005);
+        let part = Part {
+            replay: &replay,
+            icp: &icp,
+            gyro: &gyro,
+        };
+        let start = [
+            Effect::RadiusScale {
+                right: 0.0,
+                left: 0.0,
+            },
+            Effect::GyroBias { bias: 0.0 },
+        ];
+        for rounds in [1, 2] {
+            let f = fit(part, &start, [1.0; 4], 50, rounds);
+            let want = [
+                Effect::RadiusScale {
+                    right: 0.02,
+                    left: -0.01,
+                },
+                Effect::GyroBias { bias: 0.005 },
+            ];
+            for (got, want) in f.effects.iter().zip(&want) {
+                for (g, w) in got.values().iter().zip(want.values()) {
+                    assert!((g - w).abs() < 1e-7, "{:?}", f.effects);
+                }
+            }
+            assert!(f.identifiable);
+            assert_eq!(f.stderr.iter().map(Vec::len).collect::<Vec<_>>(), [2, 1]);
+        }
+    }
+
+    #[test]
+    fn a_wheel_base_scale_is_not_identifiable_on_a_straight_drive() {
+        // Both wheels alike: no turn, so the wheel base changes nothing.
+        let (first, second) = ((3.0, 3.0), (3.0, 3.0));
+        let replay = drive(first, second);
+        let (icp, _) = measured(first, second, (0.0, 0.0), 0.0);
+        let part = Part {
+            replay: &replay,
+            icp: &icp,
+            gyro: &[],
+        };
+        let f = fit(
+            part,
+            &[Effect::WheelBaseScale { scale: 0.0 }],
+            [1.0; 4],
+            20,
+            1,
+        );
+        assert!(!f.identifiable);
+    }
+}

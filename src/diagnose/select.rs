@@ -268,3 +268,162 @@ fn prune(
         .collect();
     (current, costs, nested)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::data::GyroRow;
+    use crate::diagnose::model::Replay;
+    use crate::recording::WheelSample;
+    use crate::robot::RobotConfig;
+    use nalgebra::DMatrix;
+
+    #[test]
+    fn physical_means_within_the_table_and_turn_slip_only_widening() {
+        let scale = |right, left| Effect::RadiusScale { right, left };
+        // Radius scales may reach ±0.5, on the bound included.
+        assert!(physical(&scale(0.4, -0.4)));
+        assert!(physical(&scale(0.5, -0.5)));
+        assert!(!physical(&scale(0.6, 0.0)));
+        assert!(!physical(&scale(0.0, -0.51)));
+        // Latency is non-negative in the table, yet either sign is allowed.
+        assert!(physical(&Effect::Latency { delay: -0.3 }));
+        assert!(!physical(&Effect::Latency { delay: 1.2 }));
+        assert!(physical(&Effect::TurnSlip { k: 0.1 }));
+        assert!(physical(&Effect::TurnSlip { k: 0.0 }));
+        assert!(!physical(&Effect::TurnSlip { k: -0.1 }));
+    }
+
+    #[test]
+    fn named_gives_every_parameter_and_the_errors_of_the_fitted_ones() {
+        // A radius step: its time is searched (no standard error), its two
+        // sizes fitted.
+        let f = Fit {
+            effects: vec![
+                Effect::GyroBias { bias: 0.01 },
+                Effect::RadiusStep {
+                    time: 40.0,
+                    right: 0.003,
+                    left: -0.002,
+                },
+            ],
+            stderr: vec![vec![0.001], vec![0.0004, 0.0005]],
+            cov: DMatrix::zeros(3, 3),
+            rss: [0.0; 4],
+            scale: [1.0; 4],
+            bic: 0.0,
+            identifiable: true,
+        };
+        let (p, s) = named(&f, 1);
+        let want_p: BTreeMap<String, f64> = [("time", 40.0), ("right", 0.003), ("left", -0.002)]
+            .iter()
+            .map(|&(k, v)| (k.to_string(), v))
+            .collect();
+        let want_s: BTreeMap<String, f64> = [("right", 0.0004), ("left", 0.0005)]
+            .iter()
+            .map(|&(k, v)| (k.to_string(), v))
+            .collect();
+        assert_eq!((p, s), (want_p, want_s));
+    }
+
+    /// A robot standing still for 10 s, and five one-second gyro windows
+    /// reading 0.01, 0.03, 0.02, 0.04, 0 rad/s (σ 0.01).
+    fn standing_with_a_biased_gyro() -> (Replay, Vec<GyroRow>) {
+        let wheels: Vec<WheelSample> = (0..=100)
+            .map(|i| WheelSample {
+                stamp: i as f64 / 10.0,
+                left: 0.0,
+                right: 0.0,
+            })
+            .collect();
+        let gyro = [0.01, 0.03, 0.02, 0.04, 0.0]
+            .iter()
+            .enumerate()
+            .map(|(i, &w)| GyroRow {
+                t0: i as f64,
+                t1: i as f64 + 1.0,
+                w,
+                sigma: 0.01,
+            })
+            .collect();
+        (
+            Replay::new(&RobotConfig::default(), &wheels, 0.0, 0.0),
+            gyro,
+        )
+    }
+
+    fn settings(bic_margin: f64, alpha: f64, max_effects: usize) -> SelectSettings {
+        SelectSettings {
+            candidates: vec![],
+            bic_margin,
+            alpha,
+            max_effects,
+            max_iter: 50,
+            step_range: (1.0, 9.0),
+            step_min_rows: 2,
+            max_steps: 2,
+        }
+    }
+
+    #[test]
+    fn a_gyro_bias_enters_when_it_pays_its_margin_and_is_significant() {
+        // Bias fitted (the mean 0.02): RSS 30 → 10 over 5 rows, so ΔBIC =
+        // 5 ln 6 − (5 ln 2 + ln 5) = 5 ln 3 − ln 5 = 3.884, Wald 10 and
+        // p = P(χ²₁ > 10) = erfc(√5) = 0.001565. A wheel-base scale cannot
+        // be seen on a robot that stands still and never enters; the bias
+        // enters once.
+        let (replay, gyro) = standing_with_a_biased_gyro();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let usable = ["wheel_base_scale", "gyro_bias"].map(String::from);
+        let sel = forward(part, &usable, &settings(2.0, 0.05, 3));
+        assert_eq!(sel.model.effects.len(), 1, "{:?}", sel.model.effects);
+        assert_eq!(sel.model.effects[0].name(), "gyro_bias");
+        assert_eq!(sel.steps.len(), 1);
+        assert_eq!(sel.delta_bic.len(), 1);
+        let d = 5.0 * 3f64.ln() - 5f64.ln();
+        assert!((sel.delta_bic[0] - d).abs() < 1e-6, "{:?}", sel.delta_bic);
+        assert!(sel.nominal.effects.is_empty());
+        // Round 0 tried both, round 1 only the wheel-base scale.
+        let tried: Vec<(usize, &str)> = sel
+            .tried
+            .iter()
+            .map(|c| (c.round, c.effect.as_str()))
+            .collect();
+        assert_eq!(
+            tried,
+            [
+                (0, "wheel_base_scale"),
+                (0, "gyro_bias"),
+                (1, "wheel_base_scale")
+            ]
+        );
+        let bias = &sel.tried[1];
+        assert!((bias.delta_bic - d).abs() < 1e-6, "{bias:?}");
+        // The χ² tail is Wilson–Hilferty's approximation: 0.00175 here.
+        assert!(
+            (bias.p_value / 0.0015654022580025488 - 1.0).abs() < 0.15,
+            "{bias:?}"
+        );
+        assert!((bias.parameters["bias"] - 0.02).abs() < 1e-9, "{bias:?}");
+        assert!(
+            (bias.stderr["bias"] - 4e-5f64.sqrt()).abs() < 1e-9,
+            "{bias:?}"
+        );
+        assert!(bias.identifiable && bias.physical);
+        assert!(!sel.tried[0].identifiable, "{:?}", sel.tried[0]);
+        // A margin above 3.88, a level below the p-value or no round at all: the
+        // nominal model stays.
+        for s in [
+            settings(4.0, 0.05, 3),
+            settings(2.0, 1e-3, 3),
+            settings(2.0, 0.05, 0),
+        ] {
+            let sel = forward(part, &usable, &s);
+            assert!(sel.model.effects.is_empty() && sel.delta_bic.is_empty());
+        }
+    }
+}

@@ -350,4 +350,58 @@ mod tests {
         assert!(near(&aligned.estimate[2], &reference[2], 1e-9));
         assert!(near(&aligned.reference[2], &reference[2], 0.0 + 1e-15));
     }
+
+    #[test]
+    fn origin_by_heading_uses_the_chord_at_the_heading_distance_along_a_bent_path() {
+        // The reference goes 0.6 m east then 0.6 m north (1.2 m along at
+        // index 2, the first pair at least 1 m along), then 1.4 m north. The
+        // estimate is the reference turned a quarter left and shifted by (5,
+        // 5) at indices 0 and 2 only: index 1 is off by 0.3 m and index 3 has
+        // drifted. Its chord to index 2, (−0.6, 0.6), turned a quarter right
+        // is the reference's, (0.6, 0.6): the alignment is a quarter turn
+        // right that puts estimate 0 on (2, −1) and estimate 2 on (2.6, −0.4);
+        // estimate 1, (0.3, 0.6) from estimate 0, lands at (2.6, −1.3).
+        let reference = [
+            pose(2.0, -1.0, 0.0, 0.0),
+            pose(2.6, -1.0, 0.0, 0.0),
+            pose(2.6, -0.4, 0.0, 0.0),
+            pose(2.6, 1.0, 0.0, 0.0),
+        ];
+        let estimate = [
+            pose(6.0, 7.0, 0.0, 0.0),
+            pose(6.3, 7.6, 0.0, 0.0),
+            pose(5.4, 7.6, 0.0, 0.0),
+            pose(4.5, 7.0, 0.0, 0.0),
+        ];
+        let s = origin_by_heading(&reference, &estimate, 1.0).unwrap();
+        let at = |i: usize| apply(&s, &estimate[i]).translation.vector;
+        for (i, want) in [(0, (2.0, -1.0)), (1, (2.6, -1.3)), (2, (2.6, -0.4))] {
+            let got = at(i);
+            assert!(
+                (got - Vector3::new(want.0, want.1, 0.0)).norm() < 1e-12,
+                "{i}: {got:?}"
+            );
+        }
+        let heading = s.isometry.rotation.euler_angles().2;
+        assert!((heading + FRAC_PI_2).abs() < 1e-12, "{heading}");
+    }
+
+    #[test]
+    fn origin_by_heading_accepts_a_tenth_of_the_distance_and_refuses_less() {
+        // Distance 10 m: a reference and an estimate that each move exactly
+        // 1 m (a tenth) give a heading, here a quarter turn right.
+        let reference = [pose(0.0, 0.0, 0.0, 0.0), pose(1.0, 0.0, 0.0, 0.0)];
+        let estimate = [pose(3.0, 3.0, 0.0, 0.0), pose(3.0, 4.0, 0.0, 0.0)];
+        let s = origin_by_heading(&reference, &estimate, 10.0).unwrap();
+        let got = apply(&s, &estimate[1]).translation.vector;
+        assert!(
+            (got - Vector3::new(1.0, 0.0, 0.0)).norm() < 1e-12,
+            "{got:?}"
+        );
+        // Either one moving 0.5 m while the other moves 2 m: refused.
+        let half = [pose(0.0, 0.0, 0.0, 0.0), pose(0.5, 0.0, 0.0, 0.0)];
+        let two = [pose(3.0, 3.0, 0.0, 0.0), pose(3.0, 5.0, 0.0, 0.0)];
+        assert!(origin_by_heading(&half, &two, 10.0).is_err());
+        assert!(origin_by_heading(&two, &half, 10.0).is_err());
+    }
 }

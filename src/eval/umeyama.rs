@@ -85,3 +85,204 @@ pub fn umeyama2(
     let t = mean_y - c * r * mean_x;
     Ok((theta, t, c))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Rotation3, Unit};
+
+    /// `c R(θ) x + t` in the plane, written out.
+    fn similar2(x: &[Vector2<f64>], theta: f64, t: Vector2<f64>, c: f64) -> Vec<Vector2<f64>> {
+        let (s, co) = theta.sin_cos();
+        x.iter()
+            .map(|p| {
+                Vector2::new(
+                    c * (co * p.x - s * p.y) + t.x,
+                    c * (s * p.x + co * p.y) + t.y,
+                )
+            })
+            .collect()
+    }
+
+    fn planar_points() -> Vec<Vector2<f64>> {
+        [(0.0, 0.0), (2.0, 0.5), (3.0, 3.0), (-1.0, 2.0), (1.0, -1.5)]
+            .iter()
+            .map(|&(x, y)| Vector2::new(x, y))
+            .collect()
+    }
+
+    #[test]
+    fn the_planar_fit_recovers_a_known_similarity() {
+        // y = 1.3 R(0.7) x + (0.4, −2): the Sim(2) fit returns exactly that;
+        // rigid data (scale 1) give the rotation, translation and scale 1.
+        let x = planar_points();
+        let t = Vector2::new(0.4, -2.0);
+        let y = similar2(&x, 0.7, t, 1.3);
+        let (theta, got_t, c) = umeyama2(&x, &y, true).unwrap();
+        assert!((theta - 0.7).abs() < 1e-12, "{theta}");
+        assert!((got_t - t).norm() < 1e-12, "{got_t}");
+        assert!((c - 1.3).abs() < 1e-12, "{c}");
+        let y = similar2(&x, -2.5, t, 1.0);
+        let (theta, got_t, c) = umeyama2(&x, &y, false).unwrap();
+        assert!((theta + 2.5).abs() < 1e-12, "{theta}");
+        assert!((got_t - t).norm() < 1e-12, "{got_t}");
+        assert_eq!(c, 1.0);
+    }
+
+    #[test]
+    fn the_rigid_planar_fit_of_scaled_data_keeps_scale_one_and_centres_the_means() {
+        // y = 2 R(π/2) x + (1, −1) from (0, 0), (2, 0), (0, 1): means
+        // (2/3, 1/3) and (1/3, 1/3). Without scale the rotation stays a
+        // quarter turn and t = μ_y − R μ_x = (1/3, 1/3) − (−1/3, 2/3).
+        let x = [
+            Vector2::new(0.0, 0.0),
+            Vector2::new(2.0, 0.0),
+            Vector2::new(0.0, 1.0),
+        ];
+        let y = [
+            Vector2::new(1.0, -1.0),
+            Vector2::new(1.0, 3.0),
+            Vector2::new(-1.0, -1.0),
+        ];
+        let (theta, t, c) = umeyama2(&x, &y, false).unwrap();
+        assert!(
+            (theta - std::f64::consts::FRAC_PI_2).abs() < 1e-12,
+            "{theta}"
+        );
+        assert!(
+            (t - Vector2::new(2.0 / 3.0, -1.0 / 3.0)).norm() < 1e-12,
+            "{t}"
+        );
+        assert_eq!(c, 1.0);
+        let (_, t, c) = umeyama2(&x, &y, true).unwrap();
+        assert!((t - Vector2::new(1.0, -1.0)).norm() < 1e-12 && (c - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tracker_sized_coordinates_fit_as_exactly_as_small_ones() {
+        // Positions near UTM's (611 km, 5 300 km), in the plane and in 3D
+        // (z 300 m): the fit is as good as near the origin.
+        let off = Vector2::new(611_234.56, 5_301_987.65);
+        let x: Vec<Vector2<f64>> = planar_points().iter().map(|p| p + off).collect();
+        let t = Vector2::new(-3.0, 12.0);
+        let y = similar2(&x, 0.3, t, 1.0);
+        let (theta, got_t, _) = umeyama2(&x, &y, false).unwrap();
+        assert!((theta - 0.3).abs() < 1e-9, "{theta}");
+        let back: Vec<Vector2<f64>> = similar2(&x, theta, got_t, 1.0);
+        for (b, q) in back.iter().zip(&y) {
+            assert!((b - q).norm() < 1e-6, "{b} vs {q}");
+        }
+        let x3: Vec<Vector3<f64>> = x
+            .iter()
+            .zip([0.0, 1.0, -0.5, 2.0, 0.3])
+            .map(|(p, z)| Vector3::new(p.x, p.y, 300.0 + z))
+            .collect();
+        let rot = Rotation3::from_axis_angle(&Vector3::z_axis(), 0.3);
+        let y3: Vec<Vector3<f64>> = x3
+            .iter()
+            .map(|p| rot * p + Vector3::new(-3.0, 12.0, 1.0))
+            .collect();
+        let (r, got_t, _) = umeyama3(&x3, &y3, false).unwrap();
+        assert!((r - rot.matrix()).norm() < 1e-9, "{r}");
+        for (p, q) in x3.iter().zip(&y3) {
+            assert!(
+                (r * p + got_t - q).norm() < 1e-6,
+                "{}",
+                (r * p + got_t - q).norm()
+            );
+        }
+    }
+
+    #[test]
+    fn the_planar_fit_refuses_what_does_not_spread() {
+        let x = planar_points();
+        let same = vec![Vector2::new(1.0, 2.0); x.len()];
+        // The estimate or the reference all at one point, NaN, empty or of
+        // another length: no fit.
+        assert!(umeyama2(&same, &x, true).is_err());
+        assert!(umeyama2(&x, &same, true).is_err());
+        assert!(umeyama2(&x, &same, false).is_err());
+        let mut nan = x.clone();
+        nan[2].x = f64::NAN;
+        assert!(umeyama2(&nan, &x, false).is_err());
+        assert!(umeyama2(&x, &nan, false).is_err());
+        assert!(umeyama2(&[], &[], false).is_err());
+        assert!(umeyama2(&x, &x[..4], false).is_err());
+        assert!(umeyama2(&x[..4], &x, false).is_err());
+    }
+
+    fn spatial_points() -> Vec<Vector3<f64>> {
+        [
+            (0.0, 0.0, 0.0),
+            (2.0, 0.5, 0.3),
+            (3.0, 3.0, -1.0),
+            (-1.0, 2.0, 0.5),
+            (1.0, -1.5, 2.0),
+        ]
+        .iter()
+        .map(|&(x, y, z)| Vector3::new(x, y, z))
+        .collect()
+    }
+
+    #[test]
+    fn the_spatial_fit_recovers_a_known_similarity() {
+        // y = 1.3 R x + t, R 0.8 rad about (1, 2, 3): exactly that back; the
+        // rigid fit of rigid data keeps scale 1.
+        let axis = Unit::new_normalize(Vector3::new(1.0, 2.0, 3.0));
+        let rot = Rotation3::from_axis_angle(&axis, 0.8);
+        let t = Vector3::new(0.5, -1.0, 2.0);
+        let x = spatial_points();
+        let y: Vec<Vector3<f64>> = x.iter().map(|p| 1.3 * (rot * p) + t).collect();
+        let (r, got_t, c) = umeyama3(&x, &y, true).unwrap();
+        assert!((r - rot.matrix()).norm() < 1e-12, "{r}");
+        assert!((got_t - t).norm() < 1e-12, "{got_t}");
+        assert!((c - 1.3).abs() < 1e-12, "{c}");
+        let y: Vec<Vector3<f64>> = x.iter().map(|p| rot * p + t).collect();
+        let (r, got_t, c) = umeyama3(&x, &y, false).unwrap();
+        assert!((r - rot.matrix()).norm() < 1e-12 && (got_t - t).norm() < 1e-12);
+        assert_eq!(c, 1.0);
+    }
+
+    #[test]
+    fn points_in_a_plane_give_a_proper_rotation() {
+        // Points with z = 0 (cross-covariance of rank 2), turned 0.8 rad
+        // about (1, 2, 3) and scaled 0.9: the rotation itself, determinant +1,
+        // not its mirror image in the plane.
+        let axis = Unit::new_normalize(Vector3::new(1.0, 2.0, 3.0));
+        let rot = Rotation3::from_axis_angle(&axis, 0.8);
+        let x: Vec<Vector3<f64>> = planar_points()
+            .iter()
+            .map(|p| Vector3::new(p.x, p.y, 0.0))
+            .collect();
+        let y: Vec<Vector3<f64>> = x.iter().map(|p| 0.9 * (rot * p)).collect();
+        let (r, t, c) = umeyama3(&x, &y, true).unwrap();
+        assert!((r - rot.matrix()).norm() < 1e-12, "{r}");
+        assert!((r.determinant() - 1.0).abs() < 1e-12);
+        assert!(t.norm() < 1e-12 && (c - 0.9).abs() < 1e-12, "{t} {c}");
+    }
+
+    #[test]
+    fn a_mirror_image_is_fitted_by_a_rotation_not_a_reflection() {
+        // y is x mirrored in the plane z = 0: no rotation maps one onto the
+        // other, and the fit is a proper rotation (determinant +1) all the
+        // same, leaving the mirrored axis' spread out of the scale.
+        let x = spatial_points();
+        let y: Vec<Vector3<f64>> = x.iter().map(|p| Vector3::new(p.x, p.y, -p.z)).collect();
+        let (r, _, c) = umeyama3(&x, &y, true).unwrap();
+        assert!((r.determinant() - 1.0).abs() < 1e-12, "{r}");
+        assert!(c < 1.0, "{c}");
+    }
+
+    #[test]
+    fn the_spatial_fit_refuses_points_on_a_line_and_mismatched_sets() {
+        let line: Vec<Vector3<f64>> = (0..5)
+            .map(|i| Vector3::new(1.0, 2.0, 3.0) * i as f64)
+            .collect();
+        let x = spatial_points();
+        assert!(umeyama3(&line, &x, true).is_err());
+        assert!(umeyama3(&x, &line, false).is_err());
+        assert!(umeyama3(&[], &[], false).is_err());
+        assert!(umeyama3(&x, &x[..4], false).is_err());
+        assert!(umeyama3(&x[..4], &x, false).is_err());
+    }
+}

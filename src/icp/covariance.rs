@@ -306,4 +306,172 @@ mod tests {
             u.measured
         );
     }
+
+    fn corr(p: [f64; 2], q: [f64; 2], normal: Option<[f64; 2]>, weight: f64) -> Correspondence {
+        Correspondence {
+            p,
+            q,
+            normal,
+            residual: 0.0,
+            weight,
+            tilt_var: 0.0,
+        }
+    }
+
+    #[test]
+    fn point_to_point_information_by_hand() {
+        // Points (2, 0), (0, 1), (−1, 0), (0, −1) and, at weight 0.5, (1, 1),
+        // at the identity, each 1 cm short of its match along x. Rows
+        // (1, 0, −p_y) and (0, 1, p_x) give h = [[4.5, 0, −0.5], [0, 4.5, 1.5],
+        // [−0.5, 1.5, 8]]; Σw|e|² = 4.5e-4 over 2·4.5 = 9 degrees of freedom,
+        // so σ² = 4.5e-4/(9 − 3) = 7.5e-5 and the RMS residual √(4.5e-4/9).
+        let c: Vec<Correspondence> = [
+            ([2.0, 0.0], 1.0),
+            ([0.0, 1.0], 1.0),
+            ([-1.0, 0.0], 1.0),
+            ([0.0, -1.0], 1.0),
+            ([1.0, 1.0], 0.5),
+        ]
+        .iter()
+        .map(|&(p, w)| corr(p, [p[0] - 0.01, p[1]], None, w))
+        .collect();
+        let h = Matrix3::new(4.5, 0.0, -0.5, 0.0, 4.5, 1.5, -0.5, 1.5, 8.0);
+        for inflation in [1.0, 2.0] {
+            let u = estimate(&c, [0.0; 3], inflation).unwrap();
+            let var = 7.5e-5 * inflation;
+            assert!(
+                (u.cov * h - Matrix3::identity() * var).norm() < 1e-15,
+                "{}",
+                u.cov * h
+            );
+            assert!((u.measured * var - h).norm() < 1e-9, "{}", u.measured);
+            assert!((u.rms - 5e-5f64.sqrt()).abs() < 1e-15, "{}", u.rms);
+            // The RMS range is √(Σw|p|²/Σw) = √(8/4.5) = 4/3 m: in metres h is
+            // 4.5 I plus (−0.375, 1.125) coupling x and y to the angle,
+            // eigenvalues 4.5 and 4.5 ± √(0.375² + 1.125²).
+            let s = (0.375f64.powi(2) + 1.125f64.powi(2)).sqrt();
+            let want = (4.5 - s) / (4.5 + s);
+            assert!((u.conditioning - want).abs() < 1e-12, "{}", u.conditioning);
+        }
+        // A match at 1e200 m: no finite residual variance, no covariance.
+        let mut far = c.clone();
+        far[0].q = [1e200, 0.0];
+        assert!(estimate(&far, [0.0; 3], 1.0).is_none());
+    }
+
+    #[test]
+    fn three_degrees_of_freedom_give_no_covariance_and_four_the_floor() {
+        // A point-to-point match at (1, 0) (rows (1, 0, 0), (0, 1, 1)) and
+        // point-to-line ones, normal (1, 0), at (0, 1) and (0, −1) (rows
+        // (1, 0, −1), (1, 0, 1)), all exact. Three degrees of freedom leave
+        // none for the residual: no covariance. Four: σ² at its floor 1e-6
+        // and h = [[3, 0, 0], [0, 1, 1], [0, 1, 3]].
+        let mut c = vec![
+            corr([1.0, 0.0], [1.0, 0.0], None, 1.0),
+            corr([0.0, 1.0], [0.0, 1.0], Some([1.0, 0.0]), 1.0),
+        ];
+        assert!(estimate(&c, [0.0; 3], 1.0).is_none());
+        c.push(corr([0.0, -1.0], [0.0, -1.0], Some([1.0, 0.0]), 1.0));
+        let u = estimate(&c, [0.0; 3], 1.0).unwrap();
+        let h = Matrix3::new(3.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 3.0);
+        assert!(
+            (u.cov * h - Matrix3::identity() * 1e-6).norm() < 1e-18,
+            "{}",
+            u.cov * h
+        );
+        assert_eq!(u.rms, 0.0);
+    }
+
+    #[test]
+    fn conditioning_turns_the_angle_into_metres_at_the_rms_range() {
+        // h = diag(4, 1, 8) at an RMS range of 2 m is diag(4, 1, 2) in
+        // metres: 1/4, weakest along y. At a range of 0.3 m, diag(1, 9,
+        // 0.36) is diag(1, 9, 4): 1/9, weakest along x. A range below a
+        // millimetre counts as one: diag(4, 1, 8e6).
+        let (k, v) = conditioning(&Matrix3::from_diagonal(&Vector3::new(4.0, 1.0, 8.0)), 4.0);
+        assert!(
+            (k - 0.25).abs() < 1e-15 && (v[1].abs() - 1.0).abs() < 1e-12,
+            "{k} {v:?}"
+        );
+        let (k, v) = conditioning(&Matrix3::from_diagonal(&Vector3::new(1.0, 9.0, 0.36)), 0.09);
+        assert!(
+            (k - 1.0 / 9.0).abs() < 1e-12 && (v[0].abs() - 1.0).abs() < 1e-12,
+            "{k} {v:?}"
+        );
+        let (k, v) = conditioning(&Matrix3::from_diagonal(&Vector3::new(4.0, 1.0, 8.0)), 1e-8);
+        assert!(
+            (k - 1.0 / 8e6).abs() < 1e-18 && (v[1].abs() - 1.0).abs() < 1e-12,
+            "{k} {v:?}"
+        );
+    }
+
+    #[test]
+    fn measured_information_keeps_what_stands_four_times_above_the_floor() {
+        // Against a unit floor, h = diag(10, 2, 5) keeps λ − 1 where λ ≥ 4:
+        // diag(9, 0, 4). Against floor diag(2, 1, 1) the x axis stands at
+        // 10/2 = 5 floors and keeps 4 of them, 8: diag(8, 0, 4). No floor:
+        // all of h. A floor that is no variance (negative): h as it is.
+        let h = Matrix3::from_diagonal(&Vector3::new(10.0, 2.0, 5.0));
+        let diag = |a, b, c| Matrix3::from_diagonal(&Vector3::new(a, b, c));
+        for (floor, want) in [
+            (Matrix3::identity(), diag(9.0, 0.0, 4.0)),
+            (diag(2.0, 1.0, 1.0), diag(8.0, 0.0, 4.0)),
+            (Matrix3::zeros(), h),
+            // No tilt noise in θ (a singular floor): θ keeps all of its 5.
+            (diag(1.0, 1.0, 0.0), diag(9.0, 0.0, 5.0)),
+        ] {
+            let got = measured(&h, &floor);
+            assert!((got - want).norm() < 1e-9, "{floor} {got}");
+        }
+        assert_eq!(measured(&h, &-Matrix3::identity()), h);
+        // Units do not matter: a millionth of h against a millionth of the
+        // floor keeps a millionth.
+        for floor in [Matrix3::zeros(), diag(2.0, 1.0, 1.0)] {
+            let got = measured(&(h * 1e-6), &(floor * 1e-6)) * 1e6;
+            let want = measured(&h, &floor);
+            assert!((got - want).norm() < 1e-6, "{got} vs {want}");
+        }
+        // Turned 0.3 rad in the (x, y) plane, with the floor turned alike:
+        // the same information, turned.
+        let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), 0.3).into_inner();
+        let got = measured(
+            &(r * h * r.transpose()),
+            &(r * diag(2.0, 1.0, 1.0) * r.transpose()),
+        );
+        let want = r * diag(8.0, 0.0, 4.0) * r.transpose();
+        assert!((got - want).norm() < 1e-9, "{got} vs {want}");
+    }
+
+    #[test]
+    fn information_sums_by_hand() {
+        // At pose (0.5, −0.2, 0): a point-to-line match of (1, 0) (moved to
+        // (1.5, −0.2)) against (1.5, −0.25) with normal (0.6, 0.8), weight
+        // 0.5 and tilt variance 0.01: e = 0.8·0.05 = 0.04,
+        // J = (0.6, 0.8, n·(0, 1)) = (0.6, 0.8, 0.8), and along
+        // n⊥ = (−0.8, 0.6): (−0.8, 0.6, 0.6). A point-to-point match of
+        // (0, 2) (moved to (0.5, 1.8)) against (0.49, 1.82), weight 1:
+        // e = (0.01, −0.02), rows (1, 0, −2) and (0, 1, 0).
+        let c = [
+            Correspondence {
+                tilt_var: 0.01,
+                ..corr([1.0, 0.0], [1.5, -0.25], Some([0.6, 0.8]), 0.5)
+            },
+            corr([0.0, 2.0], [0.49, 1.82], None, 1.0),
+        ];
+        let i = information(&c, [0.5, -0.2, 0.0]);
+        let j = Vector3::new(0.6, 0.8, 0.8);
+        let (jx, jy) = (Vector3::new(1.0, 0.0, -2.0), Vector3::new(0.0, 1.0, 0.0));
+        let h: Matrix3<f64> = 0.5 * j * j.transpose() + jx * jx.transpose() + jy * jy.transpose();
+        assert!((i.h - h).norm() < 1e-15, "{}", i.h);
+        let ja = Vector3::new(-0.8, 0.6, 0.6);
+        let floor: Matrix3<f64> = 0.005 * ja * ja.transpose();
+        assert!((i.floor - floor).norm() < 1e-15, "{}", i.floor);
+        assert!(
+            (i.ss - (0.5 * 0.04f64.powi(2) + 5e-4)).abs() < 1e-15,
+            "{}",
+            i.ss
+        );
+        assert_eq!((i.dof, i.wsum), (2.5, 1.5));
+        assert!((i.r2sum - 4.5).abs() < 1e-15, "{}", i.r2sum);
+    }
 }

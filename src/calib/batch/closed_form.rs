@@ -157,8 +157,12 @@ mod tests {
     /// displacement `ℓ⁻¹ o ℓ` for the robot r_R = 0.10, r_L = 0.11, b = 0.5
     /// with the laser at (0.2, 0.05, 0.3).
     fn intervals() -> (Vec<Vec<[f64; 2]>>, Vec<[f64; 3]>) {
+        intervals_with(Isometry2::new(nalgebra::Vector2::new(0.2, 0.05), 0.3))
+    }
+
+    /// [`intervals`] with the laser mounted at `laser`.
+    fn intervals_with(laser: Isometry2<f64>) -> (Vec<Vec<[f64; 2]>>, Vec<[f64; 3]>) {
         let (rr, rl, b) = (0.10, 0.11, 0.5);
-        let laser = Isometry2::new(nalgebra::Vector2::new(0.2, 0.05), 0.3);
         let drives = [
             (2.0, 2.5),
             (3.0, 1.0),
@@ -244,5 +248,91 @@ mod tests {
             })
             .collect();
         assert!(closed_form(&rows).is_err());
+    }
+
+    /// Rows of equal weights over intervals and laser displacements.
+    fn rows_of<'a>(
+        incs: &'a [Vec<[f64; 2]>],
+        s: &[[f64; 3]],
+        w_rot: f64,
+        w_tr: f64,
+    ) -> Vec<Row<'a>> {
+        incs.iter()
+            .zip(s)
+            .map(|(inc, &s)| Row {
+                inc,
+                s,
+                w_rot,
+                w_tr,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn scaling_every_weight_alike_changes_nothing() {
+        // Weights are relative: all of them 1e-8 or 1e8 instead of 1 give
+        // the same robot and laser.
+        let (incs, s) = intervals();
+        let want = [0.10, 0.11, 0.5, 0.2, 0.05, 0.3];
+        for w in [1e-8, 1e8] {
+            let u = closed_form(&rows_of(&incs, &s, w, w)).unwrap();
+            let got = [
+                u.r_right,
+                u.r_left,
+                u.wheel_base,
+                u.laser[0],
+                u.laser[1],
+                u.laser[2],
+            ];
+            for (g, v) in got.iter().zip(want) {
+                assert!((g - v).abs() < 1e-9, "{w}: {got:?} vs {want:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn recovers_the_laser_mounting_at_any_angle() {
+        // The laser at (−0.1, 0.15) turned anywhere in (−π, π): the mounting
+        // angle is the (cos, sin) direction the closed form picks.
+        for angle in [-3.0, -2.2, -1.4, -0.6, 0.0, 0.8, 1.6, 2.4, 3.1] {
+            let laser = Isometry2::new(nalgebra::Vector2::new(-0.1, 0.15), angle);
+            let (incs, s) = intervals_with(laser);
+            let u = closed_form(&rows_of(&incs, &s, 1.0, 1.0)).unwrap();
+            let got = [u.wheel_base, u.laser[0], u.laser[1], u.laser[2]];
+            let want = [0.5, -0.1, 0.15, angle];
+            for (g, v) in got.iter().zip(want) {
+                assert!((g - v).abs() < 1e-9, "{angle}: {got:?} vs {want:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_rotation_condition_at_the_limit_is_refused_and_below_it_accepted() {
+        // One interval on each wheel alone, the left turning 1 rad and the
+        // right d rad: Σ l lᵀ = diag(1, d²), condition number d². d = 100 is
+        // the limit 1e4, refused whichever wheel comes first; d = 99 is
+        // inside it and J solves by hand from θ = J21·1 = 0.2 and
+        // θ = J22·99 = 0.99: J = (0.2, 0.01).
+        let rows = |incs: &'static [[[f64; 2]; 1]; 2], theta: [f64; 2]| -> Vec<Row<'static>> {
+            incs.iter()
+                .zip(theta)
+                .map(|(inc, th)| Row {
+                    inc,
+                    s: [0.0, 0.0, th],
+                    w_rot: 1.0,
+                    w_tr: 1.0,
+                })
+                .collect()
+        };
+        static LIMIT: [[[f64; 2]; 1]; 2] = [[[1.0, 0.0]], [[0.0, 100.0]]];
+        static LIMIT_SWAPPED: [[[f64; 2]; 1]; 2] = [[[100.0, 0.0]], [[0.0, 1.0]]];
+        static INSIDE: [[[f64; 2]; 1]; 2] = [[[1.0, 0.0]], [[0.0, 99.0]]];
+        assert!(rotation_jacobian(&rows(&LIMIT, [0.2, 1.0])).is_err());
+        assert!(rotation_jacobian(&rows(&LIMIT_SWAPPED, [0.2, 1.0])).is_err());
+        let (j21, j22) = rotation_jacobian(&rows(&INSIDE, [0.2, 0.99])).unwrap();
+        assert!(
+            (j21 - 0.2).abs() < 1e-12 && (j22 - 0.01).abs() < 1e-12,
+            "{j21} {j22}"
+        );
     }
 }

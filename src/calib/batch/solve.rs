@@ -141,3 +141,191 @@ pub fn fit(d: &Data, p0: &[f64], max_iter: usize) -> Fit {
         chi2: cost,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calib::batch::WheelMotion;
+    use nalgebra::{Isometry2, Vector2};
+
+    /// The robot's motion over one sub-step, written out apart from the
+    /// model's `arc`: distance and turn from the wheels, then the exact arc.
+    fn arc_by_hand(dl: f64, dr: f64, rr: f64, rl: f64, b: f64) -> Isometry2<f64> {
+        let (ds, dth) = (0.5 * (rr * dr + rl * dl), (rr * dr - rl * dl) / b);
+        let (x, y) = if dth.abs() < 1e-12 {
+            (ds, 0.0)
+        } else {
+            (ds / dth * dth.sin(), ds / dth * (1.0 - dth.cos()))
+        };
+        Isometry2::new(Vector2::new(x, y), dth)
+    }
+
+    /// r_R, r_L, b, laser x, y, yaw.
+    const TRUTH: [f64; 6] = [0.10, 0.11, 0.5, 0.2, 0.05, 0.3];
+
+    /// Intervals of two sub-steps each, driven every way, with the laser
+    /// displacement `ℓ⁻¹ o ℓ` of [`TRUTH`] exactly.
+    fn exact_intervals() -> Vec<Interval> {
+        let [rr, rl, b, lx, ly, lth] = TRUTH;
+        let laser = Isometry2::new(Vector2::new(lx, ly), lth);
+        [
+            (2.0, 2.5),
+            (3.0, 1.0),
+            (-1.0, 1.5),
+            (1.2, -0.8),
+            (4.0, 4.2),
+            (0.5, 2.5),
+            (2.2, 0.3),
+        ]
+        .iter()
+        .map(|&(l, r)| {
+            let inc = vec![[l, r], [0.5 * l, 0.8 * r]];
+            let o = inc.iter().fold(Isometry2::identity(), |o, &[dl, dr]| {
+                o * arc_by_hand(dl, dr, rr, rl, b)
+            });
+            let d = laser.inverse() * o * laser;
+            Interval {
+                s: [d.translation.x, d.translation.y, d.rotation.angle()],
+                cov: None,
+                duration: 1.0,
+                wheels: WheelMotion::Steps(inc),
+            }
+        })
+        .collect()
+    }
+
+    fn data(ivs: &[Interval], whiten: Matrix3<f64>, free: [bool; 6]) -> Data<'_> {
+        Data {
+            intervals: ivs.iter().collect(),
+            whiten: vec![whiten; ivs.len()],
+            track: None,
+            step: vec![1e-6; 6],
+            free: free.to_vec(),
+        }
+    }
+
+    #[test]
+    fn the_fit_returns_to_the_unknowns_that_made_exact_intervals() {
+        // From 5 % off every unknown (and 0.1 rad off the laser's yaw), the
+        // fit lands on the truth with nothing left to explain.
+        let ivs = exact_intervals();
+        let d = data(&ivs, Matrix3::identity(), [true; 6]);
+        let mut p0: Vec<f64> = TRUTH.iter().map(|x| 1.05 * x).collect();
+        p0[5] += 0.1;
+        let f = fit(&d, &p0, 50);
+        for (g, w) in f.p.iter().zip(TRUTH) {
+            assert!((g - w).abs() < 1e-8, "{:?}", f.p);
+        }
+        assert!(f.chi2 < 1e-16, "{}", f.chi2);
+    }
+
+    #[test]
+    fn a_held_unknown_stays_where_it_starts_with_unit_information() {
+        // The wheel base held at its true value: the rest still reach the
+        // truth, the wheel base is untouched, and its row of the information
+        // is (0, …, 1, …, 0).
+        let ivs = exact_intervals();
+        let d = data(
+            &ivs,
+            Matrix3::identity(),
+            [true, true, false, true, true, true],
+        );
+        let mut p0: Vec<f64> = TRUTH.iter().map(|x| 0.97 * x).collect();
+        p0[2] = TRUTH[2];
+        let f = fit(&d, &p0, 50);
+        assert_eq!(f.p[2], TRUTH[2]);
+        for (g, w) in f.p.iter().zip(TRUTH) {
+            assert!((g - w).abs() < 1e-8, "{:?}", f.p);
+        }
+        for j in 0..6 {
+            let want = if j == 2 { 1.0 } else { 0.0 };
+            assert_eq!(f.info[(2, j)], want, "{j}");
+            assert_eq!(f.info[(j, 2)], want, "{j}");
+        }
+    }
+
+    #[test]
+    fn chi2_sums_the_whitened_residuals() {
+        // Both wheels 2 rad with radii 0.1 and the laser at the base: the
+        // model says 0.2 m straight ahead. Against s = (0.5, −0.1, 0.2) the
+        // residual is (0.3, −0.1, 0.2); whitened by diag(2, 10, 0.5) it is
+        // (0.6, −1, 0.1), so χ² = 0.36 + 1 + 0.01. No iteration: the start
+        // is returned as it is.
+        let ivs = [Interval {
+            s: [0.5, -0.1, 0.2],
+            cov: None,
+            duration: 1.0,
+            wheels: WheelMotion::Steps(vec![[2.0, 2.0]]),
+        }];
+        let d = data(
+            &ivs,
+            Matrix3::from_diagonal(&nalgebra::Vector3::new(2.0, 10.0, 0.5)),
+            [true; 6],
+        );
+        let p = [0.1, 0.1, 0.5, 0.0, 0.0, 0.0];
+        let f = fit(&d, &p, 0);
+        assert_eq!(f.p, p);
+        assert!((f.chi2 - 1.37).abs() < 1e-12, "{}", f.chi2);
+        let e = raw_residual(&ivs[0], None, &p, &mut vec![]);
+        for (g, w) in e.iter().zip([0.3, -0.1, 0.2]) {
+            assert!((g - w).abs() < 1e-12, "{e:?}");
+        }
+    }
+
+    #[test]
+    fn the_information_of_a_straight_drive_by_hand() {
+        // Both wheels 2 rad, radii 0.1, wheel base 0.5, laser at the base:
+        // ŝ = (0.2, 0, 0). Against r_R it moves by ∂x = φ/2 = 1,
+        // ∂y = d·(∂θ)/2 = 0.2·4/2 = 0.4 and ∂θ = φ/b = 4, so with r_R alone
+        // free and unit whitening its information is 1 + 0.16 + 16 = 17.16;
+        // every held unknown has a unit diagonal and no coupling. (The
+        // difference quotient is good to about 1e-5 here: at the 1e-6 step
+        // the turn is 4e-6 rad, where 1 − cos θ keeps few digits.)
+        let ivs = [Interval {
+            s: [0.2, 0.0, 0.0],
+            cov: None,
+            duration: 1.0,
+            wheels: WheelMotion::Steps(vec![[2.0, 2.0]]),
+        }];
+        let d = data(
+            &ivs,
+            Matrix3::identity(),
+            [true, false, false, false, false, false],
+        );
+        let f = fit(&d, &[0.1, 0.1, 0.5, 0.0, 0.0, 0.0], 0);
+        assert!((f.info[(0, 0)] - 17.16).abs() < 1e-5, "{}", f.info);
+        for i in 0..6 {
+            for j in 0..6 {
+                if i != j || i > 0 {
+                    assert_eq!(f.info[(i, j)], if i == j { 1.0 } else { 0.0 }, "{i} {j}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_fit_returns_from_a_far_start_that_needs_damping() {
+        // Radii and wheel base 30 % off, the laser 0.3 m and a radian away:
+        // undamped steps overshoot here, the damped ones still land on the
+        // truth.
+        let ivs = exact_intervals();
+        let d = data(&ivs, Matrix3::identity(), [true; 6]);
+        let p0 = [0.13, 0.077, 0.65, -0.1, 0.35, 1.3];
+        let f = fit(&d, &p0, 200);
+        for (g, w) in f.p.iter().zip(TRUTH) {
+            assert!((g - w).abs() < 1e-8, "{:?}", f.p);
+        }
+    }
+
+    #[test]
+    fn a_start_where_the_model_is_undefined_comes_back_as_it_is() {
+        // A wheel base of 0 turns every arc by ±∞: no residual, no step;
+        // the fit gives up at once instead of searching forever.
+        let ivs = exact_intervals();
+        let d = data(&ivs, Matrix3::identity(), [true; 6]);
+        let p0 = [0.1, 0.11, 0.0, 0.2, 0.05, 0.3];
+        let f = fit(&d, &p0, 10);
+        assert_eq!(f.p, p0);
+        assert!(f.chi2.is_nan());
+    }
+}
