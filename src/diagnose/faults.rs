@@ -64,6 +64,9 @@ pub fn rewire(wheels: &[WheelSample], w: Wiring) -> Option<(Vec<WheelSample>, Fa
     Some((fixed, fault))
 }
 
+/// The name of an out-of-round wheel's fault.
+pub const OUT_OF_ROUND: &str = "wheel_out_of_round";
+
 /// An out-of-round wheel from the periodic structure the extended model
 /// leaves in stream `g` (`periodic` that test's finding, `coefficients` on
 /// ω_R cos φ_R, ω_R sin φ_R, ω_L cos φ_L, ω_L sin φ_L in the stream's unit
@@ -79,7 +82,7 @@ pub fn out_of_round(
     parameters.insert("right".to_string(), rel(coefficients[0], coefficients[1]));
     parameters.insert("left".to_string(), rel(coefficients[2], coefficients[3]));
     Fault {
-        name: "wheel_out_of_round".into(),
+        name: OUT_OF_ROUND.into(),
         parameters,
         evidence: format!(
             "the {} residual follows the sine and cosine of the wheel angles, once per \

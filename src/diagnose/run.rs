@@ -6,7 +6,7 @@ use super::data::{
     drop_outliers, gyro_rows, icp_rows, merge_motions, GyroRow, IcpRow, Part, GROUPS,
 };
 use super::diagnosis::{Cause, Diagnosis, Fault, Remaining, Verdict};
-use super::faults;
+use super::faults::{self, OUT_OF_ROUND};
 use super::fit::Fit;
 use super::floor::{self, FloorSettings};
 use super::gain::heldout_gain;
@@ -94,23 +94,24 @@ fn out_of_round(
                 .and_then(|t| t.coefficients.get(1..5)?.try_into().ok())
         })
         .collect();
-    let wobble = |t0: f64, t1: f64, g: usize| {
-        periodic[g].map_or(0.0, |b| {
-            let x = wheel_regressors(r.replay, t0, t1);
-            (0..4).map(|j| b[j] * x[j]).sum::<f64>()
-        })
+    // Stream g's periodic part at the wheel regressors x.
+    let part = |x: &[f64; 4], g: usize| {
+        periodic[g].map_or(0.0, |b| (0..4).map(|j| b[j] * x[j]).sum::<f64>())
     };
     let icp: Vec<IcpRow> = icp0
         .iter()
-        .map(|row| IcpRow {
-            z: std::array::from_fn(|g| row.z[g] - wobble(row.t0, row.t1, g)),
-            ..*row
+        .map(|row| {
+            let x = wheel_regressors(r.replay, row.t0, row.t1);
+            IcpRow {
+                z: std::array::from_fn(|g| row.z[g] - part(&x, g)),
+                ..*row
+            }
         })
         .collect();
     let gyro: Vec<GyroRow> = gyro0
         .iter()
         .map(|row| GyroRow {
-            w: row.w - wobble(row.t0, row.t1, 3),
+            w: row.w - part(&wheel_regressors(r.replay, row.t0, row.t1), 3),
             ..*row
         })
         .collect();
@@ -330,7 +331,7 @@ fn structure_tests(
 }
 
 /// The significant structures the model leaves; a periodic one in the
-/// wheel angles is an out-of-round wheel, reported as that fault (from the
+/// wheel angles is an out-of-round wheel, reported as that fault once (from the
 /// stream that shows it most clearly) instead of as a leftover.
 fn leftover(
     tests: &[RemainingTest],
@@ -341,7 +342,9 @@ fn leftover(
         .iter()
         .filter(|t| t.significant && t.found.structure == PERIODIC)
         .min_by(|a, b| a.found.p_value.total_cmp(&b.found.p_value));
-    if let Some(t) = round {
+    // Named once: rows already cleared of it may still show a trace.
+    let named = faults.iter().any(|f| f.name == OUT_OF_ROUND);
+    if let Some(t) = round.filter(|_| !named) {
         let c = &t.coefficients;
         let g = super::data::GROUPS
             .iter()
