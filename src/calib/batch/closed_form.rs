@@ -47,25 +47,41 @@ pub fn rotation_jacobian(rows: &[Row]) -> Result<(f64, f64), BatchError> {
     } else {
         (1, 0)
     };
+    if !(eig.eigenvalues[hi] > 0.0) {
+        return Err(BatchError::Unobservable(
+            "the wheel increments are all zero: no wheel turned".into(),
+        ));
+    }
     if !(eig.eigenvalues[lo] * MAX_ROTATION_CONDITION > eig.eigenvalues[hi]) {
         let n = eig.eigenvectors.column(lo);
-        // The null direction (1, −1) is "left minus right never varies".
-        let turning_missing = n[0] * n[1] < 0.0;
-        return Err(BatchError::Unobservable(if turning_missing {
-            "the wheels never turned the robot (left and right always turned alike): \
-             record turns both ways"
-                .into()
-        } else {
-            "the robot only turned in place (the wheels always turned opposite ways): \
-             record straight or curved driving"
-                .into()
-        }));
+        return Err(BatchError::Unobservable(missing_motion(n[0], n[1]).into()));
     }
-    let j = a
-        .try_inverse()
-        .ok_or_else(|| BatchError::Unobservable("the wheel increments are all zero".into()))?
-        * g;
+    let j = a.try_inverse().ok_or_else(|| {
+        BatchError::Unobservable("the wheel increments do not determine the rotation".into())
+    })? * g;
     Ok((j[0], j[1]))
+}
+
+/// What the wheel increments never did, from the direction `(n_L, n_R)` in
+/// which they carry no information: along one wheel's axis that wheel never
+/// turned (a dead encoder or a wrong joint name); along (1, −1) left minus
+/// right never varied (no turn); along (1, 1) the wheels always turned
+/// opposite ways (no driving).
+fn missing_motion(n_left: f64, n_right: f64) -> &'static str {
+    let (l, r) = (n_left.abs(), n_right.abs());
+    if r < 0.1 * l {
+        "the left wheel never turned (its increments are all zero): check its encoder and \
+         its joint name"
+    } else if l < 0.1 * r {
+        "the right wheel never turned (its increments are all zero): check its encoder and \
+         its joint name"
+    } else if n_left * n_right < 0.0 {
+        "the wheels never turned the robot (left and right always turned alike): record turns \
+         both ways"
+    } else {
+        "the robot only turned in place (the wheels always turned opposite ways): record \
+         straight or curved driving"
+    }
 }
 
 /// The full closed-form estimate (time offset 0): J from the rotation, then
@@ -235,6 +251,24 @@ mod tests {
         assert!(e.contains("never turned the robot"), "{e}");
         let e = rotation_jacobian(&rows(&SPIN)).unwrap_err().to_string();
         assert!(e.contains("only turned in place"), "{e}");
+        // One wheel never turned (a dead encoder): named as that wheel, not as
+        // a missing kind of driving; no wheel turned: said so.
+        static LEFT_DEAD: [[[f64; 2]; 1]; 3] = [[[0.0, 1.0]], [[0.0, -2.0]], [[0.0, 0.5]]];
+        static RIGHT_DEAD: [[[f64; 2]; 1]; 3] = [[[1.0, 0.0]], [[-2.0, 0.0]], [[0.5, 0.0]]];
+        static STILL: [[[f64; 2]; 1]; 3] = [[[0.0, 0.0]], [[0.0, 0.0]], [[0.0, 0.0]]];
+        let e = rotation_jacobian(&rows(&LEFT_DEAD))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the left wheel never turned"), "{e}");
+        let e = rotation_jacobian(&rows(&RIGHT_DEAD))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the right wheel never turned"), "{e}");
+        let e = rotation_jacobian(&rows(&STILL)).unwrap_err().to_string();
+        assert!(e.contains("all zero"), "{e}");
+        // Negative control: both wheels turning, alike and apart, determine it.
+        static MIXED: [[[f64; 2]; 1]; 3] = [[[1.0, 1.0]], [[1.0, -1.0]], [[0.5, 2.0]]];
+        assert!(rotation_jacobian(&rows(&MIXED)).is_ok());
         // Turning both ways but never moving the laser while turning: no
         // laser position.
         static NO_TURN_MOVE: [[[f64; 2]; 1]; 2] = [[[1.0, 2.0]], [[2.0, 1.0]]];
