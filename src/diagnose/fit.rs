@@ -233,8 +233,9 @@ pub fn fit(
     }
 }
 
-/// Wald statistic θᵀ Σ⁻¹ θ of the free parameters of the effect at `index`
-/// (∞ when its covariance block is singular, 0 for an empty block).
+/// Wald statistic θᵀ Σ⁻¹ θ of the free parameters of the effect at `index`;
+/// 0 for an empty block, and 0 when the block is singular or the statistic
+/// is not finite: an effect the data cannot determine is never significant.
 pub fn wald(f: &Fit, index: usize) -> f64 {
     let start: usize = f.effects[..index]
         .iter()
