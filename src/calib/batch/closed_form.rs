@@ -155,19 +155,8 @@ pub fn closed_form(rows: &[Row]) -> Result<Unknowns, BatchError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calib::batch::tests::arc_by_hand;
     use nalgebra::Isometry2;
-
-    /// The robot's motion over one sub-step, written out apart from the
-    /// model's `arc`: v and ω from the wheels, then the exact arc.
-    fn arc_by_hand(dl: f64, dr: f64, rr: f64, rl: f64, b: f64) -> Isometry2<f64> {
-        let (ds, dth) = (0.5 * (rr * dr + rl * dl), (rr * dr - rl * dl) / b);
-        let (x, y) = if dth.abs() < 1e-12 {
-            (ds, 0.0)
-        } else {
-            (ds / dth * dth.sin(), ds / dth * (1.0 - dth.cos()))
-        };
-        Isometry2::new(nalgebra::Vector2::new(x, y), dth)
-    }
 
     /// Intervals of two sub-steps each, driven every way, and the laser's
     /// displacement `ℓ⁻¹ o ℓ` for the robot r_R = 0.10, r_L = 0.11, b = 0.5

@@ -145,20 +145,9 @@ pub fn fit(d: &Data, p0: &[f64], max_iter: usize) -> Fit {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calib::batch::tests::arc_by_hand;
     use crate::calib::batch::WheelMotion;
     use nalgebra::{Isometry2, Vector2};
-
-    /// The robot's motion over one sub-step, written out apart from the
-    /// model's `arc`: distance and turn from the wheels, then the exact arc.
-    fn arc_by_hand(dl: f64, dr: f64, rr: f64, rl: f64, b: f64) -> Isometry2<f64> {
-        let (ds, dth) = (0.5 * (rr * dr + rl * dl), (rr * dr - rl * dl) / b);
-        let (x, y) = if dth.abs() < 1e-12 {
-            (ds, 0.0)
-        } else {
-            (ds / dth * dth.sin(), ds / dth * (1.0 - dth.cos()))
-        };
-        Isometry2::new(Vector2::new(x, y), dth)
-    }
 
     /// r_R, r_L, b, laser x, y, yaw.
     const TRUTH: [f64; 6] = [0.10, 0.11, 0.5, 0.2, 0.05, 0.3];

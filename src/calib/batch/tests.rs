@@ -10,6 +10,19 @@ use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 
+/// The robot's motion over one sub-step, written out apart from the
+/// model's `arc`: distance and turn from the wheels, then the exact arc
+/// (the unit tests of `solve` and `closed_form` build their intervals with it).
+pub(super) fn arc_by_hand(dl: f64, dr: f64, rr: f64, rl: f64, b: f64) -> nalgebra::Isometry2<f64> {
+    let (ds, dth) = (0.5 * (rr * dr + rl * dl), (rr * dr - rl * dl) / b);
+    let (x, y) = if dth.abs() < 1e-12 {
+        (ds, 0.0)
+    } else {
+        (ds / dth * dth.sin(), ds / dth * (1.0 - dth.cos()))
+    };
+    nalgebra::Isometry2::new(nalgebra::Vector2::new(x, y), dth)
+}
+
 const TRUE_R: f64 = 0.101;
 const TRUE_L: f64 = 0.0985;
 const TRUE_B: f64 = 0.52;
