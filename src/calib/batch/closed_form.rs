@@ -155,7 +155,7 @@ pub fn closed_form(rows: &[Row]) -> Result<Unknowns, BatchError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::batch::tests::arc_by_hand;
+    use crate::calib::batch::tests::{arc_by_hand, DRIVES};
     use nalgebra::Isometry2;
 
     /// Intervals of two sub-steps each, driven every way, and the laser's
@@ -165,18 +165,22 @@ mod tests {
         intervals_with(Isometry2::new(nalgebra::Vector2::new(0.2, 0.05), 0.3))
     }
 
+    /// r_R, r_L, b and the laser's x, y, yaw of `u`.
+    fn flat(u: &Unknowns) -> [f64; 6] {
+        [
+            u.r_right,
+            u.r_left,
+            u.wheel_base,
+            u.laser[0],
+            u.laser[1],
+            u.laser[2],
+        ]
+    }
+
     /// [`intervals`] with the laser mounted at `laser`.
     fn intervals_with(laser: Isometry2<f64>) -> (Vec<Vec<[f64; 2]>>, Vec<[f64; 3]>) {
         let (rr, rl, b) = (0.10, 0.11, 0.5);
-        let drives = [
-            (2.0, 2.5),
-            (3.0, 1.0),
-            (-1.0, 1.5),
-            (1.2, -0.8),
-            (4.0, 4.2),
-            (0.5, 2.5),
-            (2.2, 0.3),
-        ];
+        let drives = DRIVES;
         let mut incs = Vec::new();
         let mut s = Vec::new();
         for &(l, r) in &drives {
@@ -207,14 +211,7 @@ mod tests {
         let (j21, j22) = rotation_jacobian(&rows).unwrap();
         assert!((j21 + 0.11 / 0.5).abs() < 1e-12 && (j22 - 0.10 / 0.5).abs() < 1e-12);
         let u = closed_form(&rows).unwrap();
-        let got = [
-            u.r_right,
-            u.r_left,
-            u.wheel_base,
-            u.laser[0],
-            u.laser[1],
-            u.laser[2],
-        ];
+        let got = flat(&u);
         let want = [0.10, 0.11, 0.5, 0.2, 0.05, 0.3];
         for (g, w) in got.iter().zip(want) {
             assert!((g - w).abs() < 1e-9, "{got:?} vs {want:?}");
@@ -299,14 +296,7 @@ mod tests {
         let want = [0.10, 0.11, 0.5, 0.2, 0.05, 0.3];
         for w in [1e-8, 1e8] {
             let u = closed_form(&rows_of(&incs, &s, w, w)).unwrap();
-            let got = [
-                u.r_right,
-                u.r_left,
-                u.wheel_base,
-                u.laser[0],
-                u.laser[1],
-                u.laser[2],
-            ];
+            let got = flat(&u);
             for (g, v) in got.iter().zip(want) {
                 assert!((g - v).abs() < 1e-9, "{w}: {got:?} vs {want:?}");
             }

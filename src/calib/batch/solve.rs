@@ -145,7 +145,7 @@ pub fn fit(d: &Data, p0: &[f64], max_iter: usize) -> Fit {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::batch::tests::arc_by_hand;
+    use crate::calib::batch::tests::{arc_by_hand, DRIVES};
     use crate::calib::batch::WheelMotion;
     use nalgebra::{Isometry2, Vector2};
 
@@ -157,30 +157,22 @@ mod tests {
     fn exact_intervals() -> Vec<Interval> {
         let [rr, rl, b, lx, ly, lth] = TRUTH;
         let laser = Isometry2::new(Vector2::new(lx, ly), lth);
-        [
-            (2.0, 2.5),
-            (3.0, 1.0),
-            (-1.0, 1.5),
-            (1.2, -0.8),
-            (4.0, 4.2),
-            (0.5, 2.5),
-            (2.2, 0.3),
-        ]
-        .iter()
-        .map(|&(l, r)| {
-            let inc = vec![[l, r], [0.5 * l, 0.8 * r]];
-            let o = inc.iter().fold(Isometry2::identity(), |o, &[dl, dr]| {
-                o * arc_by_hand(dl, dr, rr, rl, b)
-            });
-            let d = laser.inverse() * o * laser;
-            Interval {
-                s: [d.translation.x, d.translation.y, d.rotation.angle()],
-                cov: None,
-                duration: 1.0,
-                wheels: WheelMotion::Steps(inc),
-            }
-        })
-        .collect()
+        DRIVES
+            .iter()
+            .map(|&(l, r)| {
+                let inc = vec![[l, r], [0.5 * l, 0.8 * r]];
+                let o = inc.iter().fold(Isometry2::identity(), |o, &[dl, dr]| {
+                    o * arc_by_hand(dl, dr, rr, rl, b)
+                });
+                let d = laser.inverse() * o * laser;
+                Interval {
+                    s: [d.translation.x, d.translation.y, d.rotation.angle()],
+                    cov: None,
+                    duration: 1.0,
+                    wheels: WheelMotion::Steps(inc),
+                }
+            })
+            .collect()
     }
 
     fn data(ivs: &[Interval], whiten: Matrix3<f64>, free: [bool; 6]) -> Data<'_> {

@@ -23,6 +23,19 @@ pub(super) fn arc_by_hand(dl: f64, dr: f64, rr: f64, rl: f64, b: f64) -> nalgebr
     nalgebra::Isometry2::new(nalgebra::Vector2::new(x, y), dth)
 }
 
+/// Left and right wheel increments (rad) of drives every way: straight,
+/// curved both ways, spinning, reversing (the unit tests of `solve` and
+/// `closed_form` build intervals from them).
+pub(super) const DRIVES: [(f64, f64); 7] = [
+    (2.0, 2.5),
+    (3.0, 1.0),
+    (-1.0, 1.5),
+    (1.2, -0.8),
+    (4.0, 4.2),
+    (0.5, 2.5),
+    (2.2, 0.3),
+];
+
 const TRUE_R: f64 = 0.101;
 const TRUE_L: f64 = 0.0985;
 const TRUE_B: f64 = 0.52;
