@@ -40,6 +40,7 @@ pub mod recording;
 pub mod robot;
 pub mod scan;
 pub mod sim;
+pub mod stats;
 pub mod traj;
 pub mod viz;
 

@@ -6,9 +6,9 @@
 // `!(x > y)` is deliberate: it is also true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::normal::inverse_normal_cdf;
 use super::steps::{usable, CalibStep, Kind};
 use super::units::{PAPER_RADIUS_M, SQRT_PAPER_STEP};
+use crate::stats::chi2_quantile;
 use serde::{Deserialize, Serialize};
 
 /// How the particle count is chosen at each resampling.
@@ -163,18 +163,19 @@ impl AdaptiveParams {
         }
     }
 
-    /// Fox 2001, eq. 8 with the Wilson–Hilferty approximation of the χ²
-    /// quantile: `n = (k−1)/(2ε) · (1 − 2/(9(k−1)) + sqrt(2/(9(k−1))) z_{1−δ})³`
-    /// for `k` occupied bins, clamped.
+    /// The count of KLD-sampling \[Fox2001, eq. 7\], `n = χ²_{k−1, 1−δ} / (2ε)`
+    /// for `k` occupied bins, with the exact χ² quantile (Fox's eq. 8 is its
+    /// Wilson–Hilferty approximation), clamped.
     pub fn kld_count(&self, k: usize) -> usize {
         if k <= 1 {
             return self.n_min;
         }
-        let km1 = (k - 1) as f64;
-        let z = inverse_normal_cdf(self.kld_confidence);
-        let a = 2.0 / (9.0 * km1);
-        let n = km1 / (2.0 * self.kld_epsilon) * (1.0 - a + a.sqrt() * z).powi(3);
-        (n.ceil().max(0.0) as usize).clamp(self.n_min, self.n_max)
+        let n = chi2_quantile(self.kld_confidence, k - 1) / (2.0 * self.kld_epsilon);
+        if n.is_finite() {
+            (n.ceil().max(0.0) as usize).clamp(self.n_min, self.n_max)
+        } else {
+            self.n_max
+        }
     }
 
     /// The residuals of eq. 11, `(V_m − V_O, W_m − W_O)`, from the measured
@@ -273,20 +274,20 @@ mod tests {
 
     #[test]
     fn kld_count_matches_the_chi_square_table() {
-        // Fox 2001, eq. 8: n = χ²_{k−1, 1−δ} / (2ε). For k − 1 = 100 bins
+        // Fox 2001, eq. 7: n = χ²_{k−1, 1−δ} / (2ε). For k − 1 = 100 bins
         // and δ = 0.01 the tabulated quantile is 135.807 (Abramowitz and
-        // Stegun, Table 26.8), so n = 1358.07 with ε = 0.05; the
-        // Wilson–Hilferty form the code uses agrees to 0.1 %.
+        // Stegun, Table 26.8), so n = ⌈1358.07⌉ with ε = 0.05 (eq. 8's
+        // Wilson–Hilferty form gives 1358.2, also 1359).
         let p = AdaptiveParams {
             n_min: 1,
             n_max: 1_000_000,
             ..Default::default()
         };
-        let n = p.kld_count(101) as f64;
-        assert!((n - 1358.07).abs() < 1.5, "{n}");
-        // k − 1 = 10: χ²_{10, 0.99} = 23.209 → 232.09.
-        let n10 = p.kld_count(11) as f64;
-        assert!((n10 - 232.09).abs() < 0.01 * 232.09, "{n10}");
+        assert_eq!(p.kld_count(101), 1359);
+        // k − 1 = 10: χ²_{10, 0.99} = 23.2093 → ⌈232.09⌉ (eq. 8: 232.4, also 233).
+        assert_eq!(p.kld_count(11), 233);
+        // k − 1 = 1: χ²_{1, 0.99} = 6.6349 → ⌈66.35⌉; eq. 8 gives 65.9, so 66.
+        assert_eq!(p.kld_count(2), 67);
         assert_eq!(p.kld_count(1), p.n_min);
     }
 

@@ -26,9 +26,9 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::units::PAPER_RADIUS_M;
+use crate::stats::chi2_quantile;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
-use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Settings of the change detector (used by `adaptive-pf`, and by `dkf` and
 /// `akf` when `kalman` is set; the fixed `pf` is the plain filter of \[Farina\] and
@@ -113,9 +113,7 @@ pub struct DetectorParams {
 impl DetectorParams {
     /// The χ²₃ quantile of `1 − false_alarm`.
     pub fn threshold(&self) -> f64 {
-        ChiSquared::new(3.0)
-            .expect("3 degrees of freedom")
-            .inverse_cdf(1.0 - self.false_alarm)
+        chi2_quantile(1.0 - self.false_alarm, 3)
     }
 }
 

@@ -14,7 +14,6 @@ mod fuse;
 mod kalman;
 mod kernels;
 mod nominal;
-mod normal;
 pub mod online;
 mod params;
 mod pf;
@@ -37,7 +36,6 @@ pub use change::{ChangeDetector, ChangeParams, DetectorParams, Jump};
 pub use dkf::DualKf;
 pub use evidence::{Evidence, Wiring};
 pub use nominal::Nominal;
-pub use normal::{erfc, inverse_normal_cdf};
 pub use params::{
     CalibParams, KalmanSettings, Method, NoiseParams, PfSettings, Preset, Ranges, Units,
     MAX_PARTICLES,

@@ -481,31 +481,26 @@ impl ParticleFilter {
     }
 }
 
-/// Cholesky factor of a 3×3 covariance; a covariance that is not positive
-/// definite falls back to the square roots of its diagonal.
+/// Lower Cholesky factor of a 3×3 covariance (nalgebra's); a covariance that
+/// is not positive definite falls back to the square roots of its diagonal.
 fn cholesky(c: &Matrix3<f64>) -> [[f64; 3]; 3] {
-    let mut l = [[0.0f64; 3]; 3];
-    for r in 0..3 {
-        for k in 0..=r {
-            let mut s = c[(r, k)];
-            for j in 0..k {
-                s -= l[r][j] * l[k][j];
+    match c.cholesky() {
+        Some(ch) => {
+            let l = ch.l();
+            [
+                [l[(0, 0)], 0.0, 0.0],
+                [l[(1, 0)], l[(1, 1)], 0.0],
+                [l[(2, 0)], l[(2, 1)], l[(2, 2)]],
+            ]
+        }
+        None => {
+            let mut d = [[0.0; 3]; 3];
+            for i in 0..3 {
+                d[i][i] = c[(i, i)].max(0.0).sqrt();
             }
-            if r == k {
-                if !(s > 0.0) {
-                    let mut d = [[0.0; 3]; 3];
-                    for i in 0..3 {
-                        d[i][i] = c[(i, i)].max(0.0).sqrt();
-                    }
-                    return d;
-                }
-                l[r][r] = s.sqrt();
-            } else {
-                l[r][k] = s / l[k][k];
-            }
+            d
         }
     }
-    l
 }
 
 impl Calibrator for ParticleFilter {

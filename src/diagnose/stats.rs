@@ -1,46 +1,10 @@
-//! Small statistics used by the diagnosis: normal and χ² tail probabilities,
-//! the Ljung–Box whiteness test \[LjungBox1978\], a linear trend test, cross-correlation and
+//! Small statistics used by the diagnosis (its normal and χ² tails are
+//! [`crate::stats`]'s): the Ljung–Box whiteness test \[LjungBox1978\], a linear trend test, cross-correlation and
 //! robust centre and scale.
 
 use serde::Serialize;
 
-/// Complementary error function (Numerical Recipes `erfcc`, |rel. error| < 1.2e-7).
-pub fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.26551223
-            + t * (1.00002368
-                + t * (0.37409196
-                    + t * (0.09678418
-                        + t * (-0.18628806
-                            + t * (0.27886807
-                                + t * (-1.13520398
-                                    + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277)))))))))
-            .exp();
-    if x >= 0.0 {
-        r
-    } else {
-        2.0 - r
-    }
-}
-
-/// Two-sided p-value of a standard normal statistic.
-pub fn normal_two_sided(z: f64) -> f64 {
-    erfc(z.abs() / std::f64::consts::SQRT_2).min(1.0)
-}
-
-/// Upper tail P(χ²_k > q) by the Wilson–Hilferty cube-root approximation \[WilsonHilferty1931\]
-/// (accurate to a few per cent of the p-value for k ≥ 1 in the far tail).
-pub fn chi2_sf(q: f64, k: usize) -> f64 {
-    if q.is_nan() || q <= 0.0 || k == 0 {
-        return 1.0;
-    }
-    let k = k as f64;
-    let a = 2.0 / (9.0 * k);
-    let z = ((q / k).powf(1.0 / 3.0) - (1.0 - a)) / a.sqrt();
-    0.5 * erfc(z / std::f64::consts::SQRT_2)
-}
+pub use crate::stats::{chi2_sf, normal_two_sided};
 
 /// Tests that a normalised residual series (≈ N(0, 1) if the model is right)
 /// carries no structure: its mean, a linear trend in time and its
@@ -213,15 +177,6 @@ mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
     use rand_distr::{Distribution, Normal};
-
-    #[test]
-    fn tails_match_known_values() {
-        assert!((normal_two_sided(1.959964) - 0.05).abs() < 1e-6);
-        assert!((erfc(0.0) - 1.0).abs() < 1e-7);
-        // χ²_10 upper 1 % point is 23.209; χ²_1 5 % point 3.841.
-        assert!((chi2_sf(23.209, 10) - 0.01).abs() < 0.001);
-        assert!((chi2_sf(3.841, 1) - 0.05).abs() < 0.005);
-    }
 
     #[test]
     fn white_noise_passes_and_a_sine_fails() {

@@ -16,8 +16,8 @@
 //! rather than covariances that may be too small for it.
 
 use super::model::P3;
+use crate::stats::chi2_quantile;
 use nalgebra::Matrix3;
-use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// The translation and rotation χ² of a residual.
 pub fn chi2_parts(e: P3, cov: &Matrix3<f64>) -> (f64, f64) {
@@ -92,9 +92,8 @@ pub fn consistent(
         return out;
     }
     k.sort_by(f64::total_cmp);
-    let chi3 = ChiSquared::new(3.0).expect("3 degrees of freedom");
-    let scale = (k[k.len() / 2] / chi3.inverse_cdf(0.5)).max(f64::MIN_POSITIVE);
-    let limit = chi3.inverse_cdf(1.0 - probability);
+    let scale = (k[k.len() / 2] / chi2_quantile(0.5, 3)).max(f64::MIN_POSITIVE);
+    let limit = chi2_quantile(1.0 - probability, 3);
     let mut beyond: Vec<usize> = (0..c.len()).filter(|&i| !(c[i] / scale <= limit)).collect();
     beyond.sort_by(|&a, &b| c[b].total_cmp(&c[a]));
     let most = (max_fraction * c.len() as f64).floor() as usize;

@@ -17,8 +17,8 @@ use crate::geom::wrap_angle;
 use crate::motion::VelocityObs;
 use crate::recording::WheelSample;
 use crate::robot::DiffDrive;
+use crate::stats::chi2_quantile;
 use nalgebra::{Matrix3, Vector3};
-use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Where the filters start, once the front end knows.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -330,9 +330,7 @@ impl FrontEnd {
                 let chi2 = cov
                     .try_inverse()
                     .map_or(f64::INFINITY, |i| (d.transpose() * i * d)[0]);
-                let limit = ChiSquared::new(3.0)
-                    .expect("3 degrees of freedom")
-                    .inverse_cdf(1.0 - self.p.mount_probability);
+                let limit = chi2_quantile(1.0 - self.p.mount_probability, 3);
                 let contradicted = chi2 > limit;
                 let words = format!(
                     "the {src} mounting x {:.4} m, y {:.4} m, yaw {:.4} rad against the \
