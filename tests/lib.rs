@@ -24,6 +24,7 @@ mod diagnose_chain;
 mod diagnose_encoder_table;
 mod diagnose_figures;
 mod diagnose_independent;
+mod diagnose_nulls;
 mod diagnose_real;
 mod diagnose_sim;
 mod diagnose_synthetic;

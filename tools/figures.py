@@ -27,6 +27,10 @@ or --only):
                     (slow: ~1.5 min; its time per step is not compared)
   blind-suite       the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
   independent-laws  clean bags rewritten by tools/rewrite_effects.py, diagnosed (slow: ~5 min)
+  icp-instrument    scan-to-scan ICP's own error on 25 null runs, the diagnosis's
+                    instrument table (slow: ~5 min)
+  null-lengths      72 null runs, every scenario at 60, 150 and 300 s, diagnosed
+                    (slow: ~6 min)
   fleet             a simulated fleet, 12 chairs over 10 days (slow: ~3 min)
 
 CSM's figures are recorded measurements (tools/figures_csm.json: Censi's
@@ -49,7 +53,7 @@ import os
 import sys
 import tempfile
 
-from figlib import calibration, changes, diagnosis, pages, scan_matching
+from figlib import calibration, changes, diagnosis, instrument, pages, scan_matching
 from figlib.common import ROOT, Runner, Skip, write_atomically
 
 RESULTS = os.path.join(ROOT, "docs", "results")
@@ -69,6 +73,8 @@ BLOCKS = {
     "table-ii-scans": (calibration.block_table_ii_scans, True),
     "blind-suite": (diagnosis.block_blind_suite, True),
     "independent-laws": (diagnosis.block_independent_laws, True),
+    "icp-instrument": (instrument.block_icp_instrument, True),
+    "null-lengths": (instrument.block_null_lengths, True),
     "fleet": (calibration.block_fleet, True),
 }
 

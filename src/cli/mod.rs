@@ -172,12 +172,15 @@ fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
     }
     for r in &d.remaining {
         out!(
-            "  left in {}: {}, {:.5} {} (p {:.1e})",
+            "  left in {}: {}, {:.5} {} (p {:.1e}){}",
             r.stream,
             r.structure,
             r.size,
             r.unit,
-            r.p_value
+            r.p_value,
+            r.reason
+                .as_ref()
+                .map_or_else(String::new, |why| format!(", the scan matcher's: {why}"))
         );
     }
     out!("held out from t = {:.1} s", d.series.split);

@@ -78,6 +78,25 @@ pub struct Remaining {
     pub unit: String,
     /// p-value of the test that found it.
     pub p_value: f64,
+    /// Whose it is: [`ROBOT`] (a departure no effect of the table explains)
+    /// or [`SCAN_MATCHING`] (the scan matcher's own error accounts for it;
+    /// it does not count against the verdict).
+    pub source: String,
+    /// Why it is the scan matcher's, in words (absent for the robot's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+}
+
+/// `remaining[].source` of a structure left unexplained by the robot model.
+pub const ROBOT: &str = "robot";
+/// `remaining[].source` of a structure the scan matcher's own error accounts for.
+pub const SCAN_MATCHING: &str = "scan_matching";
+
+impl Remaining {
+    /// Whether it counts against the robot model (not the instrument's).
+    pub fn is_robot(&self) -> bool {
+        self.source == ROBOT
+    }
 }
 
 /// The whole diagnosis.

@@ -22,6 +22,7 @@ pub mod fit;
 pub mod floor;
 pub mod free;
 pub mod gain;
+pub mod instrument;
 pub mod model;
 pub mod mount;
 pub mod odometry;
@@ -95,6 +96,9 @@ pub struct DiagnoseParams {
     /// Sizes below which a leftover structure is not reported (what scan
     /// matching alone leaves on null recordings).
     pub floors: remaining::Floors,
+    /// Scan-to-scan ICP's own error per pair, against which a leftover
+    /// structure is checked before it is called the robot's.
+    pub instrument: instrument::Instrument,
     /// Maximum number of effects selected.
     pub max_effects: usize,
     /// Levenberg–Marquardt iterations per fit.
@@ -121,6 +125,7 @@ impl Default for DiagnoseParams {
             outlier_sigma: 8.0,
             structure_lag: 3.0,
             floors: remaining::Floors::default(),
+            instrument: instrument::Instrument::default(),
             max_effects: 4,
             max_iter: 30,
             candidates: EFFECT_NAMES.iter().map(|s| s.to_string()).collect(),
@@ -171,6 +176,7 @@ impl DiagnoseParams {
         if !(self.margin.is_finite() && self.margin >= 0.0) {
             return bad(format!("margin must be ≥ 0 s, got {}", self.margin));
         }
+        self.instrument.validate().map_err(DiagnoseError::Params)?;
         if self.max_iter == 0 || self.ljung_box_lags == 0 {
             return bad("max_iter and ljung_box_lags must be ≥ 1".into());
         }

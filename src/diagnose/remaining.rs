@@ -13,8 +13,9 @@
 //! size also exceeds what scan matching leaves on recordings without any
 //! effect ([`Floors`], measured on null runs through the simulator and ICP).
 
-use super::data::{Part, GROUPS};
-use super::diagnosis::Remaining;
+use super::data::{IcpRow, Part, GROUPS};
+use super::diagnosis::{Remaining, ROBOT, SCAN_MATCHING};
+use super::instrument::Instrument;
 use super::stats::chi2_sf;
 use crate::effects::Departures;
 use crate::robot::RobotConfig;
@@ -116,9 +117,11 @@ struct Rows {
     turn: Vec<f64>,
     /// ω_r cos φ_r, ω_r sin φ_r, ω_l cos φ_l, ω_l sin φ_l (rad/s).
     wheel: Vec<[f64; 4]>,
+    /// The instrument's relative error and spread per row (scan matching).
+    cell: Vec<[f64; 2]>,
 }
 
-fn rows(all: Part, x: &Departures, g: usize) -> Rows {
+fn rows(all: Part, x: &Departures, g: usize, inst: &Instrument) -> Rows {
     let phys = all.physical(x);
     let nominal = Departures::default();
     let mut r = Rows {
@@ -128,8 +131,9 @@ fn rows(all: Part, x: &Departures, g: usize) -> Rows {
         speed: Vec::new(),
         turn: Vec::new(),
         wheel: Vec::new(),
+        cell: Vec::new(),
     };
-    let mut push = |t0: f64, t1: f64, s: f64| {
+    let mut push = |t0: f64, t1: f64, s: f64, icp: Option<&IcpRow>| {
         let tm = 0.5 * (t0 + t1);
         let (v, w) = all.replay.body(&nominal, t0, t1);
         r.t.push(tm);
@@ -137,14 +141,16 @@ fn rows(all: Part, x: &Departures, g: usize) -> Rows {
         r.speed.push(v);
         r.turn.push(w);
         r.wheel.push(wheel_regressors(all.replay, t0, t1));
+        r.cell
+            .push(icp.map_or([0.0, 0.0], |row| inst.cell(g, row, v, w)));
     };
     if g < 3 {
         for row in all.icp {
-            push(row.t0, row.t1, row.sigma[g]);
+            push(row.t0, row.t1, row.sigma[g], Some(row));
         }
     } else {
         for row in all.gyro {
-            push(row.t0, row.t1, row.sigma);
+            push(row.t0, row.t1, row.sigma, None);
         }
     }
     r
@@ -211,12 +217,13 @@ fn unit(g: usize) -> &'static str {
 /// Runs one kind's test on one stream: (size, unit of size, p, floor).
 fn test_kind(
     r: &Rows,
+    e: &[f64],
     g: usize,
     kind: &str,
     lags: usize,
     floors: &Floors,
 ) -> Option<(f64, String, f64, f64, Vec<f64>)> {
-    let n = r.e.len();
+    let n = e.len();
     let one = vec![1.0; n];
     let tm = r.t.iter().sum::<f64>() / n.max(1) as f64;
     let f = if g < 2 {
@@ -263,7 +270,7 @@ fn test_kind(
             )
         }
     };
-    let (w, beta) = hac_wald(&r.e, &cols, &r.sigma, lags, &test)?;
+    let (w, beta) = hac_wald(e, &cols, &r.sigma, lags, &test)?;
     let size = if test.len() == 1 {
         beta[test[0]]
     } else {
@@ -309,15 +316,74 @@ pub fn wobble(size: f64, g: usize, robot: &RobotConfig) -> f64 {
     }
 }
 
+/// What the instrument's table makes of one stream's rows: the residuals
+/// with its error taken out, the weighted mean of its relative error and of
+/// its spread (weights: each row's information on the motion it rides on).
+struct Corrected {
+    e: Vec<f64>,
+    error: f64,
+    spread: f64,
+}
+
+/// The rows of stream `g` corrected by the instrument's table; `None` for
+/// the streams it has no table of (lateral, gyro) or when it is off.
+fn corrected(r: &Rows, g: usize, inst: &Instrument) -> Option<Corrected> {
+    let x = match g {
+        0 if inst.enabled => &r.speed,
+        2 if inst.enabled => &r.turn,
+        _ => return None,
+    };
+    let e =
+        r.e.iter()
+            .zip(&r.cell)
+            .zip(x)
+            .map(|((e, c), x)| e - c[0] * x);
+    let (mut se, mut ss, mut sw) = (0.0, 0.0, 0.0);
+    for ((c, x), s) in r.cell.iter().zip(x).zip(&r.sigma) {
+        let w = (x / s).powi(2);
+        se += w * c[0];
+        ss += w * c[1];
+        sw += w;
+    }
+    (sw > 0.0).then(|| Corrected {
+        e: e.collect(),
+        error: se / sw,
+        spread: ss / sw,
+    })
+}
+
+/// Why a structure is the instrument's, in words.
+fn instrument_reason(g: usize, c: &Corrected, rel: f64, rel_c: f64) -> String {
+    let what = if g == 0 {
+        "forward speed (more where the geometry leaves the motion's axis loose and where \
+         the scans are close together)"
+    } else {
+        "turn rate"
+    };
+    format!(
+        "scan-to-scan ICP reads the {what} {:+.2} % ± {:.2} % on these rows: {:+.2} % of the \
+         motion found, {:+.2} % once that is taken out",
+        100.0 * c.error,
+        100.0 * c.spread,
+        100.0 * rel,
+        100.0 * rel_c
+    )
+}
+
 /// Every structure test of every stream of `all` under the model `x`.
 /// `alpha` is family-wise (Bonferroni over all tests); `lag_seconds` the
-/// span of serial correlation allowed for.
+/// span of serial correlation allowed for. A significant structure that the
+/// scan matcher's own error (`inst`) accounts for is reported with source
+/// `scan_matching` and the reason: once the table's error is out of the
+/// rows, it is no longer significant or no larger than its floor widened by
+/// `inst.spreads` times the table's spread.
 pub fn remaining_tests(
     all: Part,
     x: &Departures,
     alpha: f64,
     lag_seconds: f64,
     floors: &Floors,
+    inst: &Instrument,
     robot: &RobotConfig,
 ) -> Vec<RemainingTest> {
     let mut found = Vec::new();
@@ -326,16 +392,23 @@ pub fn remaining_tests(
         if counts[g] < 50 {
             continue;
         }
-        let r = rows(all, x, g);
+        let r = rows(all, x, g, inst);
+        let corr = corrected(&r, g, inst);
         let span = r.t.last().unwrap_or(&0.0) - r.t.first().unwrap_or(&0.0);
-        let lags = ((lag_seconds / span.max(1e-9)) * r.t.len() as f64).ceil() as usize;
+        let lags = (((lag_seconds / span.max(1e-9)) * r.t.len() as f64).ceil() as usize).max(1);
         for kind in KINDS {
             // The gyro has no lateral counterpart of speed; test all the same.
-            let Some((size, u, p, floor, beta)) = test_kind(&r, g, kind, lags.max(1), floors)
-            else {
+            let Some((size, u, p, floor, beta)) = test_kind(&r, &r.e, g, kind, lags, floors) else {
                 continue;
             };
             let rel = relative(size, kind, g, &r, robot);
+            // The same test once the instrument's error is out of the rows.
+            let after = corr.as_ref().and_then(|c| {
+                let (size_c, _, p_c, _, _) = test_kind(&r, &c.e, g, kind, lags, floors)?;
+                let rel_c = relative(size_c, kind, g, &r, robot);
+                let big_c = rel_c.abs() > floor + inst.spreads * c.spread;
+                Some((big_c, p_c, instrument_reason(g, c, rel, rel_c)))
+            });
             found.push((
                 Remaining {
                     stream: GROUPS[g].to_string(),
@@ -343,19 +416,31 @@ pub fn remaining_tests(
                     size,
                     unit: u,
                     p_value: p,
+                    source: ROBOT.to_string(),
+                    reason: None,
                 },
                 rel.abs() > floor,
                 beta,
+                after,
             ));
         }
     }
     let m = found.len().max(1) as f64;
     found
         .into_iter()
-        .map(|(f, big, beta)| RemainingTest {
-            significant: big && f.p_value < alpha / m,
-            found: f,
-            coefficients: beta,
+        .map(|(mut f, big, beta, after)| {
+            let significant = big && f.p_value < alpha / m;
+            if let Some((big_c, p_c, reason)) = after {
+                if significant && !(big_c && p_c < alpha / m) {
+                    f.source = SCAN_MATCHING.to_string();
+                    f.reason = Some(reason);
+                }
+            }
+            RemainingTest {
+                significant,
+                found: f,
+                coefficients: beta,
+            }
         })
         .collect()
 }

@@ -300,7 +300,7 @@ impl Pass {
             verdict,
             causes,
             faults,
-            remaining_structure: !remaining.is_empty(),
+            remaining_structure: remaining.iter().any(Remaining::is_robot),
             remaining,
             gain,
             heldout_rejected: self.heldout_rejected.clone(),
@@ -327,7 +327,15 @@ fn structure_tests(
     robot: &RobotConfig,
     p: &DiagnoseParams,
 ) -> Vec<RemainingTest> {
-    remaining_tests(all, x, p.structure_alpha, p.structure_lag, &p.floors, robot)
+    remaining_tests(
+        all,
+        x,
+        p.structure_alpha,
+        p.structure_lag,
+        &p.floors,
+        &p.instrument,
+        robot,
+    )
 }
 
 /// The significant structures the model leaves; a periodic one in the
@@ -340,7 +348,7 @@ fn leftover(
 ) -> Vec<Remaining> {
     let round = tests
         .iter()
-        .filter(|t| t.significant && t.found.structure == PERIODIC)
+        .filter(|t| t.significant && t.found.is_robot() && t.found.structure == PERIODIC)
         .min_by(|a, b| a.found.p_value.total_cmp(&b.found.p_value));
     // Named once: rows already cleared of it may still show a trace.
     let named = faults.iter().any(|f| f.name == OUT_OF_ROUND);
@@ -579,11 +587,14 @@ fn confirmed(held: Part, sel: &Selection, c: &Confirm) -> usize {
     kept
 }
 
-/// `explained` when causes (or faults) are named and nothing is left,
-/// `partly-explained` when something is; without causes, `unexplained` when
-/// the nominal model leaves structure and `no-discrepancy` when it does not.
+/// `explained` when causes (or faults) are named and nothing of the robot's
+/// is left, `partly-explained` when something is; without causes,
+/// `unexplained` when the nominal model leaves structure of the robot's and
+/// `no-discrepancy` when it does not. What the scan matcher's own error
+/// accounts for (`source: scan_matching`) never counts.
 pub fn verdict(causes: &[Cause], remaining: &[Remaining], faults: &[Fault]) -> Verdict {
-    match (causes.is_empty() && faults.is_empty(), remaining.is_empty()) {
+    let robot_left = remaining.iter().any(Remaining::is_robot);
+    match (causes.is_empty() && faults.is_empty(), !robot_left) {
         (false, true) => Verdict::Explained,
         (false, false) => Verdict::PartlyExplained,
         (true, false) => Verdict::Unexplained,

@@ -76,7 +76,8 @@ def left_cell(r):
     else:
         text = f"{num(size, 3)} {unit}"
     mantissa, exponent = f"{r['p_value']:.0e}".split("e")
-    return f"{r['stream']}: {r['structure']} {text} ({mantissa}e{int(exponent)})"
+    whose = ", scan matching's" if r.get("source") == "scan_matching" else ""
+    return f"{r['stream']}: {r['structure']} {text} ({mantissa}e{int(exponent)}{whose})"
 
 
 def gain_cell(g):

@@ -146,6 +146,33 @@ PAGES = {
         "named. Each cell gives the verdict and everything named.",
         "blind-diagnosis-suite",
     ),
+    "icp-instrument": (
+        "The scan matcher as an instrument",
+        "`python3 tools/figures.py --write --only icp-instrument`: 25 null runs of 150 s "
+        "(`odocal simulate`, scenarios figure-eight, random-walk, hall, square, corridor-loop; "
+        "seeds 401–403 at the laser's 50 Hz, 401–402 at 25 Hz), each matched scan to scan "
+        "(`odocal icp` with `[icp] local_map = false`, as the diagnosis matches) and compared "
+        "pair by pair with the wheels, which in a null run read the true wheel motion (no effect "
+        "on the simulated chair; 8800 ticks at 100 Hz). "
+        "Each cell: ICP's relative error, Σ w e x / Σ w x² over the pairs there (x the true "
+        "forward speed or turn rate, e ICP's error, w 1/σ² of ICP's covariance), ± the standard "
+        "deviation of the runs' own estimates (runs with at least 50 pairs there; a cell seen in "
+        "fewer than three runs takes its whole error again as spread). "
+        "`diagnose::instrument::Instrument::default()` holds this table "
+        "(`python3 tools/icp_error_table.py` prints it as code).",
+        "the-scan-matcher-as-an-instrument",
+    ),
+    "null-lengths": (
+        "Null runs at every length",
+        "`python3 tools/figures.py --write --only null-lengths`: for every built-in scenario "
+        "and 60, 150 and 300 s, four runs with nothing hidden (`odocal simulate --scenario S "
+        "--seed N --duration L`, seeds 501–504, laser at the default 50 Hz; `odocal diagnose "
+        "--measured BAG --json` on the nominal chair). Each cell: how many come out "
+        "`no-discrepancy`, how many of all carry a structure the diagnosis put on the scan "
+        "matcher (`remaining[].source = \"scan_matching\"`), and the other verdicts with what "
+        "they named.",
+        "the-scan-matcher-as-an-instrument",
+    ),
     "fleet": (
         "A simulated fleet",
         "`odocal experiment fleet --runs 12 --seed 7 --settings big.toml` with `days = 10`: "

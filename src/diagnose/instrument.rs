@@ -1,0 +1,199 @@
+//! The scan matcher as an instrument: what scan-to-scan ICP itself reads
+//! wrong, so that a leftover structure of its own making is not reported as
+//! a departure of the robot.
+//!
+//! Matched scan to scan, ICP reads the forward speed short where the
+//! geometry leaves the motion's axis loose (a corridor: the walls say
+//! nothing along it) and where the scans are close together (a short step
+//! between them), and the turn rate short by a few tenths of a per cent. Against
+//! a recording's own wheels these errors look like a bias in the forward
+//! speed or a turn-dependent turn rate that no effect of the table explains
+//! (a radius would move the turn rate too; a wheel base would move the
+//! gyro). The model here is a table of the relative error per pair,
+//! measured on null runs of the simulator (no effect: the wheels read the
+//! true motion) by `tools/icp_error_table.py`, with the run-to-run spread of
+//! each cell. A leftover structure is the instrument's when, after the
+//! table's error is taken out of every row, what remains is within the
+//! floors widened by `spreads` times the spread.
+//!
+//! The table is the LMS111 wheelchair's in the simulator's worlds; on
+//! another scanner it is an assumption, stated in the diagnosis.
+
+use super::data::IcpRow;
+use serde::{Deserialize, Serialize};
+
+/// One cell of the table: the mean relative error of the pairs there
+/// (measured / true − 1) and its spread between runs (standard deviation).
+pub type Cell = [f64; 2];
+
+/// The error model of scan-to-scan ICP (`[diagnose.instrument]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Instrument {
+    /// Whether leftover structures are checked against the model (off:
+    /// every leftover structure is the robot's).
+    pub enabled: bool,
+    /// Inner bounds of the anisotropy bins: σx/σy of the pair's translation
+    /// (its covariance along and across the robot), ascending.
+    pub anisotropy_edges: Vec<f64>,
+    /// Inner bounds of the forward-step bins (m per pair), ascending.
+    pub step_edges: Vec<f64>,
+    /// Relative forward-speed error per anisotropy bin (rows) and step bin
+    /// (columns).
+    pub forward: Vec<Vec<Cell>>,
+    /// Inner bounds of the rotation bins (rad per pair), ascending.
+    pub rotation_edges: Vec<f64>,
+    /// Relative turn-rate error per rotation bin.
+    pub turn: Vec<Cell>,
+    /// Spreads of the table's error allowed beyond the floors.
+    pub spreads: f64,
+}
+
+impl Default for Instrument {
+    /// Measured by `python3 tools/icp_error_table.py` (five scenarios, seeds
+    /// 401–403 at 50 Hz and 401–402 at 25 Hz, 150 s each; the manual's
+    /// results page `icp-instrument` has the table with its row counts and
+    /// a test holds the two equal).
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            anisotropy_edges: vec![2.0, 2.5, 3.0],
+            step_edges: vec![0.012, 0.02],
+            forward: vec![
+                vec![[0.0007, 0.0077], [-0.0028, 0.0026], [-0.0009, 0.0009]],
+                vec![[0.0043, 0.0200], [-0.0095, 0.0104], [-0.0041, 0.0038]],
+                vec![[-0.0138, 0.0138], [-0.0184, 0.0088], [-0.0045, 0.0024]],
+                vec![[-0.0166, 0.0166], [-0.0210, 0.0226], [-0.0119, 0.0119]],
+            ],
+            rotation_edges: vec![0.002, 0.005, 0.01],
+            turn: vec![
+                [-0.0382, 0.0223],
+                [-0.0026, 0.0058],
+                [-0.0008, 0.0027],
+                [-0.0015, 0.0015],
+            ],
+            spreads: 2.0,
+        }
+    }
+}
+
+/// The bin of `x` among ascending inner bounds `edges`.
+fn bin(edges: &[f64], x: f64) -> usize {
+    edges.iter().take_while(|e| x >= **e).count()
+}
+
+impl Instrument {
+    /// Checks the table's shape: one row per anisotropy bin, one column per
+    /// step bin, one turn cell per rotation bin, ascending bounds, finite
+    /// cells with spreads ≥ 0.
+    pub fn validate(&self) -> Result<(), String> {
+        let ascending =
+            |e: &[f64]| e.windows(2).all(|w| w[0] < w[1]) && e.iter().all(|x| x.is_finite());
+        let cell_ok = |c: &Cell| c[0].is_finite() && c[1].is_finite() && c[1] >= 0.0;
+        if !(ascending(&self.anisotropy_edges)
+            && ascending(&self.step_edges)
+            && ascending(&self.rotation_edges))
+        {
+            return Err("instrument: bin bounds must be finite and ascending".into());
+        }
+        let cols = self.step_edges.len() + 1;
+        if self.forward.len() != self.anisotropy_edges.len() + 1
+            || self.forward.iter().any(|r| r.len() != cols)
+            || self.turn.len() != self.rotation_edges.len() + 1
+        {
+            return Err(format!(
+                "instrument: forward needs {} rows of {cols} cells and turn {} cells",
+                self.anisotropy_edges.len() + 1,
+                self.rotation_edges.len() + 1
+            ));
+        }
+        if !(self.forward.iter().flatten().all(cell_ok) && self.turn.iter().all(cell_ok)) {
+            return Err("instrument: every cell is [error, spread ≥ 0], finite".into());
+        }
+        if !(self.spreads.is_finite() && self.spreads >= 0.0) {
+            return Err(format!(
+                "instrument: spreads must be ≥ 0, got {}",
+                self.spreads
+            ));
+        }
+        Ok(())
+    }
+
+    /// The table's relative error and spread for one ICP row of stream `g`
+    /// (0 forward, 2 turn rate; the lateral stream has none) whose true
+    /// motion is about `v` (m/s) and `w` (rad/s), the replay's.
+    pub fn cell(&self, g: usize, row: &IcpRow, v: f64, w: f64) -> Cell {
+        let dt = row.t1 - row.t0;
+        match g {
+            0 => {
+                let a = row.sigma[0] / row.sigma[1];
+                let a = if a.is_finite() { a } else { 0.0 };
+                let r = bin(&self.anisotropy_edges, a);
+                let c = bin(&self.step_edges, v.abs() * dt);
+                self.forward[r][c]
+            }
+            2 => self.turn[bin(&self.rotation_edges, w.abs() * dt)],
+            _ => [0.0, 0.0],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(dt: f64, sx: f64, sy: f64) -> IcpRow {
+        IcpRow {
+            t0: 1.0,
+            t1: 1.0 + dt,
+            z: [0.0; 3],
+            sigma: [sx, sy, 0.01],
+        }
+    }
+
+    #[test]
+    fn a_row_falls_in_the_cell_of_its_geometry_step_and_rotation() {
+        let m = Instrument {
+            anisotropy_edges: vec![2.0],
+            step_edges: vec![0.01],
+            forward: vec![vec![[1.0, 0.1], [2.0, 0.2]], vec![[3.0, 0.3], [4.0, 0.4]]],
+            rotation_edges: vec![0.005],
+            turn: vec![[5.0, 0.5], [6.0, 0.6]],
+            ..Instrument::default()
+        };
+        m.validate().unwrap();
+        // 0.75 m/s over 20 ms: a 15 mm step; σx/σy 3 (loose along) or 1.
+        assert_eq!(m.cell(0, &row(0.02, 0.3, 0.1), 0.75, 0.0), [4.0, 0.4]);
+        assert_eq!(m.cell(0, &row(0.02, 0.1, 0.1), 0.75, 0.0), [2.0, 0.2]);
+        // 0.25 m/s over 20 ms: 5 mm, below the step bound.
+        assert_eq!(m.cell(0, &row(0.02, 0.3, 0.1), -0.25, 0.0), [3.0, 0.3]);
+        // Exactly on a bound: the upper bin.
+        assert_eq!(m.cell(0, &row(0.02, 0.2, 0.1), 0.5, 0.0), [4.0, 0.4]);
+        // 0.5 rad/s over 20 ms: 10 mrad; 0.1 rad/s: 2 mrad.
+        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.0, -0.5), [6.0, 0.6]);
+        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.0, 0.1), [5.0, 0.5]);
+        // The lateral stream and the gyro carry no table.
+        assert_eq!(m.cell(1, &row(0.02, 0.1, 0.1), 1.0, 1.0), [0.0, 0.0]);
+        assert_eq!(m.cell(3, &row(0.02, 0.1, 0.1), 1.0, 1.0), [0.0, 0.0]);
+    }
+
+    #[test]
+    fn a_table_of_the_wrong_shape_or_order_is_refused() {
+        Instrument::default().validate().unwrap();
+        let short = Instrument {
+            turn: vec![[0.0, 0.0]],
+            ..Instrument::default()
+        };
+        assert!(short.validate().unwrap_err().contains("turn 4 cells"));
+        let unordered = Instrument {
+            step_edges: vec![0.02, 0.012],
+            ..Instrument::default()
+        };
+        assert!(unordered.validate().is_err());
+        let negative = Instrument {
+            turn: vec![[0.0, -1.0]; 4],
+            ..Instrument::default()
+        };
+        assert!(negative.validate().is_err());
+    }
+}
