@@ -54,6 +54,7 @@
 
 mod covariance;
 mod grid;
+mod limits;
 mod matcher;
 mod metric;
 mod neighbours;
@@ -69,6 +70,7 @@ mod threshold;
 mod time_offset;
 
 pub use covariance::MIN_RESIDUAL_STD;
+pub use limits::SpeedLimits;
 pub use matcher::{MatchInfo, PriorSource, ScanMatcher};
 pub use metric::Metric;
 pub use neighbours::NeighbourSearch;
