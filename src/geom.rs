@@ -76,6 +76,16 @@ pub fn between(a: &Pose2, b: &Pose2) -> Pose2 {
     a.inv_mul(b)
 }
 
+/// Jacobians of `m = inv(a) ⊕ b` (as x, y, θ) with respect to the (x, y, θ)
+/// of `a` and of `b`, all in the common parent frame.
+pub fn between_jacobians(a: &Pose2, b: &Pose2) -> (nalgebra::Matrix3<f64>, nalgebra::Matrix3<f64>) {
+    let (s, c) = heading(a).sin_cos();
+    let m = between(a, b).translation.vector;
+    let jb = nalgebra::Matrix3::new(c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0);
+    let ja = nalgebra::Matrix3::new(-c, -s, m.y, s, -c, -m.x, 0.0, 0.0, -1.0);
+    (ja, jb)
+}
+
 /// Interpolates between two poses at fraction `s` (0 → `a`, 1 → `b`): linear in
 /// translation, shortest-arc in heading. `s` outside [0, 1] extrapolates.
 pub fn interpolate(a: &Pose2, b: &Pose2, s: f64) -> Pose2 {
@@ -124,6 +134,24 @@ mod tests {
     use super::*;
     use rand::rngs::StdRng;
     use rand::{RngExt, SeedableRng};
+
+    #[test]
+    fn between_jacobians_match_central_differences() {
+        let p = random_poses(20, 7);
+        for w in p.windows(2) {
+            let (ja, jb) = between_jacobians(&w[0], &w[1]);
+            let [a, b] = [xyt(&w[0]), xyt(&w[1])];
+            let m = |x: [f64; 3], y: [f64; 3]| {
+                xyt(&between(&pose(x[0], x[1], x[2]), &pose(y[0], y[1], y[2])))
+            };
+            let na = jacobian3(|x| m(x, b), a);
+            let nb = jacobian3(|y| m(a, y), b);
+            assert!(
+                (ja - na).norm() < 1e-6 && (jb - nb).norm() < 1e-6,
+                "{ja} {na} {jb} {nb}"
+            );
+        }
+    }
 
     fn random_poses(n: usize, seed: u64) -> Vec<Pose2> {
         let mut rng = StdRng::seed_from_u64(seed);

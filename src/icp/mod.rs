@@ -29,10 +29,15 @@
 //!   fitted lines' direction noise (range noise tilts short line fits, which
 //!   looks like information along a featureless wall), which decides how
 //!   much of each direction a motion owes to the scan and how much to the
-//!   prior term (`matcher`).
-//! - `matcher`: the pair-by-pair [`ScanMatcher`] with prior selection,
-//!   retries of failed matches from the constant-velocity guess, failure
-//!   flags, and a local map kept across a few failed scans; `stream`: the
+//!   prior term (`matcher/split`).
+//! - `limits`: the robot's speed and turn-rate limits, the plausibility gate
+//!   of every match.
+//! - `matcher`: the pair-by-pair [`ScanMatcher`], a short loop over its
+//!   components, each in its own file with its own settings: prior
+//!   selection (`prior`, `prior_term`), the source (`source`), one
+//!   registration (`attempt`), retries of failed matches from the motion
+//!   guesses (`retry`), the gates and failure flags (`acceptance`), and a
+//!   local map kept across a few failed scans (`local_map`); `stream`: the
 //!   incremental [`StreamMatcher`] (scan in, motion out) that builds the
 //!   odometry prior from wheel or odometry samples as they arrive; `run`:
 //!   whole recordings ([`match_recording`], a loop over it), [`Tally`],
@@ -54,6 +59,7 @@
 
 mod covariance;
 mod grid;
+mod limits;
 mod matcher;
 mod metric;
 mod neighbours;
@@ -69,6 +75,7 @@ mod threshold;
 mod time_offset;
 
 pub use covariance::MIN_RESIDUAL_STD;
+pub use limits::SpeedLimits;
 pub use matcher::{MatchInfo, PriorSource, ScanMatcher};
 pub use metric::Metric;
 pub use neighbours::NeighbourSearch;

@@ -1,6 +1,7 @@
 //! Parameters of the scan matcher: one plain struct with defaults, read from the
 //! `[icp]` table of a config file and validated once.
 
+use super::limits::SpeedLimits;
 use serde::{Deserialize, Serialize};
 
 /// Everything the scan matcher can be tuned by. Units: m, rad, s.
@@ -246,11 +247,17 @@ impl IcpParams {
     /// `cov` plus the slacks: the plausibility gate of every match, and the
     /// check of motions read from a file.
     pub fn within_limits(&self, motion: [f64; 3], cov: &nalgebra::Matrix3<f64>, dt: f64) -> bool {
-        let [x, y, th] = motion;
-        let st = (cov[(0, 0)] + cov[(1, 1)]).max(0.0).sqrt();
-        let sr = cov[(2, 2)].max(0.0).sqrt();
-        (x * x + y * y).sqrt() <= self.max_speed * dt + 3.0 * st + self.speed_slack
-            && th.abs() <= self.max_turn_rate * dt + 3.0 * sr + self.turn_slack
+        self.speed_limits().within(motion, cov, dt)
+    }
+
+    /// The robot's speed and turn-rate limits with their slacks.
+    pub fn speed_limits(&self) -> SpeedLimits {
+        SpeedLimits {
+            max_speed: self.max_speed,
+            max_turn_rate: self.max_turn_rate,
+            speed_slack: self.speed_slack,
+            turn_slack: self.turn_slack,
+        }
     }
 
     /// Checks ranges and orderings once, before any matching.
