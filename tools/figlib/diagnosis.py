@@ -107,7 +107,7 @@ def block_real_diagnosis(runner, csm):
             with open(os.path.join(runner.data, results)) as f:
                 authors = json.load(f)
         causes = [cause_cell(c, authors) for c in d["causes"]]
-        causes += [f"fault {f.get('fault') or f.get('effect') or f}" for f in d["faults"]]
+        causes += [f"fault {f['name']} ({f['evidence']})" for f in d["faults"]]
         left = [left_cell(r) for r in d["remaining"]]
         rows.append(f"| {label} | {d['verdict']} | {'; '.join(causes) or '–'} | "
                     f"{'; '.join(left) or '–'} | {gain_cell(d['gain'])} |")
