@@ -93,3 +93,51 @@ fn what_scan_to_scan_icp_leaves_on_null_runs_is_put_on_the_scan_matcher() {
         assert!(left(&d, "scan_matching").is_empty());
     }
 }
+
+/// The cells "e ± s %" of a table row, in order (the page writes − as U+2212).
+fn cells(row: &str) -> Vec<[f64; 2]> {
+    row.split('|')
+        .filter_map(|c| {
+            let c = c.trim().replace('−', "-");
+            let (e, rest) = c.split_once(" ± ")?;
+            let s = rest.split_once(" %")?.0;
+            Some([e.parse().ok()?, s.parse().ok()?])
+        })
+        .collect()
+}
+
+#[test]
+fn the_instrument_table_in_the_code_is_the_measured_one() {
+    // docs/results/icp-instrument.md is regenerated from null runs by
+    // tools/figures.py (CI checks it against the runs); the code must hold
+    // the same numbers.
+    let page = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/results/icp-instrument.md"),
+    )
+    .unwrap();
+    let rows: Vec<Vec<[f64; 2]>> = page
+        .lines()
+        .filter(|l| l.starts_with('|'))
+        .map(cells)
+        .filter(|c| !c.is_empty())
+        .collect();
+    let m = odocal::diagnose::instrument::Instrument::default();
+    let code: Vec<Vec<[f64; 2]>> = m
+        .forward
+        .iter()
+        .cloned()
+        .chain(m.turn.iter().map(|c| vec![*c]))
+        .collect();
+    assert_eq!(rows.len(), code.len(), "{rows:?}");
+    for (page_row, code_row) in rows.iter().zip(&code) {
+        assert_eq!(page_row.len(), code_row.len());
+        for (p, c) in page_row.iter().zip(code_row) {
+            for k in 0..2 {
+                assert!(
+                    (p[k] - 100.0 * c[k]).abs() < 0.006,
+                    "page {p:?} against code {c:?} (per cent)"
+                );
+            }
+        }
+    }
+}
