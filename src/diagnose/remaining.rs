@@ -402,8 +402,10 @@ pub fn remaining_tests(
                 continue;
             };
             let rel = relative(size, kind, g, &r, robot);
-            // The same test once the instrument's error is out of the rows.
-            let after = corr.as_ref().and_then(|c| {
+            // The same test once the instrument's error is out of the rows,
+            // for a structure that can be significant (α/m ≤ α).
+            let candidate = rel.abs() > floor && p < alpha;
+            let after = corr.as_ref().filter(|_| candidate).and_then(|c| {
                 let (size_c, _, p_c, _, _) = test_kind(&r, &c.e, g, kind, lags, floors)?;
                 let rel_c = relative(size_c, kind, g, &r, robot);
                 let big_c = rel_c.abs() > floor + inst.spreads * c.spread;
