@@ -1,5 +1,5 @@
 //! Weighted nonlinear least squares (Levenberg–Marquardt [Levenberg1944;
-//! Marquardt1963], central-difference Jacobian) of the free parameters of a
+//! Marquardt1963], forward-difference Jacobian) of the free parameters of a
 //! set of effects, with per-stream σ scales profiled out, parameter standard
 //! errors from (JᵀWJ)⁻¹ and BIC \[Schwarz1978\].
 
@@ -677,5 +677,65 @@ mod tests {
         let f = fit(part, &[Effect::GyroBias { bias: 0.0 }], [1.0; 4], 50, 1);
         let bias = f.effects[0].values()[0];
         assert!((bias - 0.02).abs() < 1e-9, "{bias}");
+    }
+
+    #[test]
+    fn identifiability_is_judged_on_correlations_not_on_precision() {
+        // The bias test's readings times 10⁵ (1000, 3000, 2000, 4000, 0
+        // rad/s; σ 0.01): the bias 2000 has variance 2e6/5 = 4e5 (mean
+        // square residual 1e7/5 over 5 rows), JᵀJ = 2.5e-6, yet one
+        // parameter alone is identifiable: its correlation is 1.
+        let replay = standing();
+        let gyro: Vec<GyroRow> = gyro_rows()
+            .into_iter()
+            .map(|g| GyroRow { w: g.w * 1e5, ..g })
+            .collect();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let f = fit(part, &[Effect::GyroBias { bias: 0.0 }], [1.0; 4], 50, 1);
+        assert!(
+            (f.effects[0].values()[0] - 2000.0).abs() < 1e-6,
+            "{:?}",
+            f.effects
+        );
+        // (To the rounding of a 1e-6 difference step on residuals of 2e5.)
+        assert!((f.cov[(0, 0)] / 4e5 - 1.0).abs() < 1e-6, "{}", f.cov);
+        assert!(f.identifiable);
+    }
+
+    #[test]
+    fn each_effect_gets_the_standard_errors_of_its_own_parameters() {
+        // Turning at 1 rad/s for 4 s, then standing (the windows after the
+        // last wheel sample see the wheels held), the gyro reading 0.1 rad/s
+        // more ± 0.01: bias 0.1 and scale 0 leave residuals ±1 (σ scale 1).
+        // With J = −100 for the bias in all 8 rows and 100/(1 + h) for the
+        // scale in the 4 turning ones (forward step h = 1e-5), JᵀJ =
+        // [[8, −4], [−4, 4]]·10⁴ (the scale's row and column × 1/(1 + h)),
+        // whose inverse is [[4, 4], [4, 8]]·10⁴/1.6e9: standard errors
+        // √2.5e-5 = 0.005 for the bias (the 4 standing windows') and
+        // √5e-5·(1 + h) for the scale.
+        let (replay, gyro) = turning(&[1.11, 1.09, 1.11, 1.09, 0.11, 0.09, 0.11, 0.09]);
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let both = [
+            Effect::GyroBias { bias: 0.0 },
+            Effect::WheelBaseScale { scale: 0.0 },
+        ];
+        let f = fit(part, &both, [1.0; 4], 50, 1);
+        assert!(
+            (f.effects[0].values()[0] - 0.1).abs() < 1e-9,
+            "{:?}",
+            f.effects
+        );
+        assert!(f.effects[1].values()[0].abs() < 1e-9, "{:?}", f.effects);
+        assert!((f.stderr[0][0] - 0.005).abs() < 1e-9, "{:?}", f.stderr);
+        let scale = 5e-5f64.sqrt() * (1.0 + 1e-5);
+        assert!((f.stderr[1][0] - scale).abs() < 1e-9, "{:?}", f.stderr);
     }
 }
