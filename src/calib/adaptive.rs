@@ -318,4 +318,154 @@ mod tests {
         }
         assert!((a.unwrap()[0] - 0.1).abs() < 1e-9 && b.unwrap()[0].abs() < 0.01);
     }
+
+    #[test]
+    fn in_metres_scales_lengths_by_the_unit_and_rates_by_root_seconds() {
+        // Lengths per particle and bin sizes are in wheel radii (× unit);
+        // α is per √s (× √s); σ_ε's clamps are both (× unit × √s).
+        let p = AdaptiveParams {
+            per_particle: 2.0,
+            alpha: 3.0,
+            sigma_min: 5.0,
+            sigma_max: 7.0,
+            kld_bin: [11.0, 13.0, 17.0],
+            ..Default::default()
+        };
+        let m = p.in_metres(0.5, 0.3, 0.1);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        assert!(close(m.per_particle, 1.0), "{m:?}");
+        assert!(close(m.alpha, 0.3), "{m:?}");
+        assert!(
+            close(m.sigma_min, 0.25) && close(m.sigma_max, 0.35),
+            "{m:?}"
+        );
+        assert!(close(m.kld_bin[0], 5.5) && close(m.kld_bin[1], 6.5) && close(m.kld_bin[2], 8.5));
+        assert_eq!(m.turn_lever, 0.3);
+        // Counts, the rule and the dimensionless settings are kept.
+        assert_eq!((m.n_min, m.n_max, m.rule), (p.n_min, p.n_max, p.rule));
+        assert_eq!((m.dispersion_sigmas, m.residual_tau), (6.0, 1.0));
+    }
+
+    #[test]
+    fn the_turn_lever_is_not_configured_and_reads_as_1_m() {
+        // ℓ = 1 is eq. 11 as printed, until the filter sets the robot's.
+        let p: AdaptiveParams = serde_json::from_str(r#"{"alpha": 2.0}"#).unwrap();
+        assert_eq!((p.alpha, p.turn_lever), (2.0, 1.0));
+    }
+
+    #[test]
+    fn validate_accepts_the_defaults_and_every_bound_and_names_each_bad_field() {
+        let ok = |f: &dyn Fn(&mut AdaptiveParams)| {
+            let mut p = AdaptiveParams::default();
+            f(&mut p);
+            p.validate()
+        };
+        assert_eq!(ok(&|_| {}), Ok(()));
+        // On the bounds: counts equal, τ, α and σ_min zero, σ_min = σ_max.
+        assert_eq!(ok(&|p| (p.n_min, p.n_max) = (300, 300)), Ok(()));
+        assert_eq!(ok(&|p| p.residual_tau = 0.0), Ok(()));
+        assert_eq!(ok(&|p| p.alpha = 0.0), Ok(()));
+        assert_eq!(ok(&|p| p.sigma_min = 0.0), Ok(()));
+        assert_eq!(ok(&|p| p.sigma_min = p.sigma_max), Ok(()));
+        let bad: [(&str, &dyn Fn(&mut AdaptiveParams)); 20] = [
+            ("per_particle", &|p| p.per_particle = 0.0),
+            ("per_particle", &|p| p.per_particle = f64::INFINITY),
+            ("dispersion_sigmas", &|p| p.dispersion_sigmas = -1.0),
+            ("n_min", &|p| p.n_min = 0),
+            ("n_min", &|p| (p.n_min, p.n_max) = (301, 300)),
+            ("residual_tau", &|p| p.residual_tau = -0.1),
+            ("residual_tau", &|p| p.residual_tau = f64::INFINITY),
+            ("alpha", &|p| p.alpha = -1e-9),
+            ("alpha", &|p| p.alpha = f64::INFINITY),
+            ("sigma_min/sigma_max", &|p| {
+                (p.sigma_min, p.sigma_max) = (0.0, 0.0)
+            }),
+            ("sigma_min/sigma_max", &|p| p.sigma_min = -1e-9),
+            ("sigma_min/sigma_max", &|p| p.sigma_min = 2.0 * p.sigma_max),
+            ("kld_epsilon", &|p| p.kld_epsilon = 0.0),
+            ("kld_epsilon", &|p| p.kld_confidence = 0.0),
+            ("kld_epsilon", &|p| p.kld_confidence = -0.5),
+            ("kld_epsilon", &|p| p.kld_confidence = 1.0),
+            ("kld_bin", &|p| p.kld_bin[1] = 0.0),
+            ("kld_bin", &|p| p.kld_bin[2] = f64::NAN),
+            ("per_particle", &|p| p.per_particle = f64::NAN),
+            ("dispersion_sigmas", &|p| {
+                p.dispersion_sigmas = f64::INFINITY
+            }),
+        ];
+        for (field, f) in bad {
+            let e = ok(f).unwrap_err();
+            assert!(e.contains(field), "{field}: {e}");
+        }
+    }
+
+    #[test]
+    fn residuals_average_each_kind_by_inverse_variance_and_a_missing_kind_gives_zero() {
+        let p = AdaptiveParams::default();
+        // V 1.0 (σ 0.1) and 2.0 (σ 0.2): weights 100 and 25, mean
+        // (100 + 50)/125 = 1.2; no W, so W's residual is 0.
+        let v = CalibStep::new(0.0, 0.02, 1.0, 1.0)
+            .with(Kind::V, 1.0, 0.1)
+            .with(Kind::V, 2.0, 0.2);
+        let e = p.residuals(&v, 0.5, 0.3, 1e-3).unwrap();
+        assert!((e[0] - 0.7).abs() < 1e-12 && e[1] == 0.0, "{e:?}");
+        // W 0.4 (σ 0.01) and 0.1 (σ 0.02): weights 10⁴ and 2500, mean
+        // (4000 + 250)/12500 = 0.34; both σ under a floor of 0.05 weigh
+        // alike, mean 0.25.
+        let w = CalibStep::new(0.0, 0.02, 1.0, 1.0)
+            .with(Kind::W, 0.4, 0.01)
+            .with(Kind::W, 0.1, 0.02);
+        let e = p.residuals(&w, 0.5, 0.3, 1e-3).unwrap();
+        assert!(e[0] == 0.0 && (e[1] - 0.04).abs() < 1e-12, "{e:?}");
+        let e = p.residuals(&w, 0.5, 0.3, 0.05).unwrap();
+        assert!((e[1] + 0.05).abs() < 1e-12, "{e:?}");
+        // A prediction that is not finite gives no residual.
+        assert!(p.residuals(&v, f64::NAN, 0.0, 1e-3).is_none());
+        assert!(p.residuals(&w, 0.0, f64::INFINITY, 1e-3).is_none());
+    }
+
+    #[test]
+    fn the_average_moves_each_residual_by_1_minus_exp_of_minus_dt_over_tau() {
+        // τ = 0.5 s, dt = 0.1 s: k = 1 − e^(−0.2) = 0.18127; the first
+        // residual is taken as it is.
+        let p = AdaptiveParams {
+            residual_tau: 0.5,
+            ..Default::default()
+        };
+        let mut ema = None;
+        p.average(&mut ema, [1.0, -2.0], 0.1);
+        assert_eq!(ema, Some([1.0, -2.0]));
+        p.average(&mut ema, [3.0, 4.0], 0.1);
+        let k = 1.0 - (-0.2f64).exp();
+        let [a, b] = ema.unwrap();
+        assert!((a - (1.0 + 2.0 * k)).abs() < 1e-12, "{a}");
+        assert!((b - (-2.0 + 6.0 * k)).abs() < 1e-12, "{b}");
+        // τ = 0: the latest residual, even over an interval of zero.
+        let now = AdaptiveParams {
+            residual_tau: 0.0,
+            ..Default::default()
+        };
+        now.average(&mut ema, [5.0, 6.0], 0.0);
+        assert_eq!(ema, Some([5.0, 6.0]));
+    }
+
+    #[test]
+    fn occupied_bins_counts_the_distinct_cells_of_all_three_coordinates() {
+        // Bins of 0.1 (R_R), 0.1 (R_L) and 1 (D): particles 1, 2 and 3 each
+        // leave particle 0's cell along one coordinate only; particle 4
+        // shares particle 0's cell.
+        let rr = [0.05, 0.15, 0.05, 0.05, 0.06];
+        let rl = [0.05, 0.05, 0.15, 0.05, 0.07];
+        let d = [0.5, 0.5, 0.5, 1.5, 0.9];
+        let bin = [0.1, 0.1, 1.0];
+        let mut keys = Vec::new();
+        let count =
+            |idx: &[usize], keys: &mut Vec<u64>| occupied_bins(idx, &rr, &rl, &d, bin, keys);
+        assert_eq!(count(&[0, 1, 2, 3, 4], &mut keys), 4);
+        assert_eq!(count(&[0, 4, 4], &mut keys), 1);
+        for other in 1..4 {
+            assert_eq!(count(&[0, other], &mut keys), 2, "particle {other}");
+        }
+        assert_eq!(count(&[], &mut keys), 0);
+    }
 }

@@ -1,5 +1,5 @@
 //! Weighted nonlinear least squares (Levenberg–Marquardt [Levenberg1944;
-//! Marquardt1963], central-difference Jacobian) of the free parameters of a
+//! Marquardt1963], forward-difference Jacobian) of the free parameters of a
 //! set of effects, with per-stream σ scales profiled out, parameter standard
 //! errors from (JᵀWJ)⁻¹ and BIC \[Schwarz1978\].
 
@@ -484,5 +484,258 @@ mod tests {
             1,
         );
         assert!(!f.identifiable);
+    }
+
+    #[test]
+    fn one_lm_step_is_gauss_newton_damped_by_1e_4_and_the_next_by_1e_5() {
+        // The bias enters the residuals linearly, so a step solves
+        // (JᵀJ)(1 + λ) δ = −Jᵀr exactly: from 0 the first (λ = 1e-4)
+        // reaches 0.02/(1 + 1e-4); an accepted step divides λ by 10, so
+        // the second leaves 1e-5/(1 + 1e-5) of what was left.
+        let replay = standing();
+        let gyro = gyro_rows();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let bias_after = |max_iter| {
+            let f = fit(
+                part,
+                &[Effect::GyroBias { bias: 0.0 }],
+                [1.0; 4],
+                max_iter,
+                1,
+            );
+            f.effects[0].values()[0]
+        };
+        let one = 0.02 / (1.0 + 1e-4);
+        assert!((bias_after(1) - one).abs() < 1e-13, "{}", bias_after(1));
+        let two = 0.02 - (0.02 - one) * 1e-5 / (1.0 + 1e-5);
+        assert!((bias_after(2) - two).abs() < 1e-13, "{}", bias_after(2));
+        // No iteration at all: the start.
+        assert_eq!(bias_after(0), 0.0);
+    }
+
+    /// A robot turning in place at 1 rad/s for 4 s (wheels at ±0.65/0.64
+    /// rad/s on the default robot: radii 0.32 m, wheel base 0.65 m) and
+    /// one-second gyro windows reading `w` (σ 0.01).
+    fn turning(w: &[f64]) -> (Replay, Vec<GyroRow>) {
+        let a = 0.65 / 0.64;
+        let wheels: Vec<WheelSample> = (0..=400)
+            .map(|i| {
+                let t = i as f64 / 100.0;
+                WheelSample {
+                    stamp: t,
+                    left: -a * t,
+                    right: a * t,
+                }
+            })
+            .collect();
+        let gyro = w
+            .iter()
+            .enumerate()
+            .map(|(k, &w)| GyroRow {
+                t0: k as f64,
+                t1: k as f64 + 1.0,
+                w,
+                sigma: 0.01,
+            })
+            .collect();
+        (
+            Replay::new(&RobotConfig::default(), &wheels, 0.0, 0.0),
+            gyro,
+        )
+    }
+
+    #[test]
+    fn a_step_that_raises_the_cost_is_refused_and_the_damping_raised_tenfold() {
+        // A wheel-base scale s turns 1 rad/s of wheels into 1/(1 + s); the
+        // gyro reads 5/3 (s = −0.4). The forward difference (step h = 1e-5)
+        // gives J = 1/((1 + h)σ) and the damped step from 0 is
+        // δ = −(2/3)(1 + h)/(1 + λ). For λ = 1e-4, 1e-3, 1e-2, 0.1 it
+        // overshoots (1/(1 + δ) = 3.00, 2.99, 2.94, 2.54: further from 5/3
+        // than 1 is); λ = 1 gives 1/(1 + δ) = 1.5, which is taken.
+        let (replay, gyro) = turning(&[5.0 / 3.0; 4]);
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let f = fit(
+            part,
+            &[Effect::WheelBaseScale { scale: 0.0 }],
+            [1.0; 4],
+            1,
+            1,
+        );
+        let want = -(2.0 / 3.0) * (1.0 + 1e-5) / 2.0;
+        assert!(
+            (f.effects[0].values()[0] - want).abs() < 1e-10,
+            "{:?}",
+            f.effects
+        );
+        // Iterated, it reaches −0.4.
+        let f = fit(
+            part,
+            &[Effect::WheelBaseScale { scale: 0.0 }],
+            [1.0; 4],
+            50,
+            1,
+        );
+        assert!(
+            (f.effects[0].values()[0] + 0.4).abs() < 1e-9,
+            "{:?}",
+            f.effects
+        );
+    }
+
+    #[test]
+    fn residuals_that_are_not_finite_leave_the_start_and_stop_the_damping_loop() {
+        // A NaN reading makes JᵀJ NaN: no Cholesky factor at any damping,
+        // so λ rises tenfold to its limit and the fit keeps its start.
+        let replay = standing();
+        let mut gyro = gyro_rows();
+        gyro[2].w = f64::NAN;
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let f = fit(part, &[Effect::GyroBias { bias: 0.01 }], [1.0; 4], 50, 1);
+        assert_eq!(f.effects, [Effect::GyroBias { bias: 0.01 }]);
+        assert!(!f.identifiable);
+    }
+
+    #[test]
+    fn the_covariance_is_rescaled_per_group_when_other_groups_come_first() {
+        // The bias test above with ICP rows of a robot standing still in
+        // front of the gyro rows (they do not depend on the bias): the
+        // gyro's rows come after 3 × 4 ICP rows, and the Jacobian at the
+        // start's σ scale 1 must be rescaled to the gyro's √2 there too:
+        // variance 2·0.01²/5 = 4e-5.
+        let replay = standing();
+        let gyro = gyro_rows();
+        let icp: Vec<IcpRow> = (0..4)
+            .map(|k| IcpRow {
+                t0: 1.0 + k as f64,
+                t1: 1.5 + k as f64,
+                z: [0.01, -0.01, 0.004 * (k % 2) as f64],
+                sigma: [0.01, 0.01, 0.004],
+            })
+            .collect();
+        let part = Part {
+            replay: &replay,
+            icp: &icp,
+            gyro: &gyro,
+        };
+        let f = fit(part, &[Effect::GyroBias { bias: 0.0 }], [1.0; 4], 50, 1);
+        assert!((f.cov[(0, 0)] - 4e-5).abs() < 1e-11, "{}", f.cov);
+        assert!((f.stderr[0][0] - 4e-5f64.sqrt()).abs() < 1e-9);
+        // RSS 4, 4 and 2 of the ICP groups (residuals of 1 σ, and 0 or 1).
+        assert!((f.rss[0] - 4.0).abs() < 1e-9 && (f.rss[2] - 2.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_gyro_bias_and_a_wheel_base_scale_are_not_identifiable_at_one_turn_rate() {
+        // At a single turn rate both only shift the gyro's reading: their
+        // Jacobian columns are proportional (correlation −1), while each
+        // alone is identifiable.
+        let (replay, gyro) = turning(&[1.06, 1.04, 1.06, 1.04]);
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let both = [
+            Effect::GyroBias { bias: 0.0 },
+            Effect::WheelBaseScale { scale: 0.0 },
+        ];
+        assert!(!fit(part, &both, [1.0; 4], 50, 1).identifiable);
+        for one in both {
+            assert!(fit(part, &[one], [1.0; 4], 50, 1).identifiable, "{one:?}");
+        }
+    }
+
+    #[test]
+    fn convergence_is_judged_relative_to_the_cost_whatever_the_units_of_sigma() {
+        // The bias test's readings with σ 10⁶ times larger (10⁴ rad/s):
+        // every cost is 10⁻¹² of the above (3e-11 at the start, the first
+        // step gaining 2e-11), yet the fit stops only once a step gains
+        // less than 1e-9 of the cost, at the mean 0.02, not after the first
+        // step (0.02/(1 + 1e-4)).
+        let replay = standing();
+        let gyro: Vec<GyroRow> = gyro_rows()
+            .into_iter()
+            .map(|g| GyroRow { sigma: 1e4, ..g })
+            .collect();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let f = fit(part, &[Effect::GyroBias { bias: 0.0 }], [1.0; 4], 50, 1);
+        let bias = f.effects[0].values()[0];
+        assert!((bias - 0.02).abs() < 1e-9, "{bias}");
+    }
+
+    #[test]
+    fn identifiability_is_judged_on_correlations_not_on_precision() {
+        // The bias test's readings times 10⁵ (1000, 3000, 2000, 4000, 0
+        // rad/s; σ 0.01): the bias 2000 has variance 2e6/5 = 4e5 (mean
+        // square residual 1e7/5 over 5 rows), JᵀJ = 2.5e-6, yet one
+        // parameter alone is identifiable: its correlation is 1.
+        let replay = standing();
+        let gyro: Vec<GyroRow> = gyro_rows()
+            .into_iter()
+            .map(|g| GyroRow { w: g.w * 1e5, ..g })
+            .collect();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let f = fit(part, &[Effect::GyroBias { bias: 0.0 }], [1.0; 4], 50, 1);
+        assert!(
+            (f.effects[0].values()[0] - 2000.0).abs() < 1e-6,
+            "{:?}",
+            f.effects
+        );
+        // (To the rounding of a 1e-6 difference step on residuals of 2e5.)
+        assert!((f.cov[(0, 0)] / 4e5 - 1.0).abs() < 1e-6, "{}", f.cov);
+        assert!(f.identifiable);
+    }
+
+    #[test]
+    fn each_effect_gets_the_standard_errors_of_its_own_parameters() {
+        // Turning at 1 rad/s for 4 s, then standing (the windows after the
+        // last wheel sample see the wheels held), the gyro reading 0.1 rad/s
+        // more ± 0.01: bias 0.1 and scale 0 leave residuals ±1 (σ scale 1).
+        // With J = −100 for the bias in all 8 rows and 100/(1 + h) for the
+        // scale in the 4 turning ones (forward step h = 1e-5), JᵀJ =
+        // [[8, −4], [−4, 4]]·10⁴ (the scale's row and column × 1/(1 + h)),
+        // whose inverse is [[4, 4], [4, 8]]·10⁴/1.6e9: standard errors
+        // √2.5e-5 = 0.005 for the bias (the 4 standing windows') and
+        // √5e-5·(1 + h) for the scale.
+        let (replay, gyro) = turning(&[1.11, 1.09, 1.11, 1.09, 0.11, 0.09, 0.11, 0.09]);
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let both = [
+            Effect::GyroBias { bias: 0.0 },
+            Effect::WheelBaseScale { scale: 0.0 },
+        ];
+        let f = fit(part, &both, [1.0; 4], 50, 1);
+        assert!(
+            (f.effects[0].values()[0] - 0.1).abs() < 1e-9,
+            "{:?}",
+            f.effects
+        );
+        assert!(f.effects[1].values()[0].abs() < 1e-9, "{:?}", f.effects);
+        assert!((f.stderr[0][0] - 0.005).abs() < 1e-9, "{:?}", f.stderr);
+        let scale = 5e-5f64.sqrt() * (1.0 + 1e-5);
+        assert!((f.stderr[1][0] - scale).abs() < 1e-9, "{:?}", f.stderr);
     }
 }

@@ -272,7 +272,7 @@ fn prune(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::data::GyroRow;
+    use crate::diagnose::data::{GyroRow, IcpRow};
     use crate::diagnose::model::Replay;
     use crate::recording::WheelSample;
     use crate::robot::RobotConfig;
@@ -426,5 +426,259 @@ mod tests {
             let sel = forward(part, &usable, &s);
             assert!(sel.model.effects.is_empty() && sel.delta_bic.is_empty());
         }
+    }
+
+    /// A robot driving straight with both wheels at 2 rad/s for 10 s
+    /// (samples at 100 Hz, default robot: radii 0.32 m), and ICP rows over
+    /// half seconds seeing the forward speed of radii 0.32 m up to 5 s and
+    /// 0.33 m after (0.64 then 0.66 m/s, σ 0.01 m/s).
+    fn straight_with_larger_radii_from_5_s() -> (Replay, Vec<IcpRow>) {
+        let wheels: Vec<WheelSample> = (0..=1000)
+            .map(|i| {
+                let t = i as f64 / 100.0;
+                WheelSample {
+                    stamp: t,
+                    left: 2.0 * t,
+                    right: 2.0 * t,
+                }
+            })
+            .collect();
+        let icp = (0..20)
+            .map(|k| {
+                let t0 = 0.5 * k as f64;
+                let v = if t0 < 5.0 { 0.64 } else { 0.66 };
+                IcpRow {
+                    t0,
+                    t1: t0 + 0.5,
+                    z: [v, 0.0, 0.0],
+                    sigma: [0.01, 0.01, 0.004],
+                }
+            })
+            .collect();
+        (Replay::new(&RobotConfig::default(), &wheels, 0.0, 0.0), icp)
+    }
+
+    #[test]
+    fn the_step_time_is_where_the_forward_speed_jumps() {
+        // Every row after 5 s misses by the same 0.02 m/s, every row before
+        // by nothing: a step at 5 s (between the rows centred at 4.75 and
+        // 5.25 s) explains all of it, one a row earlier or later leaves a
+        // row unexplained. Within 6–9 s the earliest allowed time explains
+        // the most.
+        let (replay, icp) = straight_with_larger_radii_from_5_s();
+        let part = Part {
+            replay: &replay,
+            icp: &icp,
+            gyro: &[],
+        };
+        // σ scales 1: the lateral and turn rows, matched exactly, would
+        // otherwise get the floor 1e-9 and weigh their rounding errors.
+        let nominal = Fit {
+            scale: [1.0; 4],
+            ..fit(part, &[], [1.0; 4], 50, 1)
+        };
+        let t = search_step_time(part, &nominal, &settings(2.0, 0.05, 3));
+        assert!(t.is_some_and(|t| (t - 5.0).abs() < 1e-9), "{t:?}");
+        let late = SelectSettings {
+            step_range: (6.0, 9.0),
+            ..settings(2.0, 0.05, 3)
+        };
+        let t = search_step_time(part, &nominal, &late);
+        assert!(t.is_some_and(|t| (t - 6.0).abs() < 1e-9), "{t:?}");
+    }
+
+    /// A robot turning in place at 1 rad/s for 4 s (wheels at ±0.65/0.64
+    /// rad/s on the default robot: radii 0.32 m, wheel base 0.65 m), then
+    /// standing for 4 s; one-second gyro windows reading the turn rate plus
+    /// 0.1 rad/s, ± 0.01 alternately (σ 0.01).
+    fn turning_then_standing_with_a_biased_gyro() -> (Replay, Vec<GyroRow>) {
+        let a = 0.65 / 0.64;
+        let wheels: Vec<WheelSample> = (0..=800)
+            .map(|i| {
+                let t = i as f64 / 100.0;
+                let angle = a * t.min(4.0);
+                WheelSample {
+                    stamp: t,
+                    left: -angle,
+                    right: angle,
+                }
+            })
+            .collect();
+        let gyro = (0..8)
+            .map(|k| {
+                let turn = if k < 4 { 1.0 } else { 0.0 };
+                let noise = if k % 2 == 0 { 0.01 } else { -0.01 };
+                GyroRow {
+                    t0: k as f64,
+                    t1: k as f64 + 1.0,
+                    w: turn + 0.1 + noise,
+                    sigma: 0.01,
+                }
+            })
+            .collect();
+        (
+            Replay::new(&RobotConfig::default(), &wheels, 0.0, 0.0),
+            gyro,
+        )
+    }
+
+    #[test]
+    fn of_two_acceptable_effects_the_one_saving_more_bic_enters() {
+        // Nominal: every window misses by 10 ± 1 σ, RSS 4·121 + 4·81 = 808
+        // over 8 rows. A bias of 0.1 explains every window (RSS 8): ΔBIC =
+        // 8 ln(808/8) − ln 8 = 8 ln 101 − ln 8 = 34.84. A wheel-base scale
+        // only the turning ones: 1/(1 + s) = 1.1 leaves the four standing
+        // windows at 11, 9, 11, 9 σ (RSS 4 + 404 = 408), ΔBIC = 8 ln(101/51)
+        // − ln 8 = 3.39, above the margin of 2 as well. The bias enters;
+        // next to it the scale explains nothing (ΔBIC = −ln 8).
+        let (replay, gyro) = turning_then_standing_with_a_biased_gyro();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let usable = ["wheel_base_scale", "gyro_bias"].map(String::from);
+        let sel = forward(part, &usable, &settings(2.0, 0.05, 3));
+        let tried: Vec<(usize, &str)> = sel
+            .tried
+            .iter()
+            .map(|c| (c.round, c.effect.as_str()))
+            .collect();
+        assert_eq!(
+            tried,
+            [
+                (0, "wheel_base_scale"),
+                (0, "gyro_bias"),
+                (1, "wheel_base_scale")
+            ]
+        );
+        let scale = &sel.tried[0];
+        let d_scale = 8.0 * (101f64 / 51.0).ln() - 8f64.ln();
+        assert!((scale.delta_bic - d_scale).abs() < 1e-6, "{scale:?}");
+        assert!((scale.parameters["scale"] + 1.0 / 11.0).abs() < 1e-6);
+        assert!(scale.identifiable && scale.physical && scale.p_value < 0.05);
+        let d_bias = 8.0 * 101f64.ln() - 8f64.ln();
+        assert!((sel.tried[1].delta_bic - d_bias).abs() < 1e-6);
+        assert!((sel.tried[2].delta_bic + 8f64.ln()).abs() < 1e-6);
+        assert_eq!(sel.model.effects.len(), 1);
+        assert_eq!(sel.model.effects[0].name(), "gyro_bias");
+        assert!(
+            (sel.delta_bic[0] - d_bias).abs() < 1e-6,
+            "{:?}",
+            sel.delta_bic
+        );
+    }
+
+    /// A fit of `effects` on the standing robot with its biased gyro, built
+    /// by hand: the given covariance and BIC (prune reads nothing else of
+    /// it but the σ scales: those of the bias fit, 1 and √2 for the gyro).
+    fn by_hand(effects: Vec<Effect>, cov: &[f64], bic: f64) -> Fit {
+        Fit {
+            stderr: effects
+                .iter()
+                .map(|e| vec![0.0; free_params(e).len()])
+                .collect(),
+            effects,
+            cov: DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(cov)),
+            rss: [0.0, 0.0, 0.0, 10.0],
+            scale: [1.0, 1.0, 1.0, 2f64.sqrt()],
+            bic,
+            identifiable: true,
+        }
+    }
+
+    #[test]
+    fn prune_drops_a_significant_effect_whose_removal_costs_less_than_the_margin() {
+        // Bias 0.02 (Wald 0.02²/4e-5 = 10) and a wheel-base scale of 0.1
+        // (Wald 0.1²/1e-4 = 100) that a standing robot cannot show: with
+        // both, RSS 10 over 5 rows and BIC 5 ln 2 + 2 ln 5. Without the
+        // scale BIC 5 ln 2 + ln 5 (cost −ln 5 = −1.61, below the margin
+        // 0.5); without the bias RSS 30, BIC 5 ln 6 + ln 5 (cost
+        // 5 ln 3 − ln 5 = 3.88). The scale goes; the bias alone then costs
+        // 3.88 to remove, and the nested models are refitted.
+        let (replay, gyro) = standing_with_a_biased_gyro();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let current = by_hand(
+            vec![
+                Effect::GyroBias { bias: 0.02 },
+                Effect::WheelBaseScale { scale: 0.1 },
+            ],
+            &[4e-5, 1e-4],
+            5.0 * 2f64.ln() + 2.0 * 5f64.ln(),
+        );
+        let s = settings(0.5, 0.05, 3);
+        let (model, delta_bic, steps) = prune(part, current, vec![9.0, 9.0], vec![], &s);
+        assert_eq!(model.effects.len(), 1, "{:?}", model.effects);
+        let Effect::GyroBias { bias } = model.effects[0] else {
+            panic!("{:?}", model.effects)
+        };
+        assert!((bias - 0.02).abs() < 1e-9);
+        let d = 5.0 * 3f64.ln() - 5f64.ln();
+        assert_eq!(delta_bic.len(), 1);
+        assert!((delta_bic[0] - d).abs() < 1e-6, "{delta_bic:?}");
+        assert_eq!(steps.len(), 1);
+        assert_eq!(steps[0].effects.len(), 1);
+    }
+
+    #[test]
+    fn prune_drops_an_insignificant_effect_however_much_its_removal_costs() {
+        // A wheel-base scale of 0 (Wald 0, p = 1) next to the bias, with a
+        // BIC B set 3 below that of the bias alone (5 ln 2 + ln 5): removing
+        // the scale costs 3, more than the margin 2; removing the bias
+        // (5 ln 6 + ln 5) − B = 5 ln 3 + 3, and it is significant (Wald 10,
+        // p ≈ 0.002). The insignificant scale goes.
+        let (replay, gyro) = standing_with_a_biased_gyro();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let current = by_hand(
+            vec![
+                Effect::GyroBias { bias: 0.02 },
+                Effect::WheelBaseScale { scale: 0.0 },
+            ],
+            &[4e-5, 1.0],
+            5.0 * 2f64.ln() + 5f64.ln() - 3.0,
+        );
+        let (model, _, _) = prune(part, current, vec![], vec![], &settings(2.0, 0.05, 3));
+        assert_eq!(model.effects.len(), 1, "{:?}", model.effects);
+        assert_eq!(model.effects[0].name(), "gyro_bias");
+    }
+
+    #[test]
+    fn prune_keeps_a_lone_physical_effect_and_drops_a_lone_unphysical_one() {
+        // The bias alone costs 5 ln 3 − ln 5 = 3.88 to remove, under a
+        // margin of 4, yet the forward pass's only effect stays: nothing is
+        // removed, so ΔBIC and the nested models are returned as given.
+        let (replay, gyro) = standing_with_a_biased_gyro();
+        let part = Part {
+            replay: &replay,
+            icp: &[],
+            gyro: &gyro,
+        };
+        let s = settings(4.0, 0.05, 3);
+        let bias = fit(part, &[Effect::GyroBias { bias: 0.0 }], [1.0; 4], 50, 1);
+        let (model, delta_bic, steps) = prune(part, bias.clone(), vec![1.5], vec![bias], &s);
+        assert_eq!(model.effects.len(), 1);
+        assert_eq!((delta_bic, steps.len()), (vec![1.5], 1));
+        // Windows reading 0.61…0.64 rad/s: a bias of 0.62, beyond the
+        // table's ±0.5 rad/s, is removed whatever it buys.
+        let high: Vec<GyroRow> = gyro
+            .iter()
+            .map(|g| GyroRow { w: g.w + 0.6, ..*g })
+            .collect();
+        let part = Part {
+            gyro: &high,
+            ..part
+        };
+        let bias = fit(part, &[Effect::GyroBias { bias: 0.0 }], [1.0; 4], 50, 1);
+        assert!(!physical(&bias.effects[0]), "{:?}", bias.effects);
+        let (model, delta_bic, steps) = prune(part, bias.clone(), vec![1.5], vec![bias], &s);
+        assert!(model.effects.is_empty() && delta_bic.is_empty() && steps.is_empty());
     }
 }
