@@ -468,4 +468,29 @@ mod tests {
         }
         assert_eq!(count(&[], &mut keys), 0);
     }
+
+    #[test]
+    fn occupied_bins_divides_by_each_bin_and_keeps_negative_cells_apart() {
+        // Bins 0.2 (R_R), 0.5 (R_L) and 0.25 (D), none of them 1: cells
+        // (0, 0, 2) for particle 0, and particles 1, 2, 3 one cell further
+        // along one coordinate each (0.3/0.2 = 1.5, 0.7/0.5 = 1.4,
+        // 0.8/0.25 = 3.2).
+        let rr = [0.1, 0.3, 0.1, 0.1, 0.1, 0.3, 0.1, 0.3];
+        let rl = [0.2, 0.2, 0.7, 0.2, -0.2, -0.2, 0.2, 0.2];
+        let d = [0.6, 0.6, 0.6, 0.8, 0.6, 0.6, -0.1, -0.1];
+        let bin = [0.2, 0.5, 0.25];
+        let mut keys = Vec::new();
+        let count =
+            |idx: &[usize], keys: &mut Vec<u64>| occupied_bins(idx, &rr, &rl, &d, bin, keys);
+        for other in 1..4 {
+            assert_eq!(count(&[0, other], &mut keys), 2, "particle {other}");
+        }
+        assert_eq!(count(&[0, 0, 1, 1], &mut keys), 2);
+        // Particles 4 and 5 (R_L in cell −1) and 6 and 7 (D in cell −1)
+        // differ only in R_R's cell, 0 against 1: a negative cell of one
+        // coordinate must not spill into the other coordinates' cells.
+        assert_eq!(count(&[4, 5], &mut keys), 2);
+        assert_eq!(count(&[6, 7], &mut keys), 2);
+        assert_eq!(count(&[0, 1, 2, 3, 4, 5, 6, 7], &mut keys), 8);
+    }
 }

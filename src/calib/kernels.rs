@@ -512,4 +512,306 @@ mod tests {
             assert!((x - (3.0 * 0.32 - 2.5 * 0.33) / d).abs() < 1e-12);
         }
     }
+
+    /// |a − b| within 1e-12 of b's scale (the weights' fast_exp is within
+    /// 2e-13 of exp).
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-12 * (1.0 + b.abs())
+    }
+
+    /// Seven particles (one chunk of four lanes and three on lane 0) through
+    /// one predict pass with noise, a likelihood on both V and W and D
+    /// half observable: the columns after it and the pass's output.
+    fn predict_seven(dispatched: bool) -> ([Vec<f64>; 6], Predicted) {
+        let mut rr = vec![0.30, 0.25, 0.30, 0.20, 0.30, 0.25, 0.35];
+        let mut rl = vec![0.25, 0.30, 0.30, 0.25, 0.01, 0.25, 0.30];
+        let mut d = vec![0.50, 0.60, 0.50, 0.40, 0.50, 0.50, 0.60];
+        let e1 = [1.0, 0.0, -2.0, 0.5, 0.0, 4.0, -1.0];
+        let e2 = [0.0, 2.0, 1.0, -0.5, -3.0, 0.0, -1.0];
+        let e3 = [0.0, -1.0, 3.0, 2.0, 0.0, -4.0, 1.0];
+        let mut lw = vec![0.0, -1.0, -0.5, 1.0, 0.0, -2.0, 0.5];
+        let rho = [0.125, 0.125, 0.25, 0.0625, 0.0625, 0.25, 0.125];
+        let (mut v, mut w) = (vec![9.0; 7], vec![9.0; 7]);
+        let a = Predict {
+            rr: &mut rr,
+            rl: &mut rl,
+            d: &mut d,
+            v: &mut v,
+            w: &mut w,
+            lw: &mut lw,
+            rho: &rho,
+            e: [&e1, &e2, &e3],
+            wr: 4.0,
+            wl: 2.0,
+            sr: 0.01,
+            sd: 0.02,
+            obs: 0.5,
+            ratio: 2.0,
+            kv: 2.0,
+            zv: 0.5,
+            kw: 3.0,
+            zw: 1.0,
+        };
+        let out = if dispatched {
+            predict(a)
+        } else {
+            predict_impl(a)
+        };
+        ([rr, rl, d, v, w, lw], out)
+    }
+
+    #[test]
+    fn predict_walks_the_parameters_and_weighs_v_and_w_of_every_particle() {
+        // By hand, particle by particle: R_R + 0.01 e1, R_L + 0.01 e2,
+        // D + 0.02 e3 (particle 4's R_L, 0.01 − 0.03, stops at 1e-6 m);
+        // V = (4 R_R + 2 R_L) / 2; W = (4 R_R − 2 R_L) / B with the wheel
+        // base B = 0.5 D + (1 − 0.5)·2·(R_R + R_L); the log-weight loses
+        // 2 (V − 0.5)² + 3 (W − 1)².
+        let want: [[f64; 6]; 7] = [
+            [0.31, 0.25, 0.50, 0.87, 74.0 / 81.0, -3239003.0 / 10935000.0],
+            [0.25, 0.32, 0.58, 0.82, 18.0 / 43.0, -2564172.0 / 1155625.0],
+            [
+                0.28,
+                0.31,
+                0.56,
+                0.87,
+                50.0 / 87.0,
+                -16606487.0 / 12615000.0,
+            ],
+            [
+                0.205,
+                0.245,
+                0.44,
+                0.655,
+                33.0 / 67.0,
+                16106071.0 / 89780000.0,
+            ],
+            [
+                0.30,
+                1e-6,
+                0.50,
+                0.600001,
+                1199998.0 / 550001.0,
+                -4.210029130551442,
+            ],
+            [0.29, 0.25, 0.42, 0.83, 0.88, -2.261],
+            [0.34, 0.29, 0.62, 0.97, 39.0 / 47.0, -317181.0 / 11045000.0],
+        ];
+        for dispatched in [false, true] {
+            let (cols, out) = predict_seven(dispatched);
+            for (i, row) in want.iter().enumerate() {
+                for (k, &x) in row.iter().enumerate() {
+                    assert!(
+                        close(cols[k][i], x),
+                        "dispatched {dispatched}, particle {i}, column {k}: {} vs {x}",
+                        cols[k][i]
+                    );
+                }
+            }
+            // Σ ρ V = 0.8359375625 and Σ ρ W by hand from the rows above;
+            // the largest log-weight is particle 3's.
+            assert!(close(out.vo, 0.8359375625), "{}", out.vo);
+            assert!(close(out.wo, 0.8010714206818468), "{}", out.wo);
+            assert!(close(out.max, 16106071.0 / 89780000.0), "{}", out.max);
+        }
+        let (a, b) = (predict_seven(false), predict_seven(true));
+        assert_eq!(a.0, b.0, "scalar and dispatched passes differ");
+        assert_eq!((a.1.vo, a.1.wo, a.1.max), (b.1.vo, b.1.wo, b.1.max));
+    }
+
+    /// Seven particles' columns for the summarising passes: V, W and
+    /// (R_R, R_L, D) around the reference (0.3, 0.3, 0.6).
+    const V7: [f64; 7] = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+    const W7: [f64; 7] = [0.5, -1.0, 2.0, 0.0, 1.0, 3.0, 10.0];
+    const RR7: [f64; 7] = [0.31, 0.29, 0.27, 0.32, 0.34, 0.28, 0.90];
+    const RL7: [f64; 7] = [0.33, 0.26, 0.31, 0.29, 0.27, 0.35, 0.90];
+    const D7: [f64; 7] = [0.62, 0.57, 0.58, 0.61, 0.65, 0.59, 0.90];
+
+    /// `summarize` on the seven particles with unnormalised weights
+    /// `weights` (0 as a log-weight 800 below the shift, which underflows):
+    /// the sums and the log-weights and weights left in place.
+    fn summarize_seven(
+        weights: [f64; 7],
+        uniform: bool,
+        dispatched: bool,
+    ) -> (Sums, Vec<f64>, Vec<f64>) {
+        let shift = 3.0;
+        let mut lw: Vec<f64> = weights
+            .iter()
+            .map(|&e| {
+                if e > 0.0 {
+                    shift + e.ln()
+                } else {
+                    shift - 800.0
+                }
+            })
+            .collect();
+        let mut buf = vec![f64::NAN; 7];
+        let a = Summarize {
+            rr: &RR7,
+            rl: &RL7,
+            d: &D7,
+            v: &V7,
+            w: &W7,
+            lw: &mut lw,
+            buf: &mut buf,
+            shift,
+            uniform,
+            r: [0.3, 0.3, 0.6],
+        };
+        let s = if dispatched {
+            summarize(a)
+        } else {
+            summarize_impl(a)
+        };
+        (s, lw, buf)
+    }
+
+    #[test]
+    fn summarize_normalises_the_weights_and_takes_their_moments() {
+        // Weights 1, 1/2, 4, 2 | 1/4, 1/8, 0: Σ = 63/8, Σ² = 1365/64, the
+        // largest 4 (in the chunk of four lanes). Normalised: 8, 4, 32, 16,
+        // 2, 1, 0 (/63). Means of V and W: 192/63 = 64/21 and 69/63 = 23/21;
+        // of R_R − 0.3 = (8·1 − 4·1 − 32·3 + 16·2 + 2·4 − 1·2)/6300 = −3/350,
+        // and so on for R_L and D; the products likewise, all by hand over 63.
+        let weights = [1.0, 0.5, 4.0, 2.0, 0.25, 0.125, 0.0];
+        for dispatched in [false, true] {
+            let (s, lw, buf) = summarize_seven(weights, false, dispatched);
+            assert!(
+                close(s.sum, 7.875) && close(s.sq, 1365.0 / 64.0),
+                "{} {}",
+                s.sum,
+                s.sq
+            );
+            assert!(close(s.max, 4.0), "{}", s.max);
+            let s1 = [
+                -3.0 / 350.0,
+                23.0 / 6300.0,
+                -1.0 / 180.0,
+                64.0 / 21.0,
+                23.0 / 21.0,
+            ];
+            for k in 0..5 {
+                assert!(close(s.s1[k], s1[k]), "s1[{k}] {} vs {}", s.s1[k], s1[k]);
+            }
+            let s2 = [
+                1.0 / 1575.0,
+                -61.0 / 315000.0,
+                7.0 / 15000.0,
+                227.0 / 630000.0,
+                -19.0 / 630000.0,
+                263.0 / 630000.0,
+            ];
+            for k in 0..6 {
+                assert!(
+                    (s.s2[k] - s2[k]).abs() < 1e-15,
+                    "s2[{k}] {} vs {}",
+                    s.s2[k],
+                    s2[k]
+                );
+            }
+            // In place: the normalised weights, the log-weights less the
+            // shift, and −∞ where the weight underflowed to 0.
+            let norm = [8.0, 4.0, 32.0, 16.0, 2.0, 1.0, 0.0];
+            for i in 0..7 {
+                assert!(close(buf[i], norm[i] / 63.0), "buf[{i}] {}", buf[i]);
+            }
+            for i in 0..6 {
+                assert!(close(lw[i], weights[i].ln()), "lw[{i}] {}", lw[i]);
+            }
+            assert_eq!(lw[6], f64::NEG_INFINITY);
+        }
+    }
+
+    #[test]
+    fn the_largest_weight_is_found_on_the_leftover_lane_too() {
+        // The same weights with 4 moved to particle 4, after the chunk.
+        let weights = [1.0, 0.5, 0.25, 2.0, 4.0, 0.125, 0.0];
+        for dispatched in [false, true] {
+            let (s, _, _) = summarize_seven(weights, false, dispatched);
+            assert!(
+                close(s.max, 4.0) && close(s.sum, 7.875),
+                "{} {}",
+                s.max,
+                s.sum
+            );
+        }
+    }
+
+    #[test]
+    fn uniform_weights_are_all_one_and_still_shift_the_log_weights() {
+        // After an underflow reset every weight is 1 (Σ = Σ² = 7, largest 1):
+        // the means are the plain means, V's 4 and W's 15.5/7.
+        for dispatched in [false, true] {
+            let (s, lw, buf) = summarize_seven([1.0; 7], true, dispatched);
+            assert!(close(s.sum, 7.0) && close(s.sq, 7.0) && close(s.max, 1.0));
+            assert!(
+                close(s.s1[3], 4.0) && close(s.s1[4], 15.5 / 7.0),
+                "{:?}",
+                s.s1
+            );
+            // R_R − 0.3: (1 − 1 − 3 + 2 + 4 − 2 + 60)/700 = 61/700.
+            assert!(close(s.s1[0], 61.0 / 700.0), "{}", s.s1[0]);
+            assert!(buf.iter().all(|&x| close(x, 1.0 / 7.0)), "{buf:?}");
+            // Log-weights 3 (= shift + ln 1) less the shift 3.
+            assert!(lw.iter().all(|&x| x.abs() < 1e-15), "{lw:?}");
+        }
+    }
+
+    /// The resampling move on six particles drawn from four (ancestors
+    /// 0, 1, 1, 3, 3, 3), through the scalar or the dispatched pass.
+    fn gather_six(dispatched: bool) -> [Vec<f64>; 3] {
+        let src = [
+            [0.30, 0.32, 0.28, 0.31],
+            [0.33, 0.29, 0.30, 0.34],
+            [0.60, 0.62, 0.58, 0.64],
+        ];
+        let anc = [0, 1, 1, 3, 3, 3];
+        let e1 = [1.0, -2.0, 0.5, 3.0, -1.0, 2.0];
+        let e2 = [2.0, 1.0, -3.0, 0.5, 4.0, -1.0];
+        let e3 = [-1.0, 3.0, 2.0, -2.0, 0.5, -40.0];
+        let (mut rr, mut rl, mut d) = (vec![0.0; 6], vec![0.0; 6], vec![0.0; 6]);
+        let g = GatherMove {
+            anc: &anc,
+            src: [&src[0], &src[1], &src[2]],
+            dst: [&mut rr, &mut rl, &mut d],
+            e: [&e1, &e2, &e3],
+            a: 0.5,
+            c: [0.15, 0.15, 0.3],
+            l: [0.01, 0.002, 0.02, 0.003, 0.004, 0.05],
+        };
+        if dispatched {
+            gather_move(g);
+        } else {
+            gather_move_impl(g);
+        }
+        [rr, rl, d]
+    }
+
+    #[test]
+    fn gather_move_shrinks_the_ancestors_and_adds_the_correlated_jitter() {
+        // θ = 0.5 θ_ancestor + c + L ε with L = [[0.01], [0.002, 0.02],
+        // [0.003, 0.004, 0.05]]: particle 0 (ancestor 0, ε = (1, 2, −1)):
+        // R_R = 0.15 + 0.15 + 0.01 = 0.31, R_L = 0.165 + 0.15 + 0.002 + 0.04
+        // = 0.357, D = 0.3 + 0.3 + 0.003 + 0.008 − 0.05 = 0.561; particle 5's
+        // D (ε₃ = −40) would be −1.378 and stops at 1e-6 m.
+        let want = [
+            [0.31, 0.29, 0.315, 0.335, 0.295, 0.325],
+            [0.357, 0.311, 0.236, 0.336, 0.398, 0.304],
+            [0.561, 0.758, 0.6995, 0.531, 0.658, 1e-6],
+        ];
+        for dispatched in [false, true] {
+            let got = gather_six(dispatched);
+            for k in 0..3 {
+                for i in 0..6 {
+                    assert!(
+                        close(got[k][i], want[k][i]),
+                        "dispatched {dispatched}, column {k}, particle {i}: {} vs {}",
+                        got[k][i],
+                        want[k][i]
+                    );
+                }
+            }
+        }
+    }
 }
