@@ -23,6 +23,7 @@ mod diagnose_blind;
 mod diagnose_chain;
 mod diagnose_encoder_table;
 mod diagnose_figures;
+mod diagnose_floor_slip;
 mod diagnose_independent;
 mod diagnose_nulls;
 mod diagnose_real;

@@ -73,6 +73,7 @@ BLOCKS = {
     "table-ii-scans": (calibration.block_table_ii_scans, True),
     "blind-suite": (diagnosis.block_blind_suite, True),
     "independent-laws": (diagnosis.block_independent_laws, True),
+    "floor-slip": (diagnosis.block_floor_slip, True),
     "icp-instrument": (instrument.block_icp_instrument, True),
     "null-lengths": (instrument.block_null_lengths, True),
     "fleet": (calibration.block_fleet, True),

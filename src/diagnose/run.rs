@@ -47,7 +47,7 @@ pub fn run(
         origin,
         reference: m.reference,
     };
-    if let Some((pass, fault)) = floor_slip(&rows, &icp0, &gyro0, p) {
+    if let Some((pass, fault)) = floor_slip(&rows, &icp0, &gyro0, robot, p) {
         found.push(fault);
         return Ok(pass.diagnosis(&replay, m, p, robot, found));
     }
@@ -81,7 +81,25 @@ fn out_of_round(
         gyro: &pass.gyro,
     };
     let xm = Departures::of(&pass.model().effects);
-    let tests = structure_tests(all, &xm, robot, p);
+    let (fault, icp, gyro) = without_periodic(r, all, &xm, icp0, gyro0, robot, p)?;
+    let pass = select_twice(r, &icp, &gyro, p).ok()?;
+    Some((pass, fault))
+}
+
+/// When the rows of `all` left by model `x` show a once-per-revolution
+/// structure (an out-of-round wheel, [`leftover`]), the fault and the rows
+/// `icp0`, `gyro0` with that periodic part (each stream's own fit of the
+/// wheel regressors) taken out.
+fn without_periodic(
+    r: &Rows,
+    all: Part,
+    x: &Departures,
+    icp0: &[IcpRow],
+    gyro0: &[GyroRow],
+    robot: &RobotConfig,
+    p: &DiagnoseParams,
+) -> Option<(Fault, Vec<IcpRow>, Vec<GyroRow>)> {
+    let tests = structure_tests(all, x, robot, p);
     let mut faults = Vec::new();
     leftover(&tests, robot, &mut faults);
     let fault = faults.pop()?;
@@ -115,8 +133,7 @@ fn out_of_round(
             ..*row
         })
         .collect();
-    let pass = select_twice(r, &icp, &gyro, p).ok()?;
-    Some((pass, fault))
+    Some((fault, icp, gyro))
 }
 
 /// What every selection pass shares: the replay, the wheel span, the time
@@ -159,11 +176,16 @@ fn select_twice(
 /// effects are selected on the rows with that slip taken out
 /// ([`floor::corrected`]), and the region must still stand out in the
 /// measured rows against that model ([`floor::refit`]) for the fault to be
-/// named. Returns the pass on the corrected rows and the fault.
+/// named. A wheel's once-per-revolution wobble, on a path that passes the
+/// same places at the same wheel angles, can read as such a region: when the
+/// nominal residuals show it ([`without_periodic`]), the region must also
+/// stand out on the rows with it taken out. Returns the pass on the
+/// corrected rows and the fault.
 fn floor_slip(
     r: &Rows,
     icp0: &[IcpRow],
     gyro0: &[GyroRow],
+    robot: &RobotConfig,
     p: &DiagnoseParams,
 ) -> Option<(Pass, Fault)> {
     let s = FloorSettings {
@@ -185,6 +207,14 @@ fn floor_slip(
         gyro: &gyro,
     };
     let candidate = floor::search(all, &nominal, &s).filter(|f| f.reported(&s))?;
+    if let Some((_, icp_p, gyro_p)) = without_periodic(r, all, &nominal, &icp, &gyro, robot, p) {
+        let round = Part {
+            replay: r.replay,
+            icp: &icp_p,
+            gyro: &gyro_p,
+        };
+        floor::search(round, &nominal, &s).filter(|f| f.reported(&s))?;
+    }
     let (icp_c, gyro_c) =
         floor::corrected(&icp, &gyro, &candidate.region, candidate.slip, s.margin);
     let pass = select_twice(r, &icp_c, &gyro_c, p).ok()?;

@@ -221,3 +221,49 @@ def block_independent_laws(runner, csm):
         rows.append(f"| `{law}` | {what} | " + " | ".join(cells) +
                     f" | {right} of {len(LAW_SCENARIOS)} |")
     return rows
+
+
+# Slip on part of the floor at sizes near its reporting floor: the blind
+# suite's band on each scenario (`slippery_half` in src/experiments/blind/cases.rs),
+# one seed per scenario, 90 s.
+SLIP_SCENARIOS = [("corridor-loop", 300, 15, 30), ("hall", 301, 15, 30), ("square", 302, 5, 10),
+                  ("square-ccw", 303, 5, 10), ("figure-eight", 304, 24, 30),
+                  ("random-walk", 305, 10, 20)]
+SLIP_SIZES = ["0.02", "0.03", "0.05"]
+
+
+def _slip_diagnosis(runner, scenario, seed, x0, x1, slip):
+    """`odocal diagnose --json` of a 90 s run whose wheels over-read by
+    `slip` on the band x0 ≤ x < x1."""
+    bag = runner.path(f"slip-{scenario}-{seed}-{slip}.mcap")
+    runner.run(["simulate", "--scenario", scenario, "--seed", str(seed), "--duration", "90",
+                "--effect", f"floor_slip:x_min={x0},x_max={x1},slip={slip}", "--out", bag])
+    return json.loads(runner.run(["diagnose", "--measured", bag, "--json"]))
+
+
+def block_floor_slip(runner, csm):
+    """Floor slips of 2, 3 and 5 % on half the area of every scenario:
+    whether `floor_slip` is named, its size ± stderr, the verdict and any
+    table effect named beside it."""
+    futures = {(s, k): runner.pool.submit(_slip_diagnosis, runner, s, n, x0, x1, k)
+               for s, n, x0, x1 in SLIP_SCENARIOS for k in SLIP_SIZES}
+    rows = ["| scenario (seed) | " + " | ".join(f"slip {float(k) * 100:g} %" for k in SLIP_SIZES)
+            + " |", "|---|" + "---|" * len(SLIP_SIZES)]
+    named = {k: 0 for k in SLIP_SIZES}
+    for s, n, _, _ in SLIP_SCENARIOS:
+        cells = []
+        for k in SLIP_SIZES:
+            d = futures[(s, k)].result()
+            f = next((f for f in d["faults"] if f["name"] == "floor_slip"), None)
+            others = ", ".join(c["effect"] for c in d["causes"]) or "–"
+            if f:
+                named[k] += 1
+                p = f["parameters"]
+                head = f"✓ {percent(p['slip'], p['slip_stderr'])}"
+            else:
+                head = "✗ not named"
+            cells.append(f"{head}; {d['verdict']}; beside it: {others}")
+        rows.append(f"| {s} ({n}) | " + " | ".join(cells) + " |")
+    rows.append("| named | " + " | ".join(f"{named[k]} of {len(SLIP_SCENARIOS)}"
+                                         for k in SLIP_SIZES) + " |")
+    return rows

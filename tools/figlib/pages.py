@@ -162,6 +162,18 @@ PAGES = {
         "(`python3 tools/icp_error_table.py` prints it as code).",
         "the-scan-matcher-as-an-instrument",
     ),
+    "floor-slip": (
+        "Slip on part of the floor, near its reporting floor",
+        "`python3 tools/figures.py --write --all --only floor-slip`: on each built-in scenario, "
+        "the wheels over-read by 2, 3 or 5 % on the blind suite's band of the floor (`odocal "
+        "simulate --scenario S --seed N --duration 90 --effect "
+        "floor_slip:x_min=X0,x_max=X1,slip=K`, then `odocal diagnose --measured BAG --json`). "
+        "Each cell: whether `floor_slip` is named, with its size ± stderr (the systematic 0.65 % "
+        "found on null runs included), the verdict, and the table effects named beside it. A "
+        "region is reported beyond |z| 10 and 2 % ([the method](../method.md#slip-on-part-of-the-floor)); "
+        "the null runs, on which none may be named, are on [null-lengths](null-lengths.md).",
+        "blind-diagnosis-suite",
+    ),
     "null-lengths": (
         "Null runs at every length",
         "`python3 tools/figures.py --write --only null-lengths`: for every built-in scenario "
