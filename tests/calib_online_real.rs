@@ -185,12 +185,15 @@ fn censi_tuples_the_default_method_gives_the_authors_calibration() {
         ]));
         assert_eq!(out["method"], "adaptive-pf");
         assert!(out["route"].as_str().unwrap().contains("tuple"));
-        // Within 0.5 % of the authors; lmov within 1 %: its tuples hold
-        // outliers that the filter's Student-t likelihood still weighs and
-        // the authors' solver (and odocal's batch) drop; with its laser
-        // held at the authors' mounting the filter gives the same +0.6 to
-        // +0.9 %.
-        let tol = if set == "lmov" { 0.01 } else { 0.005 };
+        // Within 0.5 % of the authors on every set. lmov's first in-place
+        // turn comes after 868 s of straight driving, with the wheel base
+        // still unobserved, and its first tuple's laser rotation is 0.53 of
+        // the wheels' (the interval spans the turn's start): the Student-t
+        // weight read against the posterior keeps it from pulling the wheel
+        // base to the edge of the cloud (read against the prior predictive
+        // it did, the change detector then fired and re-spread the radii:
+        // the +0.9 % this set had).
+        let tol = 0.005;
         every_method_and_not_the_nominal(
             set,
             &[("adaptive-pf", kinematics(&out))],

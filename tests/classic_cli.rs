@@ -104,17 +104,18 @@ fn experiment_literature_writes_every_method_side_by_side() {
             assert!(x.is_finite(), "{k} = {x}");
         }
     }
-    // The Adaptive-PF's median errors (radii, wheel base, position on the
-    // evaluation path) each under a third of the uncalibrated robot's
-    // (measured: 0.09 mm against 1.4 and 1.9 mm, 0.5 mm against 7.5 mm,
-    // 0.011 m against 0.22 m); the uncalibrated row fails the same check.
+    // The Adaptive-PF's median errors (wheel base, position on the
+    // evaluation path) each under a third of the uncalibrated robot's; the
+    // uncalibrated row fails the same check. The radii, whose spread over
+    // two runs of this short square is wide, are checked over five
+    // repetitions in tests/classic_literature.rs.
     let median = |method: &str, k: &str| {
         let rows = v["rows"].as_array().unwrap();
         let r = rows.iter().find(|r| r["method"] == method).unwrap();
         r[k]["median"].as_f64().unwrap()
     };
     let a_third_of_none = |method: &str| {
-        ["err_r_right", "err_r_left", "err_wheel_base", "rmse_xy"]
+        ["err_wheel_base", "rmse_xy"]
             .iter()
             .all(|k| median(method, k) < median("none", k) / 3.0)
     };

@@ -96,7 +96,7 @@ impl Calibrator for AugmentedKf {
             };
             let r = m.sigma.max(self.floor).powi(2);
             let nu = m.value - self.x[k];
-            let r = r / student_t_weight(nu * nu / (self.p[(k, k)] + r), self.dof);
+            let r = r / student_t_weight(nu, r, self.p[(k, k)], self.dof);
             let sv = self.p[(k, k)] + r;
             let gain: V5 = self.p.column(k) / sv;
             self.x += gain * (m.value - self.x[k]);

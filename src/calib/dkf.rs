@@ -81,7 +81,11 @@ impl Calibrator for DualKf {
             };
             let r = m.sigma.max(self.floor).powi(2);
             let nu = m.value - x[k];
-            let r = r / student_t_weight(nu * nu / (px[k] + r), self.dof);
+            // Read against the prior predictive (its spread as noise, no
+            // prior): this state filter's prior is a random walk of the
+            // velocity, not a belief the parameters give, and read against
+            // its posterior every measurement would pass.
+            let r = r / student_t_weight(nu, px[k] + r, 0.0, self.dof);
             let g = px[k] / (px[k] + r);
             x[k] += g * (m.value - x[k]);
             px[k] *= 1.0 - g;
