@@ -250,8 +250,9 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("the right wheel never turned"), "{e}");
+        // (Not "all zero" alone: the dead-wheel messages say that too.)
         let e = rotation_jacobian(&rows(&STILL)).unwrap_err().to_string();
-        assert!(e.contains("all zero"), "{e}");
+        assert!(e.contains("no wheel turned"), "{e}");
         // Negative control: both wheels turning, alike and apart, determine it.
         static MIXED: [[[f64; 2]; 1]; 3] = [[[1.0, 1.0]], [[1.0, -1.0]], [[0.5, 2.0]]];
         assert!(rotation_jacobian(&rows(&MIXED)).is_ok());
@@ -268,6 +269,46 @@ mod tests {
             })
             .collect();
         assert!(closed_form(&rows).is_err());
+    }
+
+    #[test]
+    fn a_wheel_is_named_dead_only_below_a_tenth_of_the_other() {
+        // Every interval turns the left wheel by k and the right by −q·k: the
+        // increments span one line, so the rotation system has no
+        // information along its normal n ∝ (q, 1) (n_L = q/√(1+q²),
+        // n_R = 1/√(1+q²)). The right wheel is named dead when n_L < 0.1 n_R,
+        // i.e. q < 0.1: at q = 0.098 it is (it barely turned); at q = 0.1002
+        // n_L = 0.099701 > 0.1·0.995017 = 0.099502, so the wheels are said
+        // to turn opposite ways in a fixed ratio instead. Mirrored (left −q·k,
+        // right k) for the left wheel.
+        let named = |q: f64, left_dead: bool| -> String {
+            let incs: Vec<[[f64; 2]; 1]> = [1.0, -2.0, 0.5]
+                .iter()
+                .map(|&k| {
+                    if left_dead {
+                        [[-q * k, k]]
+                    } else {
+                        [[k, -q * k]]
+                    }
+                })
+                .collect();
+            let rows: Vec<Row> = incs
+                .iter()
+                .map(|inc| Row {
+                    inc,
+                    s: [0.1, 0.0, 0.05],
+                    w_rot: 1.0,
+                    w_tr: 1.0,
+                })
+                .collect();
+            rotation_jacobian(&rows).unwrap_err().to_string()
+        };
+        for (left_dead, wheel) in [(false, "the right wheel"), (true, "the left wheel")] {
+            let e = named(0.098, left_dead);
+            assert!(e.contains(&format!("{wheel} never turned")), "{e}");
+            let e = named(0.1002, left_dead);
+            assert!(e.contains("only turned in place"), "{e}");
+        }
     }
 
     /// Rows of equal weights over intervals and laser displacements.

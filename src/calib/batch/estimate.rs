@@ -78,6 +78,7 @@ pub fn estimate_with_laser(
         p: init.to_vec(n),
         info: nalgebra::DMatrix::zeros(n, n),
         chi2: 0.0,
+        iterations: 0,
     };
     let how = Rounds {
         given,

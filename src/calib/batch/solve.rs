@@ -32,6 +32,9 @@ pub struct Fit {
     pub info: DMatrix<f64>,
     /// Σ e_kᵀ Σ_k⁻¹ e_k at the optimum.
     pub chi2: f64,
+    /// The iterations taken (each forms the normal equations once; the last
+    /// one's step was small or refused at every damping), at most `max_iter`.
+    pub iterations: usize,
 }
 
 /// The residual `s − ŝ` of one interval at `p`.
@@ -106,7 +109,9 @@ pub fn fit(d: &Data, p0: &[f64], max_iter: usize) -> Fit {
     let mut p = p0.to_vec();
     let mut cost = chi2(d, &p);
     let mut lambda = 1e-3;
+    let mut iterations = 0;
     for _ in 0..max_iter {
+        iterations += 1;
         let (h, g) = normal(d, &p);
         let mut improved = false;
         while lambda < 1e12 {
@@ -139,6 +144,7 @@ pub fn fit(d: &Data, p0: &[f64], max_iter: usize) -> Fit {
         p,
         info,
         chi2: cost,
+        iterations,
     }
 }
 
@@ -295,6 +301,66 @@ mod tests {
         let f = fit(&d, &p0, 200);
         for (g, w) in f.p.iter().zip(TRUTH) {
             assert!((g - w).abs() < 1e-8, "{:?}", f.p);
+        }
+    }
+
+    /// A robot spinning in place, left wheel −2.5 rad and right +2.5 rad on
+    /// radii 0.1, the laser at the base: it turns θ = 0.5/b, observed as
+    /// θ* = 1 (so b = 0.5), and only the wheel base is free, from b = 1.2.
+    /// The residual e(b) = 1 − 0.5/b with ∂e/∂b = 0.5/b² is whitened by `w`.
+    fn spin(w: f64, max_iter: usize) -> Fit {
+        let ivs = [Interval {
+            s: [0.0, 0.0, 1.0],
+            cov: None,
+            duration: 1.0,
+            wheels: WheelMotion::Steps(vec![[-2.5, 2.5]]),
+        }];
+        let d = data(
+            &ivs,
+            Matrix3::identity() * w,
+            [false, false, true, false, false, false],
+        );
+        fit(&d, &[0.1, 0.1, 1.2, 0.0, 0.0, 0.0], max_iter)
+    }
+
+    #[test]
+    fn a_step_that_overshoots_is_damped_until_it_lowers_the_cost() {
+        // At b = 1.2: e = 1 − 0.5/1.2 = 7/12, ∂e/∂b = 0.5/1.44, so the
+        // undamped step is e/(∂e/∂b) = 1.68, to b = −0.48 (a turn the other
+        // way: costlier). Damped by λ·H (one unknown: diag H is H) the step
+        // is 1.68/(1 + λ): λ = 0.001, 0.01 and 0.1 still land at b < 0
+        // (−0.478, −0.463, −0.327; |e| > 2 > 7/12), λ = 1 lands at
+        // 1.2 − 0.84 = 0.36 (e = −0.389, accepted). The next iteration starts
+        // at λ = 0.1: the undamped step from 0.36 is (1 − 0.5/0.36)·0.36²/0.5
+        // = −0.1008, damped −0.1008/1.1.
+        let f = spin(1.0, 1);
+        assert_eq!(f.iterations, 1);
+        assert!((f.p[2] - 0.36).abs() < 1e-9, "{:?}", f.p);
+        let f = spin(1.0, 2);
+        assert_eq!(f.iterations, 2);
+        assert!((f.p[2] - (0.36 + 0.1008 / 1.1)).abs() < 1e-9, "{:?}", f.p);
+        // The held unknowns stay where they start.
+        assert_eq!([f.p[0], f.p[1], f.p[3]], [0.1, 0.1, 0.0]);
+    }
+
+    #[test]
+    fn the_damped_path_ends_after_its_first_small_step() {
+        // The whole path from b = 1.2 (tools/lm_path_by_hand.py, with the
+        // analytic derivative): steps 0.84, −9.2e-2, −4.3e-2, −5.1e-3,
+        // −5.7e-5, −1.2e-8 (at λ = 0.1, 0.01, … after the first iteration's
+        // λ = 1), then −1.2e-13, the first under 1e-3 of the 1e-6 difference
+        // step: seven iterations, at b = 0.5.
+        let f = spin(1.0, 50);
+        assert_eq!(f.iterations, 7);
+        assert!((f.p[2] - 0.5).abs() < 1e-12, "{:?}", f.p);
+        assert!(f.chi2 < 1e-24, "{}", f.chi2);
+        // Marquardt's damping λ·diag H makes the path independent of the
+        // residuals' scale: whitened by 1e3 (H and Jᵀr 1e6 times larger, the
+        // cost too) every step is the same and so is the count.
+        for n in [1, 2, 50] {
+            let (a, b) = (spin(1.0, n), spin(1e3, n));
+            assert_eq!(a.iterations, b.iterations, "{n}");
+            assert!((a.p[2] - b.p[2]).abs() < 1e-12, "{n}: {a:?} {b:?}");
         }
     }
 
