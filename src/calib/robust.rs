@@ -22,7 +22,7 @@
 /// cover different spans, would then pull the unobserved parameter to the
 /// edge of its cloud), nor penalises an inlier, which an innovation against
 /// `r` alone would. With `prior_var` = 0 it is `(dof + 1)/(dof + ν²/r)`.
-/// `dof = 0`, or a non-finite input, gives 1.
+/// `dof = 0`, a variance `r` ≤ 0, or a non-finite input gives 1.
 pub fn student_t_weight(nu: f64, r: f64, prior_var: f64, dof: f64) -> f64 {
     if !(dof > 0.0) || !(r > 0.0) || !nu.is_finite() || !r.is_finite() {
         return 1.0;
@@ -60,6 +60,11 @@ mod tests {
         assert!((student_t_weight(50.0, 1.0, 0.0, 4.0) - 5.0 / 2504.0).abs() < 1e-12);
         assert_eq!(student_t_weight(50.0, 1.0, 0.0, 0.0), 1.0);
         assert_eq!(student_t_weight(f64::NAN, 1.0, 0.0, 4.0), 1.0);
+        // Inputs outside the law give 1 rather than a weight: an infinite
+        // innovation (which would give 0) and a negative variance (which
+        // would give 5/(4 − 9) = −1).
+        assert_eq!(student_t_weight(f64::INFINITY, 1.0, 0.0, 4.0), 1.0);
+        assert_eq!(student_t_weight(3.0, -1.0, 0.0, 4.0), 1.0);
     }
 
     #[test]
