@@ -223,16 +223,7 @@ mod tests {
     fn a_motion_that_cannot_determine_the_robot_is_named() {
         static STRAIGHT: [[[f64; 2]; 1]; 3] = [[[1.0, 1.0]], [[2.0, 2.0]], [[-1.0, -1.0]]];
         static SPIN: [[[f64; 2]; 1]; 3] = [[[1.0, -1.0]], [[-2.0, 2.0]], [[0.5, -0.5]]];
-        let rows = |incs: &'static [[[f64; 2]; 1]; 3]| -> Vec<Row<'static>> {
-            incs.iter()
-                .map(|inc| Row {
-                    inc,
-                    s: [0.1, 0.0, 0.05],
-                    w_rot: 1.0,
-                    w_tr: 1.0,
-                })
-                .collect()
-        };
+        let rows = |incs: &'static [[[f64; 2]; 1]; 3]| unit_rows(incs, [0.1, 0.0, 0.05]);
         let e = rotation_jacobian(&rows(&STRAIGHT)).unwrap_err().to_string();
         assert!(e.contains("never turned the robot"), "{e}");
         let e = rotation_jacobian(&rows(&SPIN)).unwrap_err().to_string();
@@ -259,16 +250,7 @@ mod tests {
         // Turning both ways but never moving the laser while turning: no
         // laser position.
         static NO_TURN_MOVE: [[[f64; 2]; 1]; 2] = [[[1.0, 2.0]], [[2.0, 1.0]]];
-        let rows: Vec<Row> = NO_TURN_MOVE
-            .iter()
-            .map(|inc| Row {
-                inc,
-                s: [0.0, 0.0, 0.0],
-                w_rot: 1.0,
-                w_tr: 1.0,
-            })
-            .collect();
-        assert!(closed_form(&rows).is_err());
+        assert!(closed_form(&unit_rows(&NO_TURN_MOVE, [0.0; 3])).is_err());
     }
 
     #[test]
@@ -292,16 +274,9 @@ mod tests {
                     }
                 })
                 .collect();
-            let rows: Vec<Row> = incs
-                .iter()
-                .map(|inc| Row {
-                    inc,
-                    s: [0.1, 0.0, 0.05],
-                    w_rot: 1.0,
-                    w_tr: 1.0,
-                })
-                .collect();
-            rotation_jacobian(&rows).unwrap_err().to_string()
+            rotation_jacobian(&unit_rows(&incs, [0.1, 0.0, 0.05]))
+                .unwrap_err()
+                .to_string()
         };
         for (left_dead, wheel) in [(false, "the right wheel"), (true, "the left wheel")] {
             let e = named(0.098, left_dead);
@@ -309,6 +284,19 @@ mod tests {
             let e = named(0.1002, left_dead);
             assert!(e.contains("only turned in place"), "{e}");
         }
+    }
+
+    /// Rows of unit weights, one wheel increment each, all with the laser
+    /// displacement `s`.
+    fn unit_rows(incs: &[[[f64; 2]; 1]], s: [f64; 3]) -> Vec<Row<'_>> {
+        incs.iter()
+            .map(|inc| Row {
+                inc,
+                s,
+                w_rot: 1.0,
+                w_tr: 1.0,
+            })
+            .collect()
     }
 
     /// Rows of equal weights over intervals and laser displacements.
