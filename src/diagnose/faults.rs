@@ -96,6 +96,37 @@ pub fn out_of_round(
     }
 }
 
+/// The name of a gyro whose turn scale the scan matching contradicts.
+pub const GYRO_SCALE: &str = "gyro_scale";
+
+/// A gyro reading turns (1 + `scale`) times the scan matching
+/// ([`super::gyro_check`]). Parameters: `scale` (relative) and
+/// `scale_stderr`, `segments` compared.
+pub fn gyro_scale(s: &super::gyro_check::GyroScale) -> Fault {
+    let mut parameters = BTreeMap::new();
+    parameters.insert("scale".to_string(), s.scale);
+    parameters.insert("scale_stderr".to_string(), s.stderr);
+    parameters.insert("segments".to_string(), s.segments as f64);
+    Fault {
+        name: GYRO_SCALE.into(),
+        parameters,
+        evidence: format!(
+            "over {} one-second segments the gyro's turn is {:+.2} ± {:.2} % of the \
+             scan-matched turn (least squares with a bias; jackknife over stretches of the \
+             run), before any effect of the robot is fitted; the fit below reads the gyro \
+             on the scan matching's scale",
+            s.segments,
+            100.0 * s.scale,
+            100.0 * s.stderr
+        ),
+        fix: format!(
+            "correct the gyro's scale factor (divide its rate by {:.4}) or recalibrate the \
+             IMU; no wheel parameter removes a gyro scale",
+            1.0 + s.scale
+        ),
+    }
+}
+
 /// Slip on part of the floor from the region model fitted against the
 /// selected table effects ([`super::floor`]). Parameters: `slip` (relative
 /// over-reading of both wheels inside the region against the rest of the

@@ -47,6 +47,9 @@ pub struct Instrument {
     pub turn: Vec<Cell>,
     /// Spreads of the table's error allowed beyond the floors.
     pub spreads: f64,
+    /// Shortest latency between the wheels and the scan matching that is
+    /// named (s): the matcher's own timing error on null runs stays under it.
+    pub timing: f64,
 }
 
 impl Default for Instrument {
@@ -73,6 +76,13 @@ impl Default for Instrument {
                 [-0.0015, 0.0015],
             ],
             spreads: 2.0,
+            // The latency alone fitted with the gyro set aside, on null runs
+            // of every scenario (seeds 401–402, 150 s, 50 Hz): under 1.1 ms
+            // (|delay|) on all but the figure eight, which reads 3.9–5.3 ms
+            // (± 0.8 ms) on three seeds. It vanishes when the simulated
+            // laser sweeps without moving, so it lies in how the sweep's
+            // motion is read; where exactly is not established.
+            timing: 0.006,
         }
     }
 }
@@ -109,6 +119,12 @@ impl Instrument {
         }
         if !(self.forward.iter().flatten().all(cell_ok) && self.turn.iter().all(cell_ok)) {
             return Err("instrument: every cell is [error, spread ≥ 0], finite".into());
+        }
+        if !(self.timing.is_finite() && self.timing >= 0.0) {
+            return Err(format!(
+                "instrument: timing must be ≥ 0 s, got {}",
+                self.timing
+            ));
         }
         if !(self.spreads.is_finite() && self.spreads >= 0.0) {
             return Err(format!(

@@ -22,6 +22,7 @@ pub mod fit;
 pub mod floor;
 pub mod free;
 pub mod gain;
+pub mod gyro_check;
 pub mod instrument;
 pub mod model;
 pub mod mount;
@@ -29,6 +30,7 @@ pub mod odometry;
 pub mod onset;
 pub mod remaining;
 pub mod residuals;
+pub mod resolution;
 pub mod run;
 pub mod select;
 pub mod series;
@@ -99,6 +101,9 @@ pub struct DiagnoseParams {
     /// Scan-to-scan ICP's own error per pair, against which a leftover
     /// structure is checked before it is called the robot's.
     pub instrument: instrument::Instrument,
+    /// The gyro's turn scale checked against the scan matching before the
+    /// fit (a gyro scale is a fault of the gyro, not an effect of the table).
+    pub gyro_check: gyro_check::GyroCheck,
     /// Maximum number of effects selected.
     pub max_effects: usize,
     /// Levenberg–Marquardt iterations per fit.
@@ -126,6 +131,7 @@ impl Default for DiagnoseParams {
             structure_lag: 3.0,
             floors: remaining::Floors::default(),
             instrument: instrument::Instrument::default(),
+            gyro_check: gyro_check::GyroCheck::default(),
             max_effects: 4,
             max_iter: 30,
             candidates: EFFECT_NAMES.iter().map(|s| s.to_string()).collect(),
@@ -177,6 +183,7 @@ impl DiagnoseParams {
             return bad(format!("margin must be ≥ 0 s, got {}", self.margin));
         }
         self.instrument.validate().map_err(DiagnoseError::Params)?;
+        self.gyro_check.validate().map_err(DiagnoseError::Params)?;
         if self.max_iter == 0 || self.ljung_box_lags == 0 {
             return bad("max_iter and ljung_box_lags must be ≥ 1".into());
         }

@@ -81,6 +81,9 @@ pub struct Replay {
     ts: Vec<f64>,
     right: Vec<f64>,
     left: Vec<f64>,
+    /// One encoder tick period at the run's wheel rate (s; 0 when the
+    /// angles are not quantised), [`super::resolution`].
+    pub timing_resolution: f64,
 }
 
 /// Predicted body velocities over an interval: forward V, lateral L (m/s) and
@@ -123,6 +126,7 @@ impl Replay {
             right.push(s.right);
             left.push(s.left);
         }
+        let timing_resolution = super::resolution::timing_resolution(wheels);
         let k = smoothing_samples(&ts, smoothing);
         if k > 1 && ts.len() >= 3 * k {
             (ts, right, left) = smooth(&ts, &right, &left, k);
@@ -135,6 +139,7 @@ impl Replay {
             ts,
             right,
             left,
+            timing_resolution,
         }
     }
 

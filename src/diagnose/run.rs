@@ -41,6 +41,15 @@ pub fn run(
     let icp0 = icp_rows(&merged, span, p.margin);
     let gyro0 = gyro_rows(m.gyro, span, p.margin, p.gyro_window);
     let mut found: Vec<Fault> = rewired.into_iter().map(|r| r.1).collect();
+    let gyro0 = match checked_gyro(&icp0, &gyro0, &p.gyro_check) {
+        Some(fault) => {
+            // A gyro whose scale is wrong says nothing the fit can use about
+            // the robot's turning: it is left out, as on a robot without one.
+            found.push(fault);
+            Vec::new()
+        }
+        None => gyro0,
+    };
     let rows = Rows {
         replay: &replay,
         span,
@@ -57,6 +66,17 @@ pub fn run(
         return Ok(pass.diagnosis(&replay, m, p, robot, found));
     }
     Ok(pass.diagnosis(&replay, m, p, robot, found))
+}
+
+/// The gyro's fault when its turn scale is one ([`super::gyro_check`]);
+/// `None` when it is not, or the check is off.
+fn checked_gyro(
+    icp0: &[IcpRow],
+    gyro0: &[GyroRow],
+    c: &super::gyro_check::GyroCheck,
+) -> Option<Fault> {
+    let s = super::gyro_check::gyro_scale(icp0, gyro0, c).filter(|s| c.enabled && s.is_fault(c))?;
+    Some(faults::gyro_scale(&s))
 }
 
 /// An out-of-round wheel, looked for in what the selected model leaves:
@@ -503,7 +523,20 @@ fn settings(p: &DiagnoseParams, train: Part, split: &Split, origin: f64) -> Sele
         step_range: (split.start - origin + 1.0, split.time - origin - 1.0),
         step_min_rows: 30,
         max_steps: p.max_effects,
+        min_latency: min_latency(train.replay, p),
     }
+}
+
+/// Shortest latency named (s): one encoder tick period at the run's wheel
+/// rate ([`super::resolution`]) or the scan matcher's own timing error
+/// ([`super::instrument::Instrument::timing`]), whichever is longer.
+pub fn min_latency(replay: &Replay, p: &DiagnoseParams) -> f64 {
+    let instrument = if p.instrument.enabled {
+        p.instrument.timing
+    } else {
+        0.0
+    };
+    replay.timing_resolution.max(instrument)
 }
 
 /// Forward selection on the training part whose every effect the held-out

@@ -29,6 +29,10 @@ pub struct CandidateScore {
     pub identifiable: bool,
     /// Whether the estimate is physically possible (see [`physical`]).
     pub physical: bool,
+    /// Whether the instruments can time it: false for a latency shorter than
+    /// one encoder tick period ([`super::resolution`]) or the scan matcher's
+    /// own timing error ([`super::instrument::Instrument::timing`]).
+    pub resolvable: bool,
 }
 
 /// Whether a fitted effect is physically possible: every parameter within
@@ -66,6 +70,8 @@ pub struct SelectSettings {
     pub step_min_rows: usize,
     /// Most radius steps in one model.
     pub max_steps: usize,
+    /// Shortest latency named (s; [`super::run::min_latency`]).
+    pub min_latency: f64,
 }
 
 /// Result of the selection.
@@ -114,7 +120,7 @@ pub fn search_step_time(part: Part, current: &Fit, s: &SelectSettings) -> Option
     super::split::search_split(part, current, &step, range).map(|f| f.time)
 }
 
-fn score(round: usize, f: &Fit, base_bic: f64) -> CandidateScore {
+fn score(round: usize, f: &Fit, base_bic: f64, min_latency: f64) -> CandidateScore {
     let i = f.effects.len() - 1;
     let (parameters, stderr) = named(f, i);
     let w = wald(f, i);
@@ -127,6 +133,7 @@ fn score(round: usize, f: &Fit, base_bic: f64) -> CandidateScore {
         p_value: chi2_sf(w, free_params(&f.effects[i]).len()),
         identifiable: f.identifiable,
         physical: physical(&f.effects[i]),
+        resolvable: !matches!(f.effects[i], Effect::Latency { delay } if delay.abs() < min_latency),
     }
 }
 
@@ -167,9 +174,10 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
             let mut effs = current.effects.clone();
             effs.push(new);
             let f = fit(part, &effs, current.scale, s.max_iter, 1);
-            let sc = score(round, &f, current.bic);
+            let sc = score(round, &f, current.bic, s.min_latency);
             let ok = sc.identifiable
                 && sc.physical
+                && sc.resolvable
                 && sc.delta_bic > s.bic_margin
                 && sc.p_value < s.alpha;
             tried.push(sc.clone());
@@ -362,6 +370,7 @@ mod tests {
             step_range: (1.0, 9.0),
             step_min_rows: 2,
             max_steps: 2,
+            min_latency: 0.0,
         }
     }
 
@@ -680,5 +689,65 @@ mod tests {
         assert!(!physical(&bias.effects[0]), "{:?}", bias.effects);
         let (model, delta_bic, steps) = prune(part, bias.clone(), vec![1.5], vec![bias], &s);
         assert!(model.effects.is_empty() && delta_bic.is_empty() && steps.is_empty());
+    }
+
+    /// Both wheels at 2 + sin 2t rad/s for 20 s (100 Hz, radii 0.32 m), and
+    /// ICP rows over 0.1 s reading the forward speed the wheels had 20 ms
+    /// earlier (the wheel stream 20 ms late), σ 0.002 m/s.
+    fn wheels_20_ms_late() -> (Replay, Vec<IcpRow>) {
+        let phi = |t: f64| 2.0 * t - 0.5 * (2.0 * t).cos();
+        let wheels: Vec<WheelSample> = (0..=2000)
+            .map(|i| {
+                let t = i as f64 / 100.0;
+                WheelSample {
+                    stamp: t,
+                    left: phi(t),
+                    right: phi(t),
+                }
+            })
+            .collect();
+        let icp = (5..195)
+            .map(|k| {
+                let (t0, t1) = (0.1 * k as f64, 0.1 * (k + 1) as f64);
+                let v = 0.32 * (phi(t1 - 0.02) - phi(t0 - 0.02)) / 0.1;
+                IcpRow {
+                    t0,
+                    t1,
+                    z: [v, 0.0, 0.0],
+                    sigma: [0.002, 0.002, 0.002],
+                }
+            })
+            .collect();
+        (Replay::new(&RobotConfig::default(), &wheels, 0.0, 0.0), icp)
+    }
+
+    #[test]
+    fn a_latency_under_what_the_instruments_time_is_not_named() {
+        let (replay, icp) = wheels_20_ms_late();
+        let part = Part {
+            replay: &replay,
+            icp: &icp,
+            gyro: &[],
+        };
+        let usable = vec!["latency".to_string()];
+        let named = |min_latency: f64| {
+            let s = SelectSettings {
+                min_latency,
+                ..settings(10.0, 1e-3, 2)
+            };
+            forward(part, &usable, &s)
+        };
+        // Timed to within 10 ms: the 20 ms are named.
+        let sel = named(0.01);
+        assert_eq!(sel.model.effects.len(), 1, "{:?}", sel.tried);
+        let Effect::Latency { delay } = sel.model.effects[0] else {
+            panic!("{:?}", sel.model.effects)
+        };
+        assert!((delay.abs() - 0.02).abs() < 1e-3, "{delay}");
+        assert!(sel.tried[0].resolvable);
+        // Timed to within 30 ms only: tried, fitted, and not named.
+        let sel = named(0.03);
+        assert!(sel.model.effects.is_empty(), "{:?}", sel.model.effects);
+        assert!(!sel.tried[0].resolvable && sel.tried[0].delta_bic > 10.0);
     }
 }

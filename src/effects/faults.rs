@@ -61,13 +61,33 @@ pub enum FaultEffect {
         /// Turn of the mounting (rad).
         dyaw: f64,
     },
+    /// Tyres whose rolling radius follows their load: each drive wheel's
+    /// radius shrinks by its tyre's deflection F / `stiffness`, the load F
+    /// its share of `mass` · g by where the centre of mass sits across the
+    /// axle (`com_y`), plus the load the turn moves onto the outer wheel
+    /// (`mass` · v ω · `height` / wheel base). A linear tyre whose rolling
+    /// radius drops by its whole deflection: a model of the physics, not a
+    /// law of the effect table.
+    TyreLoad {
+        /// Mass the two drive wheels carry (kg).
+        mass: f64,
+        /// Centre of mass left of the axle's middle (m).
+        com_y: f64,
+        /// Height of the centre of mass above the ground (m).
+        height: f64,
+        /// Vertical stiffness of one tyre (N/m).
+        stiffness: f64,
+    },
 }
+
+/// Standard gravity (m/s²).
+const G: f64 = 9.80665;
 
 /// Parameter keys of a fault with their (lo, hi) ranges.
 type Keys = &'static [(&'static str, f64, f64)];
 
 /// Every fault name, with its parameter keys and (lo, hi) ranges.
-const TABLE: [(&str, Keys); 7] = [
+const TABLE: [(&str, Keys); 8] = [
     ("swapped_wheels", &[]),
     ("reversed_left_encoder", &[]),
     ("reversed_right_encoder", &[]),
@@ -98,11 +118,22 @@ const TABLE: [(&str, Keys); 7] = [
             ("dyaw", -0.5, 0.5),
         ],
     ),
+    // A wheelchair with its user to a delivery robot: up to 1 t on the two
+    // wheels, tyres from soft pneumatics (10 kN/m) to solid rubber.
+    (
+        "tyre_load",
+        &[
+            ("mass", 0.0, 1000.0),
+            ("com_y", -0.5, 0.5),
+            ("height", 0.0, 2.0),
+            ("stiffness", 1e4, 1e8),
+        ],
+    ),
 ];
 
 /// Every fault name.
-pub const FAULT_NAMES: [&str; 7] = [
-    TABLE[0].0, TABLE[1].0, TABLE[2].0, TABLE[3].0, TABLE[4].0, TABLE[5].0, TABLE[6].0,
+pub const FAULT_NAMES: [&str; 8] = [
+    TABLE[0].0, TABLE[1].0, TABLE[2].0, TABLE[3].0, TABLE[4].0, TABLE[5].0, TABLE[6].0, TABLE[7].0,
 ];
 
 impl FaultEffect {
@@ -120,6 +151,7 @@ impl FaultEffect {
             Self::FloorSlip { .. } => 4,
             Self::LatencyChange { .. } => 5,
             Self::LaserKnock { .. } => 6,
+            Self::TyreLoad { .. } => 7,
         }
     }
 
@@ -130,6 +162,12 @@ impl FaultEffect {
             Self::FloorSlip { x_min, x_max, slip } => vec![x_min, x_max, slip],
             Self::LatencyChange { time, delay } => vec![time, delay],
             Self::LaserKnock { time, dx, dy, dyaw } => vec![time, dx, dy, dyaw],
+            Self::TyreLoad {
+                mass,
+                com_y,
+                height,
+                stiffness,
+            } => vec![mass, com_y, height, stiffness],
             _ => Vec::new(),
         }
     }
@@ -185,13 +223,48 @@ impl FaultEffect {
                 time: v[0],
                 delay: v[1],
             },
-            _ => Self::LaserKnock {
+            6 => Self::LaserKnock {
                 time: v[0],
                 dx: v[1],
                 dy: v[2],
                 dyaw: v[3],
             },
+            _ => Self::TyreLoad {
+                mass: v[0],
+                com_y: v[1],
+                height: v[2],
+                stiffness: v[3],
+            },
         })
+    }
+
+    /// The rolling radii (right, left) (m) of wheels of unloaded radii
+    /// `radii` on an axle `wheel_base` m long, while the body moves at `v`
+    /// (m/s) and turns at `w` (rad/s): each radius less its tyre's
+    /// deflection under its load (never below zero load: a wheel lifting
+    /// off is outside the model).
+    pub fn loaded_radii(&self, radii: (f64, f64), wheel_base: f64, v: f64, w: f64) -> (f64, f64) {
+        match *self {
+            Self::TyreLoad {
+                mass,
+                com_y,
+                height,
+                stiffness,
+            } => {
+                // The centre of mass left of the middle loads the left wheel;
+                // turning left (ω > 0), the centrifugal force at the centre of
+                // mass's height loads the outer, right wheel.
+                let share = mass * G * com_y / wheel_base;
+                let transfer = mass * v * w * height / wheel_base;
+                let right = (0.5 * mass * G - share + transfer).max(0.0);
+                let left = (0.5 * mass * G + share - transfer).max(0.0);
+                // In a turn hard enough to flatten a tyre to half its radius
+                // the model stops (the run is refused beyond a fifth standing).
+                let rolled = |r: f64, f: f64| r - (f / stiffness).min(0.5 * r);
+                (rolled(radii.0, right), rolled(radii.1, left))
+            }
+            _ => radii,
+        }
     }
 
     /// True wheel rates (right, left) (rad/s) that roll the rims at the rates

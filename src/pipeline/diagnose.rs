@@ -85,6 +85,7 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
             nominal.drop_unused_wheel_keys(&mut d.assumptions, values);
             nominal.state_prior(&mut d.assumptions, &prior, cfg.icp.prior, wheels);
             state_instrument(&mut d.assumptions, &cfg.diagnose.instrument);
+            state_latency_floor(&mut d.assumptions, &rec, &cfg.diagnose);
             d.wheel_source = (rec.wheels.len() >= 2).then(|| {
                 super::wheels::describe(&read, &nominal, rec.wheels.len(), rec.wheel_values)
             });
@@ -130,6 +131,39 @@ fn state_instrument(
         )
     };
     a.set("instrument", value, source, Some(note.into()));
+}
+
+/// States the shortest latency the diagnosis names and why.
+fn state_latency_floor(
+    a: &mut crate::assumptions::Assumptions,
+    rec: &crate::recording::Recording,
+    p: &diagnose::DiagnoseParams,
+) {
+    let encoder = diagnose::resolution::timing_resolution(&rec.wheels);
+    let instrument = if p.instrument.enabled {
+        p.instrument.timing
+    } else {
+        0.0
+    };
+    let note = format!(
+        "a latency under it is not named: the wheel encoders time the wheels to one tick \
+         period at this run's wheel rate ({:.1} ms; 0 when the angles are not quantised) \
+         and scan-to-scan ICP reads the motion's timing to within [diagnose.instrument] \
+         timing ({:.1} ms, from null runs)",
+        1e3 * encoder,
+        1e3 * instrument
+    );
+    let source = if instrument == diagnose::instrument::Instrument::default().timing {
+        Origin::Default
+    } else {
+        Origin::Config
+    };
+    a.set(
+        "latency_floor_s",
+        encoder.max(instrument),
+        source,
+        Some(note),
+    );
 }
 
 /// Runs ICP on the recording and diagnoses the nominal model against it.

@@ -97,10 +97,14 @@ impl TrueRobot {
     }
 
     /// True wheel rates (rad/s) that realise body velocities `v` (m/s), `w`
-    /// (rad/s) at time `t`, with the turn-slip effective base.
+    /// (rad/s) at time `t`, with the turn-slip effective base and the
+    /// tyres' loaded radii.
     pub fn wheel_rates(&self, t: f64, v: f64, w: f64) -> (f64, f64) {
         let mut k = self.at(t);
         k.wheel_base = self.departures.turning_base(k.wheel_base, w);
+        for f in &self.faults {
+            (k.r_right, k.r_left) = f.loaded_radii((k.r_right, k.r_left), k.wheel_base, v, w);
+        }
         k.wheel_rates(v, w)
     }
 
@@ -109,13 +113,20 @@ impl TrueRobot {
         self.departures.encoder_rate(omega)
     }
 
-    /// Whether the true radii are physically possible over `[0, duration]` s.
+    /// Whether the true radii are physically possible over `[0, duration]` s
+    /// (and loaded tyres deflect at most a fifth of their radius standing).
     pub fn radii_positive(&self, duration: f64) -> bool {
         let mut times = vec![0.0, duration];
         times.extend(self.departures.step_times().map(|t| t.clamp(0.0, duration)));
         times.iter().all(|&t| {
             let k = self.at(t);
-            k.r_right > 0.0 && k.r_left > 0.0 && k.wheel_base > 0.0
+            // Loaded tyres standing may deflect a fifth of their radius at
+            // most: past that a linear tyre is no model of one.
+            let loaded = self.faults.iter().all(|f| {
+                let (r, l) = f.loaded_radii((k.r_right, k.r_left), k.wheel_base, 0.0, 0.0);
+                r >= 0.8 * k.r_right && l >= 0.8 * k.r_left
+            });
+            k.r_right > 0.0 && k.r_left > 0.0 && k.wheel_base > 0.0 && loaded
         })
     }
 }
@@ -152,6 +163,33 @@ mod tests {
         assert!((b.r_left - a.r_left - 0.002).abs() < 1e-12);
         assert!((b.wheel_base - 0.65 * 1.03).abs() < 1e-12);
         assert!(t.radii_positive(100.0));
+    }
+
+    #[test]
+    fn loaded_tyres_roll_on_radii_shrunk_by_their_deflection() {
+        // 100 kg on the chair's 0.65 m axle, the centre of mass 0.065 m to
+        // the left and 0.5 m high, tyres of 50 kN/m. Standing: right
+        // 100·9.80665·(0.5 − 0.1) = 392.3 N (7.85 mm), left 588.4 N
+        // (11.77 mm). At 0.5 m/s turning left at 1 rad/s the turn moves
+        // 100·0.5·1·0.5/0.65 = 38.46 N onto the right wheel.
+        let robot = RobotConfig::default();
+        let f = FaultEffect::TyreLoad {
+            mass: 100.0,
+            com_y: 0.065,
+            height: 0.5,
+            stiffness: 5e4,
+        };
+        let t = TrueRobot::new(&robot, &[]).with_faults(&[f]);
+        let (r, l) = f.loaded_radii((0.32, 0.32), 0.65, 0.0, 0.0);
+        assert!((r - (0.32 - 392.266 / 5e4)).abs() < 1e-7, "{r}");
+        assert!((l - (0.32 - 588.399 / 5e4)).abs() < 1e-7, "{l}");
+        let (r, l) = f.loaded_radii((0.32, 0.32), 0.65, 0.5, 1.0);
+        assert!((r - (0.32 - (392.266 + 38.4615) / 5e4)).abs() < 1e-7, "{r}");
+        assert!((l - (0.32 - (588.399 - 38.4615) / 5e4)).abs() < 1e-7, "{l}");
+        // Straight at 1 m/s the wheels turn at 1 m/s over their loaded radii.
+        let (wr, wl) = t.wheel_rates(0.0, 1.0, 0.0);
+        assert!((wr - 1.0 / (0.32 - 392.266 / 5e4)).abs() < 1e-6, "{wr}");
+        assert!((wl - 1.0 / (0.32 - 588.399 / 5e4)).abs() < 1e-6, "{wl}");
     }
 
     #[test]

@@ -228,7 +228,9 @@ fn true_robot(
     let true_robot = TrueRobot::new(robot, effects).with_faults(&cfg.faults);
     if !true_robot.radii_positive(cfg.duration_s) {
         return Err(SimError::Config(
-            "the effects make a wheel radius or the wheel base non-positive".into(),
+            "the effects make a wheel radius or the wheel base non-positive (or loaded tyres \
+             deflect more than a fifth of their radius standing)"
+                .into(),
         ));
     }
     Ok(true_robot)

@@ -140,10 +140,14 @@ PAGES = {
         "150 s bag (`odocal simulate --scenario S --seed N --duration 150`, seeds 301–304), "
         "rewritten by `tools/rewrite_effects.py LAW` (Python `mcap` and `rosbags`, its own "
         "arithmetic: nothing of odocal's effect laws), then `odocal diagnose --measured BAG "
-        "--json` on the nominal chair. ✓ = a table effect named alone with its size within "
-        "20 %; a catalogued fault named at its size within 20 % with no table effect beside it; "
-        "for a departure outside the table, no table effect named; for the clean bag, nothing "
-        "named. Each cell gives the verdict and everything named.",
+        "--json` on the nominal chair. The last row is not a rewrite: the simulator drives the "
+        "same scenario and seed with tyres whose rolling radius follows their load "
+        "(`--effect tyre_load:…`, physics in the simulator, no law of the effect table), whose "
+        "static part is a radius scale of each wheel computed here from the load. ✓ = a table "
+        "effect named alone with its size within 20 %; a catalogued fault named at its size "
+        "within 20 % with no table effect beside it; for a departure the catalogue does not "
+        "hold, neither a table effect nor a fault named; for the clean bag, nothing named. Each cell gives the verdict and "
+        "everything named.",
         "blind-diagnosis-suite",
     ),
     "icp-instrument": (

@@ -79,6 +79,7 @@ pub fn estimate_with_laser(
         info: nalgebra::DMatrix::zeros(n, n),
         chi2: 0.0,
         iterations: 0,
+        converged: true,
     };
     let how = Rounds {
         given,

@@ -199,6 +199,15 @@ pub fn build(f: &Fit, c: Context) -> Result<BatchEstimate, BatchError> {
     let dof = (3 * c.kept).saturating_sub(c.free.iter().filter(|x| **x).count());
     let mut notes = Vec::new();
     let widening = birge(f.chi2, dof, c.noise.is_none(), &mut notes);
+    if !f.converged {
+        // Every iteration took a step still worth taking: not shown to be
+        // at the optimum.
+        notes.push(format!(
+            "the fit stopped at its iteration limit ({} iterations) while its steps were \
+             still large; the estimate may not be the optimum: raise [batch] max_iterations",
+            f.iterations
+        ));
+    }
     let mut cov = cov * (widening * widening);
     for j in (0..n).filter(|&j| !c.free[j]) {
         cov.row_mut(j).fill(0.0);

@@ -35,6 +35,9 @@ pub struct Fit {
     /// The iterations taken (each forms the normal equations once; the last
     /// one's step was small or refused at every damping), at most `max_iter`.
     pub iterations: usize,
+    /// Whether it stopped because no step was worth taking (else at
+    /// `max_iter`, still improving).
+    pub converged: bool,
 }
 
 /// The residual `s − ŝ` of one interval at `p`.
@@ -110,6 +113,7 @@ pub fn fit(d: &Data, p0: &[f64], max_iter: usize) -> Fit {
     let mut cost = chi2(d, &p);
     let mut lambda = 1e-3;
     let mut iterations = 0;
+    let mut converged = false;
     for _ in 0..max_iter {
         iterations += 1;
         let (h, g) = normal(d, &p);
@@ -136,6 +140,7 @@ pub fn fit(d: &Data, p0: &[f64], max_iter: usize) -> Fit {
             lambda *= 10.0;
         }
         if !improved {
+            converged = true;
             break;
         }
     }
@@ -145,6 +150,7 @@ pub fn fit(d: &Data, p0: &[f64], max_iter: usize) -> Fit {
         info,
         chi2: cost,
         iterations,
+        converged,
     }
 }
 
@@ -335,6 +341,8 @@ mod tests {
         // = −0.1008, damped −0.1008/1.1.
         let f = spin(1.0, 1);
         assert_eq!(f.iterations, 1);
+        // Stopped by the limit with a step of 0.84 just taken.
+        assert!(!f.converged);
         assert!((f.p[2] - 0.36).abs() < 1e-9, "{:?}", f.p);
         let f = spin(1.0, 2);
         assert_eq!(f.iterations, 2);
@@ -352,6 +360,9 @@ mod tests {
         // step: seven iterations, at b = 0.5.
         let f = spin(1.0, 50);
         assert_eq!(f.iterations, 7);
+        assert!(f.converged);
+        // With exactly seven allowed the seventh step is the small one: done.
+        assert!(spin(1.0, 7).converged && !spin(1.0, 6).converged);
         assert!((f.p[2] - 0.5).abs() < 1e-12, "{:?}", f.p);
         assert!(f.chi2 < 1e-24, "{}", f.chi2);
         // Marquardt's damping λ·diag H makes the path independent of the

@@ -77,3 +77,28 @@ pub fn store(
     crate::io::atomic::write_bytes_atomic(&p, text.as_bytes())
         .map_err(|e| PipelineError::write(&p, e))
 }
+
+#[cfg(test)]
+mod tests {
+    /// A cached result must read back bit for bit: the trends fitted over a
+    /// fleet difference near-equal radii, so a value read one ulp off
+    /// changes a rate in its 12th digit and a re-run from the cache (or a
+    /// Ray run, whose results also travel as JSON) no longer gives the same
+    /// summary as the first run. serde_json parses exactly only with its
+    /// `float_roundtrip` feature.
+    #[test]
+    fn cached_numbers_read_back_bit_for_bit() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let mut off = 0;
+        for _ in 0..20_000 {
+            let x: f64 = rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-8..3));
+            let text = serde_json::to_string(&x).unwrap();
+            let back: f64 = serde_json::from_str(&text).unwrap();
+            if back.to_bits() != x.to_bits() {
+                off += 1;
+            }
+        }
+        assert_eq!(off, 0, "{off} of 20000 numbers read back changed");
+    }
+}
