@@ -154,4 +154,48 @@ mod tests {
         // Standing still: no step at all.
         assert_eq!(timing_resolution(&stream(0.0, Some(512.0), 20.0)), 0.0);
     }
+
+    /// `n` samples 10 ms apart, the right wheel one tick of 2π/512 further
+    /// at each, the left standing.
+    fn ticking(n: usize) -> Vec<WheelSample> {
+        let tick = std::f64::consts::TAU / 512.0;
+        (0..n)
+            .map(|i| WheelSample {
+                stamp: i as f64 * 0.01,
+                right: i as f64 * tick,
+                left: 0.0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_lattice_needs_twenty_moving_steps() {
+        assert!(tick(&ticking(21)).is_some());
+        assert_eq!(tick(&ticking(20)), None);
+        assert_eq!(timing_resolution(&ticking(20)), 0.0);
+    }
+
+    #[test]
+    fn a_step_without_time_between_its_stamps_is_no_motion() {
+        // The right wheel moves one tick only between two samples of the
+        // same stamp (or one stamped earlier), and stands between the
+        // others: no step that took time, so no lattice to read.
+        let one = std::f64::consts::TAU / 512.0;
+        let mut w = Vec::new();
+        for i in 0..40 {
+            let t = i as f64 * 0.01;
+            let back = if i % 2 == 0 { 0.0 } else { 0.001 };
+            w.push(WheelSample {
+                stamp: t,
+                right: i as f64 * one,
+                left: 0.0,
+            });
+            w.push(WheelSample {
+                stamp: t - back,
+                right: (i + 1) as f64 * one,
+                left: 0.0,
+            });
+        }
+        assert_eq!(tick(&w), None);
+    }
 }
