@@ -113,8 +113,8 @@ pub fn gyro_scale(s: &super::gyro_check::GyroScale) -> Fault {
         evidence: format!(
             "over {} one-second segments the gyro's turn is {:+.2} ± {:.2} % of the \
              scan-matched turn (least squares with a bias; jackknife over stretches of the \
-             run), before any effect of the robot is fitted; the fit below reads the gyro \
-             on the scan matching's scale",
+             run), before any effect of the robot is fitted; the fit below leaves the gyro \
+             out",
             s.segments,
             100.0 * s.scale,
             100.0 * s.stderr

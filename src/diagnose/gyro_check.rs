@@ -14,9 +14,9 @@
 //! correlation of scan-matching errors inside a block). The default
 //! `min_scale` (1 %) lies above scan-to-scan ICP's own turn-rate error
 //! beyond the smallest rotations (a few tenths of a per cent,
-//! [`super::instrument`]). When named, the gyro rows are divided by 1 + s, so
-//! the gyro keeps its say on timing and bias and the scan matching sets the
-//! turn scale.
+//! [`super::instrument`]). When named, the diagnosis leaves the gyro out, as
+//! on a robot without one: read on the scan matching's scale instead it
+//! would carry ICP's own turn-rate error into the fit.
 
 use super::data::{GyroRow, IcpRow};
 use serde::{Deserialize, Serialize};
@@ -104,8 +104,9 @@ fn icp_turn(icp: &[IcpRow], t0: f64, t1: f64) -> (f64, f64) {
     let first = icp.partition_point(|r| r.t1 <= t0);
     let (mut angle, mut covered) = (0.0, 0.0);
     for r in icp[first..].iter().take_while(|r| r.t0 < t1) {
+        // Positive only for a row that runs forward (t1 > t0) into the window.
         let overlap = r.t1.min(t1) - r.t0.max(t0);
-        if overlap > 0.0 && r.t1 > r.t0 {
+        if overlap > 0.0 {
             angle += r.z[2] * overlap;
             covered += overlap;
         }
@@ -187,17 +188,6 @@ pub fn gyro_scale(icp: &[IcpRow], gyro: &[GyroRow], c: &GyroCheck) -> Option<Gyr
     })
 }
 
-/// The gyro rows read on the scan matching's scale: each rate divided by
-/// 1 + s.
-pub fn rescaled(gyro: &[GyroRow], s: &GyroScale) -> Vec<GyroRow> {
-    gyro.iter()
-        .map(|g| GyroRow {
-            w: g.w / (1.0 + s.scale),
-            ..*g
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -246,7 +236,14 @@ mod tests {
         assert_eq!(s.segments, 150);
         assert!(s.is_fault(&GyroCheck::default()));
         // Read on the scan matching's scale, the same gyro shows none.
-        let again = gyro_scale(&icp, &rescaled(&gyro, &s), &GyroCheck::default()).unwrap();
+        let rescaled: Vec<GyroRow> = gyro
+            .iter()
+            .map(|g| GyroRow {
+                w: g.w / (1.0 + s.scale),
+                ..*g
+            })
+            .collect();
+        let again = gyro_scale(&icp, &rescaled, &GyroCheck::default()).unwrap();
         assert!(again.scale.abs() < 1e-4, "{again:?}");
         assert!(!again.is_fault(&GyroCheck::default()));
     }
@@ -291,5 +288,92 @@ mod tests {
         let s = gyro_scale(&icp, &gyro, &GyroCheck::default()).unwrap();
         assert_eq!(s.segments, 120);
         assert!((s.scale - 0.02).abs() < 1e-4, "{s:?}");
+    }
+
+    #[test]
+    fn a_window_the_scan_matching_covers_in_part_counts_at_its_mean_rate() {
+        // One 20 ms row of every third 100 ms window missing: those windows
+        // are covered 80 %, their scan-matched turn read at the covered
+        // part's mean rate over the whole window.
+        let (mut icp, gyro) = streams(150.0, 0.02, 0.0, 0.0);
+        icp.retain(|r| {
+            let k = (r.t0 / 0.02).round() as usize;
+            !(k % 15 == 2)
+        });
+        let c = GyroCheck {
+            min_coverage: 0.75,
+            ..GyroCheck::default()
+        };
+        let s = gyro_scale(&icp, &gyro, &c).unwrap();
+        assert!((s.scale - 0.02).abs() < 5e-4, "{s:?}");
+        // At the default 90 % those windows are left out.
+        let s = gyro_scale(&icp, &gyro, &GyroCheck::default()).unwrap();
+        assert!(s.segments < 150, "{s:?}");
+    }
+
+    #[test]
+    fn the_fit_reads_scale_and_bias_exactly_from_segments_of_any_length() {
+        // g = 1.03·c + 0.2·T on segments of 0.5–2 s: the scale 0.03 whatever
+        // the bias, and no fit without turning.
+        let rows: Vec<[f64; 3]> = [(0.4, 0.5), (-0.7, 1.0), (1.1, 2.0), (0.2, 1.5), (-0.3, 0.7)]
+            .iter()
+            .map(|&(c, t)| [1.03 * c + 0.2 * t, c, t])
+            .collect();
+        assert!((fit(&rows).unwrap() - 0.03).abs() < 1e-12);
+        let still: Vec<[f64; 3]> = rows.iter().map(|r| [0.2 * r[2], 0.0, r[2]]).collect();
+        assert_eq!(fit(&still), None);
+    }
+
+    #[test]
+    fn gyro_rows_of_no_length_or_no_rate_are_left_out() {
+        let (icp, mut gyro) = streams(150.0, 0.02, 0.0, 0.0);
+        // A row of no length and a row without a rate, every 10 s.
+        for k in 1..15 {
+            let t = 10.0 * k as f64 + 0.05;
+            gyro.push(GyroRow {
+                t0: t,
+                t1: t,
+                w: 1.0,
+                sigma: 0.3,
+            });
+            gyro.push(GyroRow {
+                t0: t,
+                t1: t + 0.1,
+                w: f64::NAN,
+                sigma: 0.3,
+            });
+        }
+        gyro.sort_by(|a, b| a.t0.total_cmp(&b.t0));
+        let s = gyro_scale(&icp, &gyro, &GyroCheck::default()).unwrap();
+        assert!((s.scale - 0.02).abs() < 1e-4, "{s:?}");
+    }
+
+    #[test]
+    fn settings_out_of_range_are_refused_at_their_bounds() {
+        let ok = |c: GyroCheck| c.validate().is_ok();
+        assert!(ok(GyroCheck::default()));
+        let with = |f: fn(&mut GyroCheck)| {
+            let mut c = GyroCheck::default();
+            f(&mut c);
+            c
+        };
+        // Positive and finite: 0, a negative value and NaN refused.
+        assert!(!ok(with(|c| c.min_scale = 0.0)));
+        assert!(!ok(with(|c| c.min_sigmas = -1.0)));
+        assert!(!ok(with(|c| c.segment = f64::NAN)));
+        assert!(!ok(with(|c| c.segment = f64::INFINITY)));
+        assert!(ok(with(|c| c.min_scale = 1e-9)));
+        // Coverage in (0, 1]: 1 allowed, 0 and above 1 refused.
+        assert!(ok(with(|c| c.min_coverage = 1.0)));
+        assert!(!ok(with(|c| c.min_coverage = 0.0)));
+        assert!(!ok(with(|c| c.min_coverage = 1.01)));
+        assert!(ok(with(|c| c.min_coverage = 0.5)));
+        // At least three blocks to leave out.
+        assert!(ok(with(|c| c.blocks = 3)));
+        assert!(!ok(with(|c| c.blocks = 2)));
+        assert!(with(|c| c.blocks = 2)
+            .validate()
+            .unwrap_err()
+            .contains("blocks"));
     }
 }

@@ -211,5 +211,13 @@ mod tests {
             ..Instrument::default()
         };
         assert!(negative.validate().is_err());
+        // A timing error of 0 s is allowed (no floor), a negative one not.
+        let timing = |t: f64| Instrument {
+            timing: t,
+            ..Instrument::default()
+        };
+        assert!(timing(0.0).validate().is_ok());
+        assert!(timing(-0.001).validate().unwrap_err().contains("timing"));
+        assert!(timing(f64::NAN).validate().is_err());
     }
 }
