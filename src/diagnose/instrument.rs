@@ -135,6 +135,16 @@ impl Instrument {
         Ok(())
     }
 
+    /// The shortest latency the scan matcher can time (s): `timing`, or 0
+    /// when the model is off.
+    pub fn timing_floor(&self) -> f64 {
+        if self.enabled {
+            self.timing
+        } else {
+            0.0
+        }
+    }
+
     /// The table's relative error and spread for one ICP row of stream `g`
     /// (0 forward, 2 turn rate; the lateral stream has none) whose true
     /// motion is about `v` (m/s) and `w` (rad/s), the replay's.

@@ -531,12 +531,7 @@ fn settings(p: &DiagnoseParams, train: Part, split: &Split, origin: f64) -> Sele
 /// rate ([`super::resolution`]) or the scan matcher's own timing error
 /// ([`super::instrument::Instrument::timing`]), whichever is longer.
 pub fn min_latency(replay: &Replay, p: &DiagnoseParams) -> f64 {
-    let instrument = if p.instrument.enabled {
-        p.instrument.timing
-    } else {
-        0.0
-    };
-    replay.timing_resolution.max(instrument)
+    replay.timing_resolution.max(p.instrument.timing_floor())
 }
 
 /// Forward selection on the training part whose every effect the held-out

@@ -140,11 +140,7 @@ fn state_latency_floor(
     p: &diagnose::DiagnoseParams,
 ) {
     let encoder = diagnose::resolution::timing_resolution(&rec.wheels);
-    let instrument = if p.instrument.enabled {
-        p.instrument.timing
-    } else {
-        0.0
-    };
+    let instrument = p.instrument.timing_floor();
     let note = format!(
         "a latency under it is not named: the wheel encoders time the wheels to one tick \
          period at this run's wheel rate ({:.1} ms; 0 when the angles are not quantised) \
