@@ -5,7 +5,9 @@
 //! laser knocked on its mounting during the run (the recording's
 //! `/tf_static` keeps the mounting it had at the start).
 //! The diagnosis never fits them as table effects; it names those it
-//! recognises under their own names (design.md). A SPEC is `NAME` or
+//! recognises under their own names (design.md). One is physics rather than
+//! a fault: tyres that deflect under load (`tyre_load`), whose standing
+//! part a diagnosis should read as a radius scale. A SPEC is `NAME` or
 //! `NAME:key=value,...`, like an effect's; `simulate --effect` takes both.
 
 use serde::{Deserialize, Serialize};

@@ -96,6 +96,18 @@ impl TrueRobot {
         }
     }
 
+    /// The radii (m) the wheels roll on at time `t` standing (loaded tyres
+    /// deflected by their static load), with the wheel base: what the truth
+    /// file reports and a calibration should find; the turns' load transfer
+    /// comes on top while moving.
+    pub fn rolling_at(&self, t: f64) -> DiffDrive {
+        let mut k = self.at(t);
+        for f in &self.faults {
+            (k.r_right, k.r_left) = f.loaded_radii((k.r_right, k.r_left), k.wheel_base, 0.0, 0.0);
+        }
+        k
+    }
+
     /// True wheel rates (rad/s) that realise body velocities `v` (m/s), `w`
     /// (rad/s) at time `t`, with the turn-slip effective base and the
     /// tyres' loaded radii.
@@ -186,6 +198,9 @@ mod tests {
         let (r, l) = f.loaded_radii((0.32, 0.32), 0.65, 0.5, 1.0);
         assert!((r - (0.32 - (392.266 + 38.4615) / 5e4)).abs() < 1e-7, "{r}");
         assert!((l - (0.32 - (588.399 - 38.4615) / 5e4)).abs() < 1e-7, "{l}");
+        let k = t.rolling_at(0.0);
+        assert!((k.r_right - (0.32 - 392.266 / 5e4)).abs() < 1e-7, "{k:?}");
+        assert!((k.r_left - (0.32 - 588.399 / 5e4)).abs() < 1e-7, "{k:?}");
         // Straight at 1 m/s the wheels turn at 1 m/s over their loaded radii.
         let (wr, wl) = t.wheel_rates(0.0, 1.0, 0.0);
         assert!((wr - 1.0 / (0.32 - 392.266 / 5e4)).abs() < 1e-6, "{wr}");

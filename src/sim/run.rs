@@ -236,8 +236,9 @@ fn true_robot(
     Ok(true_robot)
 }
 
-/// The true radii and wheel base at 10 Hz and at every radius step of the
-/// run, in time order (a step at a sample time gives one row).
+/// The true radii (loaded tyres' standing) and wheel base at 10 Hz and at
+/// every radius step of the run, in time order (a step at a sample time
+/// gives one row).
 fn true_parameters(true_robot: TrueRobot, duration: f64) -> impl Iterator<Item = TrueParameters> {
     let mut steps: Vec<f64> = true_robot
         .departures()
@@ -258,7 +259,7 @@ fn true_parameters(true_robot: TrueRobot, duration: f64) -> impl Iterator<Item =
             continue;
         }
         last = Some(t);
-        let k = true_robot.at(t);
+        let k = true_robot.rolling_at(t);
         return Some(TrueParameters {
             t,
             r_right: k.r_right,
