@@ -4,7 +4,11 @@
 //! measurement, with the state's variance plus the velocity model's own
 //! noise (`NoiseParams::model_sigma_v`, `model_sigma_w`: encoder
 //! quantisation, slip), without which the parameter filter would trust each
-//! step's wheel-rate prediction as exact and chase its noise.
+//! step's wheel-rate prediction as exact and chase its noise. The state
+//! filter's prior is loose (it must follow the measurements), so its
+//! Student-t weight passes what a small robot's scan matching gets wrong;
+//! the parameter filter's residual is therefore gated against its own
+//! prior predictive (`NoiseParams::kalman_gate`).
 
 use super::change::KalmanChange;
 use super::kalman::{
@@ -26,6 +30,7 @@ pub struct DualKf {
     q_x: [f64; 2],
     floor: f64,
     dof: f64,
+    gate: f64,
     w_obs: f64,
     model_var: [f64; 2],
     per_step: bool,
@@ -44,6 +49,7 @@ impl DualKf {
             q_x: [n.kalman_velocity_sigma.powi(2), n.kalman_turn_sigma.powi(2)],
             floor: n.sigma_floor,
             dof: n.robust_dof,
+            gate: n.kalman_gate,
             w_obs: n.observability_turn_rate,
             model_var: [n.model_sigma_v.powi(2), n.model_sigma_w.powi(2)],
             per_step: p.per_step,
@@ -104,6 +110,7 @@ impl Calibrator for DualKf {
             };
             let ph = self.p_theta * h;
             let meas_var = px[k].max(self.floor * self.floor) + model_var[k];
+            let meas_var = gated(x[k] - f[k], h.dot(&ph), meas_var, self.gate);
             let sv = h.dot(&ph) + meas_var;
             let gain = ph / sv;
             self.theta += gain * (x[k] - f[k]);
@@ -134,5 +141,101 @@ impl Calibrator for DualKf {
 
     fn name(&self) -> &'static str {
         "dkf"
+    }
+}
+
+/// The measurement variance `r` of a residual `nu` whose prior predictive
+/// variance is `hph + r`, raised when `|nu|` lies beyond `gate` σ of it so
+/// that the residual stands at `gate` σ of the raised predictive. The
+/// prediction then moves by `hph·gate²/ν`: at most `gate` of its own σ at
+/// the gate, less the further out the residual lies, as a robust filter
+/// treats a measurement its model cannot explain (Huber's bound on one
+/// observation's influence, here by its variance). `gate` ≤ 0 leaves `r`.
+fn gated(nu: f64, hph: f64, r: f64, gate: f64) -> f64 {
+    let s = hph + r;
+    if !(gate > 0.0) || !(s > 0.0) || !nu.is_finite() || nu * nu <= gate * gate * s {
+        return r;
+    }
+    // (hph + r') = ν²/gate² → r' = ν²/gate² − hph, which exceeds r here.
+    nu * nu / (gate * gate) - hph
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calib::steps::Measurement;
+    use crate::calib::{CalibParams, Method, Ranges};
+
+    #[test]
+    fn the_gate_raises_the_variance_of_a_residual_beyond_it_and_only_then() {
+        // ν = 20 against hph 3 + r 1 (σ 2): 10 σ, beyond 5 → r' with
+        // (3 + r')·25 = 400, r' = 13; the residual then stands at 20/4 = 5 σ.
+        assert_eq!(gated(20.0, 3.0, 1.0, 5.0), 13.0);
+        assert_eq!(gated(-20.0, 3.0, 1.0, 5.0), 13.0);
+        // ν = 9: 4.5 σ, inside.
+        assert_eq!(gated(9.0, 3.0, 1.0, 5.0), 1.0);
+        // Exactly at the gate (ν = 10 = 5·2): left as it is.
+        assert_eq!(gated(10.0, 3.0, 1.0, 5.0), 1.0);
+        // Off, or nothing to read against.
+        assert_eq!(gated(20.0, 3.0, 1.0, 0.0), 1.0);
+        assert_eq!(gated(f64::NAN, 3.0, 1.0, 5.0), 1.0);
+        assert_eq!(gated(20.0, 0.0, 0.0, 5.0), 0.0);
+    }
+
+    /// A filter of a small robot (R 20 mm, D 90 mm, 1 cm/s), five intervals
+    /// into its stream (R known to ±0.7 mm, as after a change detector has
+    /// re-spread it), sees one interval whose V is four times what its
+    /// wheels give: a residual of 3 cm/s, 28 σ of its prediction, that the
+    /// state filter's loose prior (σ 5 cm/s) passes. Gated at 3 σ, R moves
+    /// by a tenth of its σ (hph·9/ν on V = R̄/2); without the gate, by 8 σ.
+    #[test]
+    fn one_wild_interval_moves_a_converged_filter_by_at_most_the_gate() {
+        let settings = |gate: Option<f64>| {
+            let mut p = CalibParams {
+                method: Method::Dkf,
+                ranges: Some(Ranges::around(0.02, 0.02, 0.09, 0.1)),
+                ..Default::default()
+            };
+            p.change.enabled = false;
+            if let Some(g) = gate {
+                p.noise.kalman_gate = g;
+            }
+            p.kalman_settings()
+        };
+        let step = |t: f64, v: f64| {
+            let mut s = CalibStep::new(t, t + 1.0, 0.5, 0.5);
+            s.push(Measurement {
+                kind: Kind::V,
+                value: v,
+                sigma: 0.001,
+            });
+            s.push(Measurement {
+                kind: Kind::W,
+                value: 0.0,
+                sigma: 0.001,
+            });
+            s
+        };
+        let mut moved = [0.0; 2];
+        // The default gate (3 σ), then none.
+        for (i, gate) in [None, Some(0.0)].into_iter().enumerate() {
+            let mut f = DualKf::new(&settings(gate));
+            // Five intervals of 1 cm/s on wheels at 0.5 rad/s: R = 20 mm.
+            let mut last = f.step(&step(0.0, 0.01));
+            for k in 1..5 {
+                last = f.step(&step(k as f64, 0.01));
+            }
+            let before = 0.5 * (last.r_right + last.r_left);
+            assert!((before - 0.02).abs() < 2e-4, "gate {gate:?}: R {before}");
+
+            let sd = 0.5 * (last.std_r_right + last.std_r_left);
+            // One interval at 4 cm/s.
+            let after = f.step(&step(5.0, 0.04));
+            moved[i] = (0.5 * (after.r_right + after.r_left) - before).abs() / sd;
+        }
+        // V = 0.5 rad/s · R̄: 3 σ of V's prediction is at most 3 σ of R.
+        assert!(moved[0] <= 3.0, "gated: R moved {} σ", moved[0]);
+        // The negative control: ungated, the same bound fails.
+        assert!(moved[1] > 3.0, "ungated: R moved only {} σ", moved[1]);
     }
 }

@@ -194,6 +194,12 @@ pub struct NoiseParams {
     pub kalman_velocity_sigma: f64,
     /// The same on W (rad/s).
     pub kalman_turn_sigma: f64,
+    /// Dual Kalman filter: a residual of its parameter filter beyond this
+    /// many σ of its prior predictive (`hᵀPh` + the measurement's variance)
+    /// has its variance raised until it stands at this many (a Huber weight
+    /// on the whitened residual), so that one interval the model cannot
+    /// explain moves the parameters by at most this many σ's worth; 0 = off.
+    pub kalman_gate: f64,
 }
 
 impl Default for NoiseParams {
@@ -210,6 +216,7 @@ impl Default for NoiseParams {
             kalman_param_sigma: 1e-5 / PAPER_RADIUS_M / SQRT_PAPER_STEP,
             kalman_velocity_sigma: 0.05,
             kalman_turn_sigma: 0.05,
+            kalman_gate: 3.0,
         }
     }
 }
@@ -398,6 +405,7 @@ impl CalibParams {
             && nonneg(n.model_sigma_v)
             && nonneg(n.model_sigma_w)
             && nonneg(n.robust_dof)
+            && nonneg(n.kalman_gate)
             && nonneg(n.observability_turn_rate)
             && n.kernel_shrink > 0.0
             && n.kernel_shrink <= 1.0
