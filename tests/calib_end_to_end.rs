@@ -3,7 +3,9 @@
 //! and wheel base.
 
 use odocal::calib::{self, CalibParams, Method};
-use odocal::experiments::{scan_montecarlo, table2_configs, ScanMonteCarloParams};
+use odocal::experiments::{
+    scan_montecarlo, table2_configs, RunMetrics, ScanMonteCarloParams, TableRow,
+};
 use odocal::icp::IcpParams;
 use odocal::robot::RobotConfig;
 use odocal::sim::{self, SimConfig};
@@ -12,40 +14,65 @@ use odocal::sim::{self, SimConfig};
 fn adaptive_pf_learns_radii_and_wheel_base_from_simulated_scans() {
     // One run per scenario, 120 s each as in `experiment montecarlo-scans`,
     // true parameters drawn in the ranges of [Farina] (radii 0.305–0.335 m, wheel
-    // base 0.60–0.70 m).
+    // base 0.60–0.70 m). Runs 89 to 93 are five draws that all lie at least
+    // three tolerances from the nominal chair on every parameter (3 mm of
+    // each radius, 9 mm of the wheel base; a draw may fall closer). The
+    // `none` row keeps the nominal: its errors are those departures, and it
+    // must fail every check the Adaptive-PF passes.
     let settings = ScanMonteCarloParams::default();
     let configs: Vec<_> = table2_configs(&CalibParams::default())
         .into_iter()
-        .filter(|(l, _)| l == "adaptive-pf" || l == "dkf")
+        .filter(|(l, _)| ["adaptive-pf", "dkf", "none"].contains(&l.as_str()))
         .collect();
     let robot = RobotConfig::default();
-    let t = scan_montecarlo(5, 1, &settings, &robot, &IcpParams::default(), &configs).unwrap();
-    let (apf, dkf) = (&t.rows[0], &t.rows[1]);
-    assert_eq!(apf.label, "adaptive-pf");
+    let t = scan_montecarlo(5, 89, &settings, &robot, &IcpParams::default(), &configs).unwrap();
+    let (apf, dkf, none) = (&t.rows[0], &t.rows[1], &t.rows[2]);
+    assert_eq!(
+        (apf.label.as_str(), none.label.as_str()),
+        ("adaptive-pf", "none")
+    );
     let mm = 1e3;
-    for (k, r) in apf.runs.iter().enumerate() {
-        assert!(
-            r.err_r_right * mm < 1.0 && r.err_r_left * mm < 1.0,
-            "run {k}: radius errors {:.2} / {:.2} mm",
+    let (tol_r, tol_d) = (1e-3, 3e-3);
+    let recovered =
+        |r: &RunMetrics| r.err_r_right < tol_r && r.err_r_left < tol_r && r.err_wheel_base < tol_d;
+    let errors = |r: &RunMetrics| {
+        format!(
+            "radius errors {:.2} / {:.2} mm, wheel base error {:.2} mm",
             r.err_r_right * mm,
-            r.err_r_left * mm
-        );
-        assert!(
-            r.err_wheel_base * mm < 3.0,
-            "run {k}: wheel base error {:.2} mm",
+            r.err_r_left * mm,
             r.err_wheel_base * mm
+        )
+    };
+    for (k, (r, n)) in apf.runs.iter().zip(&none.runs).enumerate() {
+        assert!(
+            n.err_r_right.min(n.err_r_left) >= 3.0 * tol_r
+                && n.err_wheel_base >= 3.0 * tol_d
+                && !recovered(n),
+            "run {k}: the nominal passes or is under three tolerances off: {}",
+            errors(n)
         );
+        assert!(recovered(r), "run {k}: {}", errors(r));
         assert!(r.convergence_s.is_some(), "run {k} never converged");
     }
-    let median = 0.5 * (apf.err_r_right.median + apf.err_r_left.median);
+    let median = |row: &TableRow| 0.5 * (row.err_r_right.median + row.err_r_left.median);
+    let median_ok = |m: f64| m <= 0.3e-3;
     assert!(
-        median * mm <= 0.3,
+        median_ok(median(apf)),
         "median radius error {:.3} mm",
-        median * mm
+        median(apf) * mm
+    );
+    assert!(
+        !median_ok(median(none)) && median(none) >= 3.0 * 0.3e-3,
+        "the nominal's median radius error {:.3} mm",
+        median(none) * mm
     );
     assert!(apf.convergence_s.median <= 15.0, "{:?}", apf.convergence_s);
-    let dkf_median = 0.5 * (dkf.err_r_right.median + dkf.err_r_left.median);
-    assert!(median < dkf_median, "{median} vs DKF {dkf_median}");
+    assert!(
+        median(apf) < median(dkf),
+        "{} vs DKF {}",
+        median(apf),
+        median(dkf)
+    );
 }
 
 /// Final (R_R, R_L, D) of `method` on a simulated run, with or without the gyro.
@@ -336,8 +363,7 @@ fn bundled_calibration(d: &std::path::Path, name: &str, icp: &str) -> [[f64; 2];
 fn thinned_scans_calibrate_the_chair_as_whole_ones() {
     // docs/performance.md ("Speed against thinning"): every second beam of
     // the scans being matched is a throughput setting that leaves the values
-    // where the whole scans put them. Against the simulator's final radii
-    // (after its step), which the nominal 0.32 m misses by 1.16 and 1.44 mm.
+    // where the whole scans put them.
     let d = crate::support::scratch("calib_thinned");
     let truth: serde_json::Value = serde_json::from_str(include_str!(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -345,6 +371,7 @@ fn thinned_scans_calibrate_the_chair_as_whole_ones() {
     )))
     .unwrap();
     let last = &truth["parameters"][truth["parameters"].as_array().unwrap().len() - 1];
+    let nominal = CHAIR_PARAMS.map(|k| truth["nominal"][k].as_f64().unwrap());
     let truth = CHAIR_PARAMS.map(|k| last[k].as_f64().unwrap());
     let all = bundled_calibration(&d, "all", "");
     let thinned = bundled_calibration(&d, "thinned", "beam_stride = 2\n");
@@ -356,15 +383,21 @@ fn thinned_scans_calibrate_the_chair_as_whole_ones() {
             "{name}: thinned {t:.5} m, whole {w:.5} m"
         );
     }
-    for k in 0..2 {
-        let within = |x: f64| (x - truth[k]).abs() < 1.0e-3;
-        assert!(
-            within(all[k][0]),
-            "{}: {} vs truth {}",
-            CHAIR_PARAMS[k],
-            all[k][0],
-            truth[k]
+    // Both against the simulator's final radii (after its step), through
+    // what the recording shows of them: left minus right, 2.60 mm, where the
+    // nominal chair has 0, over five tolerances (0.5 mm) away, so the
+    // nominal must fail the same check. The radii's mean (0.32014 m) is
+    // 0.14 mm from the nominal's, under what this 75 s recording resolves
+    // (both radii come out 0.56 mm low, as much as their stated std), so no
+    // check on it could tell a calibration from the nominal.
+    let split = |p: &[[f64; 2]; 3]| p[1][0] - p[0][0];
+    for (what, p) in [("whole", &all), ("thinned", &thinned)] {
+        crate::support::assert_recovered(
+            &format!("left minus right radius, {what} scans"),
+            split(p),
+            truth[1] - truth[0],
+            nominal[1] - nominal[0],
+            0.5e-3,
         );
-        assert!(!within(0.32), "the nominal radius passes the check");
     }
 }

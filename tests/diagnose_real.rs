@@ -218,6 +218,9 @@ fn censi_tuples_laser_mount_matches_the_authors_calibration() {
                 crate::support::assert_recovered(&what, got, want, nominal, tol);
                 discriminating.push(what);
             } else {
+                // The nominal already lies within the tolerance here (the
+                // authors' lstraight y is 0.19 mm): not an accuracy claim,
+                // only that the diagnosis did not move the value off.
                 assert!((got - want).abs() < tol, "{what}: {got} vs {want}");
             }
         }
@@ -347,7 +350,9 @@ fn cli_diagnoses_censi_tuples_with_json_keys() {
     assert_eq!(first["effect"], "laser_offset");
     let authors = censi::read_results(&dir.join("lstraight_results.json")).unwrap();
     let x = first["parameters"]["x"].as_f64().unwrap();
-    assert!((x - authors.l_x).abs() < 0.002, "{x} vs {}", authors.l_x);
+    // Within 0.6 mm of the authors' −5.8 mm (the laser at the base's
+    // origin, the robot file's, misses by 9 tolerances).
+    crate::support::assert_recovered("lstraight laser x", x, authors.l_x, 0.0, 0.6e-3);
     assert!(first["stderr"]["x"].as_f64().unwrap() > 0.0);
     assert!(first["delta_bic"].as_f64().unwrap() > 100.0);
     for k in ["heldout_rmse_before", "heldout_rmse_after", "relative"] {

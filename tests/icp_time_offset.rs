@@ -5,7 +5,7 @@
 //! alone, say nothing against a prior read at it, and find no offset where
 //! there is none.
 
-use crate::support::scratch;
+use crate::support::{assert_recovered, scratch};
 use odocal::effects::Effect;
 use odocal::icp::{IcpParams, TimeOffsetFit};
 use odocal::io::{read_recording, write_mcap, ReadOptions, WriteOptions};
@@ -60,8 +60,11 @@ fn icp_finds_the_encoders_latency_and_accepts_a_prior_read_at_it() {
     // The check's resolution on simulated turns is a few hundredths of a
     // second (without a latency it finds +0.001 s here, +0.04 s on the
     // smoother figure eight, where a shift of the odometry changes little).
+    // A check that finds nothing answers the offset in use (0), which is
+    // over three tolerances from the delay and must fail the same check.
     let at_zero = fit(&rec, &robot, 0.0);
-    assert!((at_zero.best_s - 0.1).abs() < 0.03, "{at_zero:?}");
+    let what = format!("best offset read at 0: {at_zero:?}");
+    assert_recovered(&what, at_zero.best_s, 0.1, at_zero.used_s, 0.03);
     assert!(at_zero.contradicts_used(), "{at_zero:?}");
     let at_delay = fit(&rec, &robot, 0.1);
     assert!((at_delay.best_s - 0.1).abs() < 0.03, "{at_delay:?}");
@@ -78,7 +81,11 @@ fn icp_finds_the_encoders_latency_and_accepts_a_prior_read_at_it() {
 fn icp_finds_no_offset_where_the_clocks_agree() {
     let (rec, robot) = random_walk_bag("icp_time_offset_none", 0.0);
     let f = fit(&rec, &robot, 0.0);
-    assert!(f.best_s.abs() < 0.03, "{f:?}");
+    // Within 30 ms of no offset; an answer at the 0.1 s latency the test
+    // above hides fails the same check, so the check tells one apart.
+    let agrees = |s: f64| s.abs() < 0.03;
+    assert!(agrees(f.best_s), "{f:?}");
+    assert!(!agrees(0.1), "the latency passes the check");
     assert!(!f.contradicts_used(), "{f:?}");
 }
 
@@ -115,7 +122,10 @@ fn mines_rover_clock_check_agrees_with_the_batch_and_calibrate_states_it() {
     let batch = run("calibrate", &["--method", "batch"], &out("batch"));
     let delta = batch["time_offset"]["value"].as_f64().unwrap();
     eprintln!("clock check {best:+.4} s, batch {delta:+.4} s");
-    assert!((best - delta).abs() < 0.03, "check {best} vs batch {delta}");
+    // The check's offset in use is 0, which misses the batch's by six
+    // tolerances and must fail the same check.
+    let used = icp["prior_time_offset"]["used_s"].as_f64().unwrap();
+    assert_recovered("clock check vs batch", best, delta, used, 0.03);
     // The filters estimate the offset on the stream themselves: within 25 ms
     // (a quarter of a wheel period) of the batch's, where 0 is 180 ms off.
     let dkf = run("calibrate", &["--method", "dkf"], &out("dkf"));
