@@ -57,6 +57,24 @@ for bag in bags:
                 w.add_message(cids[channel.id], msg.log_time, msg.data, msg.publish_time,
                               msg.sequence)
             w.finish()
+# A DiagnosticArray as `odocal live` publishes it (no bag here holds one),
+# CDR little-endian by hand; the fuzz target's kind byte 0xF7 picks it.
+import struct
+def cdr_string(buf, s):
+    buf += b"\0" * (-len(buf) % 4)
+    b = s.encode() + b"\0"
+    return buf + struct.pack("<I", len(b)) + b
+body = bytearray(struct.pack("<iI", 12, 500))
+body = cdr_string(body, "base_link")
+body += b"\0" * (-len(body) % 4) + struct.pack("<I", 1)
+body += bytes([1])
+for s in ["odocal: calibration", "converged", ""]:
+    body = cdr_string(body, s)
+body += b"\0" * (-len(body) % 4) + struct.pack("<I", 1)
+for s in ["r_right", "0.3201"]:
+    body = cdr_string(body, s)
+# The encapsulation header's 4 bytes precede the body; CDR aligns from after it.
+(out / "cdr_msgs" / "live-DiagnosticArray").write_bytes(bytes([0xF7, 0, 1, 0, 0]) + bytes(body))
 print(f"mcap_read: {len(list((out / 'mcap_read').iterdir()))} seeds, "
       f"cdr_msgs: {len(list((out / 'cdr_msgs').iterdir()))} seeds")
 PY

@@ -11,8 +11,8 @@ use odocal::io::carmen::read_carmen_bytes;
 use odocal::io::kitti::parse_kitti;
 use odocal::io::relations::parse_relations;
 use odocal::io::ros_msgs::{
-    ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg, PoseStampedMsg, RosMsg,
-    TfMessage,
+    DiagnosticArrayMsg, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg,
+    PoseStampedMsg, RosMsg, TfMessage,
 };
 use odocal::io::tum::parse_tum;
 use odocal::io::{read_mcap_bytes, ReadOptions, TopicConfig};
@@ -60,15 +60,16 @@ fn cdr(data: &[u8]) -> Result<(), String> {
     }
     let (&kind, msg) = data.split_first().ok_or("empty")?;
     let ros1 = kind & 8 != 0;
-    match kind & 7 {
-        0 => round::<LaserScanMsg>(msg, ros1),
-        1 => round::<JointStateMsg>(msg, ros1),
-        2 => round::<ImuMsg>(msg, ros1),
-        3 => round::<OdometryMsg>(msg, ros1),
-        4 => round::<PoseStampedMsg>(msg, ros1),
-        5 => round::<PointStampedMsg>(msg, ros1),
-        6 => round::<TfMessage>(msg, ros1),
-        _ => ticks(msg, ros1, kind >> 4),
+    match (kind & 7, kind >> 4) {
+        (0, _) => round::<LaserScanMsg>(msg, ros1),
+        (1, _) => round::<JointStateMsg>(msg, ros1),
+        (2, _) => round::<ImuMsg>(msg, ros1),
+        (3, _) => round::<OdometryMsg>(msg, ros1),
+        (4, _) => round::<PoseStampedMsg>(msg, ros1),
+        (5, _) => round::<PointStampedMsg>(msg, ros1),
+        (6, _) => round::<TfMessage>(msg, ros1),
+        (_, 15) => round::<DiagnosticArrayMsg>(msg, ros1),
+        (_, pick) => ticks(msg, ros1, pick),
     }
 }
 

@@ -1,12 +1,14 @@
 //! The CDR decoders directly: the first byte picks the message type and the
-//! wire (bit 3: the ROS 1 serialisation), the rest is the message. A message
+//! wire (bit 3: the ROS 1 serialisation), the rest is the message; its low
+//! three bits 7 pick a tick array by the high four (15: the
+//! `DiagnosticArray` `odocal live` publishes and its tests read back). A message
 //! decoded from CDR must encode and decode again; every decode returns an
 //! error value or a message, never a panic.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use odocal::io::cdr::CdrReader;
 use odocal::io::ros_msgs::{
-    read_int_array, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg,
+    read_int_array, DiagnosticArrayMsg, ImuMsg, JointStateMsg, LaserScanMsg, OdometryMsg, PointStampedMsg,
     PoseStampedMsg, RosMsg, TfMessage,
 };
 use odocal::robot::TicksType;
@@ -60,6 +62,7 @@ fuzz_target!(|data: &[u8]| {
         (4, _) => round::<PoseStampedMsg>(msg, ros1),
         (5, _) => round::<PointStampedMsg>(msg, ros1),
         (6, _) => round::<TfMessage>(msg, ros1),
+        (_, 15) => round::<DiagnosticArrayMsg>(msg, ros1),
         (_, pick) => ticks(msg, ros1, pick),
     }
 });

@@ -206,3 +206,74 @@ pub fn open<'o>(
 ) -> Result<Box<dyn SampleSource + 'o>, InputError> {
     super::bag_stream::open_with(path, opts, || Db3Messages::open(path, opts))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A rosbag2 database of `n` JointState rows (the payloads need not
+    /// decode: only the rows are read here).
+    fn database(path: &Path, n: i64) {
+        let db = Connection::open(path).unwrap();
+        db.execute_batch(
+            "CREATE TABLE topics (id INTEGER PRIMARY KEY, name TEXT, type TEXT, \
+             serialization_format TEXT, offered_qos_profiles TEXT); \
+             CREATE TABLE messages (id INTEGER PRIMARY KEY, topic_id INTEGER, \
+             timestamp INTEGER, data BLOB); \
+             INSERT INTO topics VALUES (1, '/joint_states', 'sensor_msgs/msg/JointState', \
+             'cdr', '');",
+        )
+        .unwrap();
+        let tx = db.unchecked_transaction().unwrap();
+        for i in 0..n {
+            tx.execute(
+                "INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?1, ?2)",
+                rusqlite::params![1_000_000 * (n - i), vec![0u8; 16]],
+            )
+            .unwrap();
+        }
+        tx.commit().unwrap();
+    }
+
+    /// Dropped after one message of thousands (its worker waiting on a full
+    /// channel, its query open) or before the first (its worker inside the
+    /// query's first step, which sorts the whole table), the reader leaves
+    /// nothing behind: at once another connection can lock the file for
+    /// writing, which a query still open (a worker still alive) would refuse.
+    #[test]
+    fn a_reader_dropped_early_has_ended_its_worker() {
+        let dir = std::env::temp_dir().join(format!("odocal-db3-drop-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("bag.db3");
+        // Stamps in reverse row order: the first step sorts them all.
+        database(&path, 300_000);
+        let writer = Connection::open(&path).unwrap();
+        writer.busy_timeout(std::time::Duration::ZERO).unwrap();
+        let free = |w: &Connection| w.execute_batch("BEGIN EXCLUSIVE; COMMIT;");
+        // Mid-stream.
+        let mut r = Db3Messages::open(&path, &ReadOptions::default()).unwrap();
+        let first = r.next_raw().ok().flatten().expect("a first message");
+        assert_eq!(first.topic, "/joint_states");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        // The negative control: while the reader lives, its open query
+        // holds the file.
+        assert!(free(&writer).is_err());
+        drop(r);
+        let mid_stream = free(&writer);
+        // Inside the first step.
+        let t = std::time::Instant::now();
+        drop(Db3Messages::open(&path, &ReadOptions::default()).unwrap());
+        let at_once = t.elapsed();
+        let first_step = free(&writer);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(
+            mid_stream.is_ok(),
+            "mid-stream: the file is still held: {mid_stream:?}"
+        );
+        assert!(
+            first_step.is_ok(),
+            "first step: the file is still held: {first_step:?}"
+        );
+        eprintln!("dropped in {at_once:?}");
+    }
+}
