@@ -109,6 +109,17 @@ fn mines_rover_every_online_method_agrees_with_the_batch_from_the_nominal_values
             runs.push((m, kinematics(&j)));
         }
         every_method_and_not_the_nominal(e, &runs, nominal, reference, [0.015, 0.015, 0.03]);
+        // Those bounds are what a user of the filters is promised; the robot's
+        // own departure from its file is no more than 1.4 and 2.2 of them
+        // (radii 1.2 % on exp2, 3.3 % on exp1; wheel base 4.3 and 6.4 %).
+        // exp1's wheel base departs three times 2 %, within which every
+        // method lands: that check, with the nominal failing it, too.
+        if e == "exp1" {
+            let tol = 0.02;
+            assert!((nominal[2] / reference[2] - 1.0).abs() >= 3.0 * tol);
+            let d_only = [f64::INFINITY, f64::INFINITY, tol];
+            every_method_and_not_the_nominal(e, &runs, nominal, reference, d_only);
+        }
         let apf = runs[0].1;
         means.push((0.5 * (apf[0] + apf[1]), 0.5 * (reference[0] + reference[1])));
     }
