@@ -163,12 +163,21 @@ fn fit(rows: &[[f64; 3]]) -> Option<f64> {
 /// segments (fewer than two per block) or no turning to read it from.
 pub fn gyro_scale(icp: &[IcpRow], gyro: &[GyroRow], c: &GyroCheck) -> Option<GyroScale> {
     let rows = segments(icp, gyro, c);
-    let k = c.blocks;
-    if rows.len() < 2 * k {
+    if rows.len() < 2 * c.blocks {
         return None;
     }
-    let scale = fit(&rows)?;
-    // Delete-one-block jackknife (Efron): var = (k−1)/k Σ (s₋ⱼ − mean)².
+    let (scale, stderr) = jackknife(&rows, c.blocks)?;
+    Some(GyroScale {
+        scale,
+        stderr,
+        segments: rows.len(),
+    })
+}
+
+/// The scale of `rows` and its delete-one-block jackknife standard error
+/// over `k` consecutive blocks (Efron): var = (k−1)/k Σ (s₋ⱼ − mean)².
+fn jackknife(rows: &[[f64; 3]], k: usize) -> Option<(f64, f64)> {
+    let scale = fit(rows)?;
     let bound = |j: usize| j * rows.len() / k;
     let mut left_out = Vec::with_capacity(k);
     for j in 0..k {
@@ -181,11 +190,7 @@ pub fn gyro_scale(icp: &[IcpRow], gyro: &[GyroRow], c: &GyroCheck) -> Option<Gyr
     }
     let mean = left_out.iter().sum::<f64>() / k as f64;
     let var = (k - 1) as f64 / k as f64 * left_out.iter().map(|s| (s - mean).powi(2)).sum::<f64>();
-    Some(GyroScale {
-        scale,
-        stderr: var.sqrt(),
-        segments: rows.len(),
-    })
+    Some((scale, var.sqrt()))
 }
 
 #[cfg(test)]
@@ -375,5 +380,62 @@ mod tests {
             .validate()
             .unwrap_err()
             .contains("blocks"));
+    }
+
+    /// Twenty one-second segments whose scan-matched turns are all 3 rad up
+    /// to ±3·10⁻⁷: the turn column is the duration column times 3 to within
+    /// 10⁻⁷, so scale and bias cannot be told apart (det / (Σc²·Σt²) =
+    /// ε²/9 = 10⁻¹⁴, under the 10⁻¹² the fit asks): refused. The same
+    /// segments with turns spread by ±1 rad are read.
+    #[test]
+    fn a_turn_column_nearly_proportional_to_the_durations_is_refused() {
+        let rows = |eps: f64| -> Vec<[f64; 3]> {
+            (0..20)
+                .map(|i| {
+                    let c = 3.0 + if i % 2 == 0 { eps } else { -eps };
+                    [1.02 * c + 0.01, c, 1.0]
+                })
+                .collect()
+        };
+        assert_eq!(fit(&rows(3e-7)), None);
+        let spread = fit(&rows(1.0)).expect("read");
+        assert!((spread - 0.02).abs() < 1e-12, "{spread}");
+    }
+
+    /// Ten blocks need twenty segments: twenty (20 s) are read, nineteen
+    /// (19 s) are not.
+    #[test]
+    fn twice_the_blocks_in_segments_is_the_least_that_is_read() {
+        let c = GyroCheck::default();
+        assert_eq!(c.blocks, 10);
+        let (icp, gyro) = streams(20.0, 0.02, 0.003, 0.01);
+        let s = gyro_scale(&icp, &gyro, &c).expect("twenty segments are read");
+        assert_eq!(s.segments, 20);
+        assert!((s.scale - 0.02).abs() < 1e-3, "{s:?}");
+        let (icp, gyro) = streams(19.0, 0.02, 0.003, 0.01);
+        assert_eq!(segments(&icp, &gyro, &c).len(), 19);
+        assert_eq!(gyro_scale(&icp, &gyro, &c), None);
+    }
+
+    /// Three blocks of two one-second segments, (scan-matched turn c, gyro
+    /// minus scan-matched y) = (0, 0), (1, 1) twice and (0, 0), (1, 2): the
+    /// slope of y on c with an intercept is 4/3 over all six, 3/2 without
+    /// either of the first two blocks and 1 without the third; their mean
+    /// is 4/3, the squared deviations sum to 1/36 + 1/36 + 1/9 = 1/6, and
+    /// (k − 1)/k of that, 1/9, is the variance: a standard error of 1/3.
+    #[test]
+    fn the_jackknife_by_hand() {
+        let row = |c: f64, y: f64| [y + c, c, 1.0];
+        let rows = [
+            row(0.0, 0.0),
+            row(1.0, 1.0),
+            row(0.0, 0.0),
+            row(1.0, 1.0),
+            row(0.0, 0.0),
+            row(1.0, 2.0),
+        ];
+        let (scale, stderr) = jackknife(&rows, 3).unwrap();
+        assert!((scale - 4.0 / 3.0).abs() < 1e-12, "{scale}");
+        assert!((stderr - 1.0 / 3.0).abs() < 1e-12, "{stderr}");
     }
 }
