@@ -184,7 +184,18 @@ fn run(target: &str, data: &[u8]) -> Result<(), String> {
             .map(|_| ())
             .map_err(|x| x.to_string()),
         "censi_tuples" => odocal::io::censi::parse(text(data)?, "fuzz.tuple")
-            .map(|_| ())
+            .map(|tuples| {
+                // As the fuzz target: what is accepted makes motions that
+                // move forward in time, with finite values.
+                let mount = odocal::geom::pose(0.1, -0.02, 0.3);
+                let (_, motions) = odocal::io::censi::to_streams(&tuples, &mount, 0.005, 0.002);
+                for m in &motions {
+                    assert!(
+                        m.t1 > m.t0 && m.dx.is_finite() && m.dtheta.is_finite(),
+                        "{m:?}"
+                    );
+                }
+            })
             .map_err(e),
         "rosbag2_dir" => read_as_rosbag2_dir(data, "regression")
             .map(|r| assert_sound(&r))

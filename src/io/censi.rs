@@ -64,8 +64,13 @@ fn line_of(text: &str, offset: usize) -> usize {
 /// laid end to end (0.8 s + 1e-201 s is 0.8 s).
 pub const MIN_INTERVAL_S: f64 = 1e-6;
 
+/// Longest interval a tuple may span (s): a tuple is the motion between two
+/// laser scans, not an hour of driving; a longer one (8·10³⁰¹ s) would
+/// swallow every later interval into a clock that no longer moves.
+pub const MAX_INTERVAL_S: f64 = 3600.0;
+
 /// Parses a tuple stream; `file` names the source in errors. Every tuple must
-/// have T ≥ [`MIN_INTERVAL_S`] and finite values.
+/// have [`MIN_INTERVAL_S`] ≤ T ≤ [`MAX_INTERVAL_S`] and finite values.
 pub fn parse(text: &str, file: &str) -> Result<Vec<CensiTuple>, InputError> {
     let mut out = Vec::new();
     let mut stream = serde_json::Deserializer::from_str(text).into_iter::<CensiTuple>();
@@ -79,14 +84,18 @@ pub fn parse(text: &str, file: &str) -> Result<Vec<CensiTuple>, InputError> {
                     .at(format!("object {} (line {})", out.len() + 1, e.line())));
             }
             Some(Ok(t)) => {
-                let ok = t.t >= MIN_INTERVAL_S
+                let ok = (MIN_INTERVAL_S..=MAX_INTERVAL_S).contains(&t.t)
                     && [t.t, t.phi_l, t.phi_r, t.sm[0], t.sm[1], t.sm[2]]
                         .iter()
                         .all(|x| x.is_finite());
                 if !ok {
                     return Err(InputError::new(
                         file,
-                        format!("T must be ≥ {MIN_INTERVAL_S} s and all values finite"),
+                        format!(
+                            "T = {} s: T must lie in [{MIN_INTERVAL_S}, {MAX_INTERVAL_S}] s \
+                             (the interval between two scans) and all values be finite",
+                            t.t
+                        ),
                     )
                     .topic("tuple")
                     .at(format!(
@@ -198,6 +207,19 @@ mod tests {
         assert_eq!(e.position.as_deref(), Some("object 2 (line 2)"));
         let e = parse("{ \"T\": 0.8, \"phi_l\": 0.5 }", "x.tuple").unwrap_err();
         assert!(e.position.unwrap().starts_with("object 1"));
+    }
+
+    #[test]
+    fn an_interval_is_a_microsecond_to_an_hour() {
+        let one =
+            |t: f64| format!("{{ \"T\": {t}, \"phi_l\": 0.5, \"phi_r\": 0.4, \"sm\": [0, 0, 0] }}");
+        for ok in [1e-6, 0.8, 3600.0] {
+            assert!(parse(&one(ok), "x.tuple").is_ok(), "{ok}");
+        }
+        for bad in [9e-7, 3600.5, 7.93058e301] {
+            let e = parse(&one(bad), "x.tuple").unwrap_err();
+            assert!(e.to_string().contains("[0.000001, 3600] s"), "{bad}: {e}");
+        }
     }
 
     #[test]
