@@ -196,9 +196,9 @@ pub struct NoiseParams {
     pub kalman_turn_sigma: f64,
     /// Dual Kalman filter: a residual of its parameter filter beyond this
     /// many σ of its prior predictive (`hᵀPh` + the measurement's variance)
-    /// has its variance raised until it stands at this many (a Huber weight
-    /// on the whitened residual), so that one interval the model cannot
-    /// explain moves the parameters by at most this many σ's worth; 0 = off.
+    /// has its variance raised until it stands at this many, so that one
+    /// interval the model cannot explain moves the prediction by at most
+    /// this many of its own σ (less the further out it lies); 0 = off.
     pub kalman_gate: f64,
 }
 
