@@ -5,7 +5,7 @@
 //! do not depend on the thread count. Print them with
 //! `cargo test --release --no-default-features --test lib diagnose_figures -- --nocapture`.
 
-use crate::diagnose_synthetic::{check, draw, run};
+use crate::diagnose_synthetic::{check, draw, draw_pair, run};
 use odocal::diagnose::synthetic::SyntheticSpec;
 use odocal::diagnose::Verdict;
 use odocal::effects::EFFECT_NAMES;
@@ -71,14 +71,8 @@ fn diagnose_figures() {
     let mut paired = Vec::new();
     for (i, (a, b)) in pairs.iter().enumerate() {
         for seed in 0..5u64 {
-            let (ea, _) = draw(a, &mut rng);
-            let (eb, _) = draw(b, &mut rng);
-            let spec = SyntheticSpec {
-                duration: 90.0,
-                effects: vec![ea, eb],
-                ..Default::default()
-            };
-            paired.push(([ea, eb], spec, 8000 + 10 * i as u64 + seed));
+            let (effects, spec) = draw_pair(a, b, &mut rng);
+            paired.push((effects, spec, 8000 + 10 * i as u64 + seed));
         }
     }
 

@@ -74,6 +74,23 @@ pub(crate) fn draw(name: &str, rng: &mut rand::rngs::StdRng) -> (Effect, f64) {
     (e, duration)
 }
 
+/// Two effects drawn in order (`a` then `b`) and the 90 s synthetic run
+/// holding both.
+pub(crate) fn draw_pair(
+    a: &str,
+    b: &str,
+    rng: &mut rand::rngs::StdRng,
+) -> ([Effect; 2], SyntheticSpec) {
+    let (ea, _) = draw(a, rng);
+    let (eb, _) = draw(b, rng);
+    let spec = SyntheticSpec {
+        duration: 90.0,
+        effects: vec![ea, eb],
+        ..Default::default()
+    };
+    ([ea, eb], spec)
+}
+
 /// Checks that the diagnosis names exactly the injected effects, with every
 /// parameter within 20 % of the truth, and gains on the held-out part.
 pub(crate) fn check(d: &Diagnosis, truth: &[Effect], what: &str) -> Result<(), String> {
@@ -135,13 +152,7 @@ fn combinations_of_two_effects_are_both_named() {
         ("encoder_gain", "laser_offset"),
         ("radius_step", "turn_slip"),
     ] {
-        let (ea, _) = draw(a, &mut rng);
-        let (eb, _) = draw(b, &mut rng);
-        let spec = SyntheticSpec {
-            duration: 90.0,
-            effects: vec![ea, eb],
-            ..Default::default()
-        };
+        let ([ea, eb], spec) = draw_pair(a, b, &mut rng);
         let d = run(&spec, 7);
         if let Err(m) = check(&d, &[ea, eb], &format!("{ea} + {eb}")) {
             failures.push(m);

@@ -110,8 +110,9 @@ impl Calibrator for DualKf {
             };
             let ph = self.p_theta * h;
             let meas_var = px[k].max(self.floor * self.floor) + model_var[k];
-            let meas_var = gated(x[k] - f[k], h.dot(&ph), meas_var, self.gate);
-            let sv = h.dot(&ph) + meas_var;
+            let hph = h.dot(&ph);
+            let meas_var = gated(x[k] - f[k], hph, meas_var, self.gate);
+            let sv = hph + meas_var;
             let gain = ph / sv;
             self.theta += gain * (x[k] - f[k]);
             let ikh = Matrix3::identity() - gain * h.transpose();
