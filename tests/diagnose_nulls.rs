@@ -126,7 +126,12 @@ fn the_instrument_table_in_the_code_is_the_measured_one() {
         .forward
         .iter()
         .cloned()
-        .chain(m.turn.iter().map(|c| vec![*c]))
+        .chain(
+            m.turn
+                .iter()
+                .zip(&m.turn_in_place)
+                .map(|(a, b)| vec![*a, *b]),
+        )
         .collect();
     assert_eq!(rows.len(), code.len(), "{rows:?}");
     for (page_row, code_row) in rows.iter().zip(&code) {

@@ -14,9 +14,12 @@
 //! correlation of scan-matching errors inside a block). The default
 //! `min_scale` (1 %) lies above scan-to-scan ICP's own turn-rate error
 //! beyond the smallest rotations (a few tenths of a per cent,
-//! [`super::instrument`]). When named, the diagnosis leaves the gyro out, as
-//! on a robot without one: read on the scan matching's scale instead it
-//! would carry ICP's own turn-rate error into the fit.
+//! [`super::instrument`]); the diagnosis hands it the scan matching's turns
+//! read on the instrument's scale (each pair's own error taken out,
+//! [`super::instrument::Instrument::turns_debiased`]). When named, the
+//! diagnosis leaves the gyro out, as on a robot without one: rescaled by the
+//! estimate instead it would carry what is left of ICP's turn-rate error
+//! into the fit with the gyro's weight.
 
 use super::data::{GyroRow, IcpRow};
 use serde::{Deserialize, Serialize};

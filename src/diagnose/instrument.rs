@@ -43,8 +43,14 @@ pub struct Instrument {
     pub forward: Vec<Vec<Cell>>,
     /// Inner bounds of the rotation bins (rad per pair), ascending.
     pub rotation_edges: Vec<f64>,
-    /// Relative turn-rate error per rotation bin.
+    /// Relative turn-rate error per rotation bin, of pairs moving forward.
     pub turn: Vec<Cell>,
+    /// A pair whose forward step is under this (m) turns in place.
+    pub in_place_step: f64,
+    /// Relative turn-rate error per rotation bin, of pairs turning in place
+    /// (the laser, off the axle, swings on an arc; scan to scan ICP reads
+    /// those turns differently from turns on the move).
+    pub turn_in_place: Vec<Cell>,
     /// Spreads of the table's error allowed beyond the floors.
     pub spreads: f64,
     /// Shortest latency between the wheels and the scan matching that is
@@ -68,12 +74,21 @@ impl Default for Instrument {
                 vec![[-0.0138, 0.0138], [-0.0184, 0.0088], [-0.0045, 0.0024]],
                 vec![[-0.0166, 0.0166], [-0.0210, 0.0226], [-0.0119, 0.0119]],
             ],
-            rotation_edges: vec![0.002, 0.005, 0.01],
+            rotation_edges: vec![0.002, 0.005, 0.01, 0.02],
             turn: vec![
-                [-0.0382, 0.0223],
-                [-0.0026, 0.0058],
-                [-0.0008, 0.0027],
-                [-0.0015, 0.0015],
+                [-0.0382, 0.0232],
+                [-0.0026, 0.0060],
+                [-0.0008, 0.0024],
+                [-0.0017, 0.0016],
+                [-0.0012, 0.0003],
+            ],
+            in_place_step: 0.002,
+            turn_in_place: vec![
+                [-0.0404, 0.0106],
+                [-0.0040, 0.0041],
+                [0.0002, 0.0035],
+                [-0.0042, 0.0026],
+                [-0.0001, 0.0003],
             ],
             spreads: 2.0,
             // The latency alone fitted with the gyro set aside, on null runs
@@ -107,18 +122,28 @@ impl Instrument {
             return Err("instrument: bin bounds must be finite and ascending".into());
         }
         let cols = self.step_edges.len() + 1;
+        let turns = self.rotation_edges.len() + 1;
         if self.forward.len() != self.anisotropy_edges.len() + 1
             || self.forward.iter().any(|r| r.len() != cols)
-            || self.turn.len() != self.rotation_edges.len() + 1
+            || self.turn.len() != turns
+            || self.turn_in_place.len() != turns
         {
             return Err(format!(
-                "instrument: forward needs {} rows of {cols} cells and turn {} cells",
+                "instrument: forward needs {} rows of {cols} cells, turn and turn_in_place \
+                 {turns} cells each",
                 self.anisotropy_edges.len() + 1,
-                self.rotation_edges.len() + 1
             ));
         }
-        if !(self.forward.iter().flatten().all(cell_ok) && self.turn.iter().all(cell_ok)) {
+        if !(self.forward.iter().flatten().all(cell_ok)
+            && self.turn.iter().chain(&self.turn_in_place).all(cell_ok))
+        {
             return Err("instrument: every cell is [error, spread ≥ 0], finite".into());
+        }
+        if !(self.in_place_step.is_finite() && self.in_place_step >= 0.0) {
+            return Err(format!(
+                "instrument: in_place_step must be ≥ 0 m, got {}",
+                self.in_place_step
+            ));
         }
         if !(self.timing.is_finite() && self.timing >= 0.0) {
             return Err(format!(
@@ -158,8 +183,77 @@ impl Instrument {
                 let c = bin(&self.step_edges, v.abs() * dt);
                 self.forward[r][c]
             }
-            2 => self.turn[bin(&self.rotation_edges, w.abs() * dt)],
+            2 => self.turn_cell(dt, v, w),
             _ => [0.0, 0.0],
+        }
+    }
+
+    /// The turn rate's cell of a pair `dt` s long whose motion is about `v`
+    /// (m/s) and `w` (rad/s): in place when its forward step is under
+    /// `in_place_step`, else on the move.
+    pub fn turn_cell(&self, dt: f64, v: f64, w: f64) -> Cell {
+        let b = bin(&self.rotation_edges, w.abs() * dt);
+        if v.abs() * dt < self.in_place_step {
+            self.turn_in_place[b]
+        } else {
+            self.turn[b]
+        }
+    }
+
+    /// ICP rows with each turn rate read on the table's scale: divided by 1
+    /// plus the table's error for its pair (binned by the row's own forward
+    /// speed and turn rate, which are close enough to the true ones for
+    /// that). The rows unchanged when the model is off.
+    pub fn turns_debiased(&self, rows: &[IcpRow]) -> Vec<IcpRow> {
+        rows.iter()
+            .map(|r| {
+                let mut z = r.z;
+                if self.enabled {
+                    z[2] /= 1.0 + self.turn_cell(r.t1 - r.t0, r.z[0], r.z[2])[0];
+                }
+                IcpRow { z, ..*r }
+            })
+            .collect()
+    }
+
+    /// The model of rows already read on the table's scale
+    /// ([`Self::turns_debiased`]): the turn cells' errors 0, their spreads
+    /// kept.
+    pub fn turn_errors_taken_out(&self) -> Self {
+        let out = |c: &Vec<Cell>| c.iter().map(|c| [0.0, c[1]]).collect();
+        Self {
+            turn: out(&self.turn),
+            turn_in_place: out(&self.turn_in_place),
+            ..self.clone()
+        }
+    }
+
+    /// The smallest relative turn-rate departure the scan matching can
+    /// vouch for on `rows` (each `(dt, v, w, σ_w)`: a pair's length (s),
+    /// forward speed (m/s), turn rate (rad/s) and the turn rate's σ), and
+    /// the turn rate those rows weigh most: the table's error plus
+    /// `spreads` times its spread, and |w|, each averaged with each pair's
+    /// information on the turn, (w/σ_w)². `[0, 0]` when the model is off or
+    /// nothing turned.
+    pub fn turn_floor(&self, rows: impl Iterator<Item = (f64, f64, f64, f64)>) -> [f64; 2] {
+        if !self.enabled {
+            return [0.0, 0.0];
+        }
+        let (mut floor, mut rate, mut weight) = (0.0, 0.0, 0.0);
+        for (dt, v, w, sigma) in rows {
+            let info = (w / sigma).powi(2);
+            if !(info.is_finite() && dt > 0.0) {
+                continue;
+            }
+            let [e, s] = self.turn_cell(dt, v, w);
+            floor += info * (e.abs() + self.spreads * s);
+            rate += info * w.abs();
+            weight += info;
+        }
+        if weight > 0.0 {
+            [floor / weight, rate / weight]
+        } else {
+            [0.0, 0.0]
         }
     }
 }
@@ -185,6 +279,8 @@ mod tests {
             forward: vec![vec![[1.0, 0.1], [2.0, 0.2]], vec![[3.0, 0.3], [4.0, 0.4]]],
             rotation_edges: vec![0.005],
             turn: vec![[5.0, 0.5], [6.0, 0.6]],
+            in_place_step: 0.002,
+            turn_in_place: vec![[7.0, 0.7], [8.0, 0.8]],
             ..Instrument::default()
         };
         m.validate().unwrap();
@@ -195,9 +291,15 @@ mod tests {
         assert_eq!(m.cell(0, &row(0.02, 0.3, 0.1), -0.25, 0.0), [3.0, 0.3]);
         // Exactly on a bound: the upper bin.
         assert_eq!(m.cell(0, &row(0.02, 0.2, 0.1), 0.5, 0.0), [4.0, 0.4]);
-        // 0.5 rad/s over 20 ms: 10 mrad; 0.1 rad/s: 2 mrad.
-        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.0, -0.5), [6.0, 0.6]);
-        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.0, 0.1), [5.0, 0.5]);
+        // 0.5 rad/s over 20 ms: 10 mrad; 0.1 rad/s: 2 mrad; in place (no
+        // forward step) or moving at 0.5 m/s (a 10 mm step).
+        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.0, -0.5), [8.0, 0.8]);
+        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.0, 0.1), [7.0, 0.7]);
+        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.5, -0.5), [6.0, 0.6]);
+        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), -0.5, 0.1), [5.0, 0.5]);
+        // A 1.9 mm step is in place, a 2 mm one is not (the bound moves).
+        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.095, 0.5), [8.0, 0.8]);
+        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.1, 0.5), [6.0, 0.6]);
         // The lateral stream and the gyro carry no table.
         assert_eq!(m.cell(1, &row(0.02, 0.1, 0.1), 1.0, 1.0), [0.0, 0.0]);
         assert_eq!(m.cell(3, &row(0.02, 0.1, 0.1), 1.0, 1.0), [0.0, 0.0]);
@@ -210,14 +312,31 @@ mod tests {
             turn: vec![[0.0, 0.0]],
             ..Instrument::default()
         };
-        assert!(short.validate().unwrap_err().contains("turn 4 cells"));
+        assert!(short
+            .validate()
+            .unwrap_err()
+            .contains("turn and turn_in_place 5 cells"));
+        let short_in_place = Instrument {
+            turn_in_place: vec![[0.0, 0.0]; 4],
+            ..Instrument::default()
+        };
+        assert!(short_in_place.validate().is_err());
+        let step = |x: f64| Instrument {
+            in_place_step: x,
+            ..Instrument::default()
+        };
+        assert!(step(0.0).validate().is_ok());
+        assert!(step(-1e-3)
+            .validate()
+            .unwrap_err()
+            .contains("in_place_step"));
         let unordered = Instrument {
             step_edges: vec![0.02, 0.012],
             ..Instrument::default()
         };
         assert!(unordered.validate().is_err());
         let negative = Instrument {
-            turn: vec![[0.0, -1.0]; 4],
+            turn: vec![[0.0, -1.0]; 5],
             ..Instrument::default()
         };
         assert!(negative.validate().is_err());
@@ -229,5 +348,64 @@ mod tests {
         assert!(timing(0.0).validate().is_ok());
         assert!(timing(-0.001).validate().unwrap_err().contains("timing"));
         assert!(timing(f64::NAN).validate().is_err());
+    }
+
+    #[test]
+    fn the_turn_floor_weighs_each_pair_by_its_information_on_the_turn() {
+        let m = Instrument {
+            rotation_edges: vec![0.005],
+            turn: vec![[-0.04, 0.02], [-0.001, 0.001]],
+            in_place_step: 0.002,
+            turn_in_place: vec![[-0.04, 0.02], [-0.004, 0.002]],
+            spreads: 2.0,
+            ..Instrument::default()
+        };
+        // One pair turning 12 mrad in place (σ 0.01 rad/s: information
+        // 0.6²/0.01² = 3600) and one turning 12 mrad on the move with four
+        // times the σ (information 225): (3600·0.008 + 225·0.003) / 3825.
+        let rows = [(0.02, 0.0, 0.6, 0.01), (0.02, 1.0, 0.6, 0.04)];
+        let want = (3600.0 * 0.008 + 225.0 * 0.003) / 3825.0;
+        let [floor, rate] = m.turn_floor(rows.into_iter());
+        assert!((floor - want).abs() < 1e-12 && (rate - 0.6).abs() < 1e-12);
+        // A pair that does not turn carries no information on the turn.
+        let still = [(0.02, 1.0, 0.0, 0.01), (0.02, 1.0, -0.3, 0.04)];
+        let [floor, rate] = m.turn_floor(still.into_iter());
+        assert!((floor - 0.003).abs() < 1e-12 && (rate - 0.3).abs() < 1e-12);
+        // Nothing turned, or the model off: no floor.
+        assert_eq!(m.turn_floor([(0.02, 1.0, 0.0, 0.01)].into_iter()), [0.0; 2]);
+        let off = Instrument {
+            enabled: false,
+            ..m.clone()
+        };
+        assert_eq!(off.turn_floor(rows.into_iter()), [0.0; 2]);
+    }
+
+    #[test]
+    fn turns_are_read_on_the_tables_scale_only_when_the_model_is_on() {
+        let m = Instrument {
+            rotation_edges: vec![0.005],
+            turn: vec![[0.0, 0.0], [-0.01, 0.001]],
+            in_place_step: 0.002,
+            turn_in_place: vec![[0.0, 0.0], [-0.005, 0.001]],
+            ..Instrument::default()
+        };
+        let row = |v: f64, w: f64| IcpRow {
+            t0: 0.0,
+            t1: 0.02,
+            z: [v, 0.0, w],
+            sigma: [0.01; 3],
+        };
+        let out = m.turns_debiased(&[row(0.0, 0.5), row(1.0, 0.5), row(1.0, 0.1)]);
+        // In place ICP reads 0.5 % short, on the move 1 %; 2 mrad per pair
+        // carries no error in this table.
+        assert!((out[0].z[2] - 0.5 / 0.995).abs() < 1e-12);
+        assert!((out[1].z[2] - 0.5 / 0.99).abs() < 1e-12);
+        assert_eq!(out[2].z[2], 0.1);
+        assert_eq!((out[1].z[0], out[1].t1), (1.0, 0.02));
+        let off = Instrument {
+            enabled: false,
+            ..m
+        };
+        assert_eq!(off.turns_debiased(&[row(1.0, 0.5)])[0].z[2], 0.5);
     }
 }

@@ -84,6 +84,9 @@ pub struct Replay {
     /// One encoder tick period at the run's wheel rate (s; 0 when the
     /// angles are not quantised), [`super::resolution`].
     pub timing_resolution: f64,
+    /// The averaging window used (s): the configured one, widened for
+    /// coarse encoders ([`super::resolution::smoothing_window`]).
+    pub smoothing: f64,
 }
 
 /// Predicted body velocities over an interval: forward V, lateral L (m/s) and
@@ -101,7 +104,8 @@ pub struct Predicted {
 impl Replay {
     /// Prepares a replay; wheel samples with non-increasing stamps are dropped.
     /// The (stamp, angle) pairs are averaged over a centred window of about
-    /// `smoothing` s (an odd number of samples; exact for constant rates even
+    /// `smoothing` s, widened to span [`super::resolution::WINDOW_TICKS`]
+    /// ticks of a coarse encoder (an odd number of samples; exact for constant rates even
     /// with irregular stamps): encoder quantisation then no longer depends on
     /// where an interval falls between two samples, which would otherwise bias
     /// the latency estimate (shifting by a fraction of a sample averages
@@ -127,6 +131,7 @@ impl Replay {
             left.push(s.left);
         }
         let timing_resolution = super::resolution::timing_resolution(wheels);
+        let smoothing = super::resolution::smoothing_window(smoothing, timing_resolution);
         let k = smoothing_samples(&ts, smoothing);
         if k > 1 && ts.len() >= 3 * k {
             (ts, right, left) = smooth(&ts, &right, &left, k);
@@ -140,6 +145,7 @@ impl Replay {
             right,
             left,
             timing_resolution,
+            smoothing,
         }
     }
 

@@ -15,6 +15,26 @@
 
 use crate::recording::WheelSample;
 
+/// Least encoder ticks (at the run's mean wheel rate) the replay's moving
+/// average spans: half a tick of quantisation at each end of the window is
+/// then at most 1/32 of the motion averaged. With coarse encoders the
+/// configured window alone leaves the per-pair speed noisy enough that the
+/// fit's regressors carry the noise (measured: 512 ticks per revolution on
+/// the figure eight, 0.1 s averaging 21 ticks, read as a 2.2 % slip on a
+/// fifth of the floor; 0.15 s or more, nothing).
+pub const WINDOW_TICKS: f64 = 32.0;
+
+/// The replay's averaging window (s): the configured `seconds`, or
+/// [`WINDOW_TICKS`] tick periods (`timing_resolution`, s) when longer; 0
+/// (no averaging, as configured) stays 0.
+pub fn smoothing_window(seconds: f64, timing_resolution: f64) -> f64 {
+    if seconds > 0.0 {
+        seconds.max(WINDOW_TICKS * timing_resolution)
+    } else {
+        seconds
+    }
+}
+
 /// Share of moving steps that must lie on the lattice.
 const ON_LATTICE: f64 = 0.95;
 /// Distance from a whole number of ticks still counted as on it (ticks).
@@ -197,5 +217,21 @@ mod tests {
             });
         }
         assert_eq!(tick(&w), None);
+    }
+
+    #[test]
+    fn coarse_encoders_widen_the_averaging_window() {
+        // 8800 ticks at 2.6 rad/s: a tick period of 0.27 ms, 32 of them 8.8
+        // ms, under the configured 0.1 s.
+        let fine = std::f64::consts::TAU / 8800.0 / 2.6;
+        assert_eq!(smoothing_window(0.1, fine), 0.1);
+        // 512 ticks: 4.7 ms, 32 of them 0.151 s.
+        let coarse = std::f64::consts::TAU / 512.0 / 2.6;
+        assert!((smoothing_window(0.1, coarse) - 32.0 * coarse).abs() < 1e-15);
+        assert!((smoothing_window(0.1, coarse) - 0.151).abs() < 1e-3);
+        // Angles on no lattice (0): the configured window; averaging
+        // switched off stays off.
+        assert_eq!(smoothing_window(0.1, 0.0), 0.1);
+        assert_eq!(smoothing_window(0.0, coarse), 0.0);
     }
 }

@@ -41,7 +41,10 @@ pub fn run(
     let icp0 = icp_rows(&merged, span, p.margin);
     let gyro0 = gyro_rows(m.gyro, span, p.margin, p.gyro_window);
     let mut found: Vec<Fault> = rewired.into_iter().map(|r| r.1).collect();
-    let gyro0 = match checked_gyro(&icp0, &gyro0, &p.gyro_check) {
+    // The gyro is compared with the scan matching's turns read on the
+    // instrument's scale (its own turn-rate error per pair taken out).
+    let icp_turns = p.instrument.turns_debiased(&icp0);
+    let gyro0 = match checked_gyro(&icp_turns, &gyro0, &p.gyro_check) {
         Some(fault) => {
             // A gyro whose scale is wrong says nothing the fit can use about
             // the robot's turning: it is left out, as on a robot without one.
@@ -49,6 +52,19 @@ pub fn run(
             Vec::new()
         }
         None => gyro0,
+    };
+    // Without a gyro the scan matching alone times the turns: its turn
+    // rates are read on the instrument's scale, and the table's spread,
+    // what it cannot vouch for, is what a turn-rate effect must exceed.
+    let read_on_scale;
+    let (icp0, p) = if gyro0.is_empty() && p.instrument.enabled {
+        read_on_scale = DiagnoseParams {
+            instrument: p.instrument.turn_errors_taken_out(),
+            ..p.clone()
+        };
+        (icp_turns, &read_on_scale)
+    } else {
+        (icp0, p)
     };
     let rows = Rows {
         replay: &replay,
@@ -514,6 +530,7 @@ fn settings(p: &DiagnoseParams, train: Part, split: &Split, origin: f64) -> Sele
         .filter(|c| c.as_str() != EffectKind::GyroBias.name() || train.gyro.len() >= 20)
         .cloned()
         .collect();
+    let [min_turn_scale, turn_rate] = turn_floor(train, p);
     SelectSettings {
         candidates: usable,
         bic_margin: p.bic_margin,
@@ -524,7 +541,24 @@ fn settings(p: &DiagnoseParams, train: Part, split: &Split, origin: f64) -> Sele
         step_min_rows: 30,
         max_steps: p.max_effects,
         min_latency: min_latency(train.replay, p),
+        min_turn_scale,
+        turn_rate,
     }
+}
+
+/// What a turn-rate effect must exceed to be named, `[min_turn_scale,
+/// turn_rate]` of [`SelectSettings`]: nothing when a gyro times the turns
+/// (at least 20 rows of it), else the scan matcher's own turn-rate error on
+/// the training rows ([`super::instrument::Instrument::turn_floor`]).
+fn turn_floor(train: Part, p: &DiagnoseParams) -> [f64; 2] {
+    if train.gyro.len() >= 20 {
+        return [0.0, 0.0];
+    }
+    let rows = train
+        .icp
+        .iter()
+        .map(|r| (r.t1 - r.t0, r.z[0], r.z[2], r.sigma[2]));
+    p.instrument.turn_floor(rows)
 }
 
 /// Shortest latency named (s): one encoder tick period at the run's wheel

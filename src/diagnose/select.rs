@@ -29,9 +29,13 @@ pub struct CandidateScore {
     pub identifiable: bool,
     /// Whether the estimate is physically possible (see [`physical`]).
     pub physical: bool,
-    /// Whether the instruments can time it: false for a latency shorter than
-    /// one encoder tick period ([`super::resolution`]) or the scan matcher's
-    /// own timing error ([`super::instrument::Instrument::timing`]).
+    /// Whether the instruments can time or scale it: false for a latency
+    /// shorter than one encoder tick period ([`super::resolution`]) or the
+    /// scan matcher's own timing error
+    /// ([`super::instrument::Instrument::timing`]), and for a wheel-base
+    /// scale or turn slip whose change of the turn rate lies within the scan
+    /// matcher's own turn-rate error when it alone reads the turns
+    /// ([`SelectSettings::min_turn_scale`]).
     pub resolvable: bool,
 }
 
@@ -72,6 +76,15 @@ pub struct SelectSettings {
     pub max_steps: usize,
     /// Shortest latency named (s; [`super::run::min_latency`]).
     pub min_latency: f64,
+    /// Smallest wheel-base scale named (relative): 0 with a gyro; without
+    /// one, what the scan matcher's turn reading leaves uncertain on the
+    /// rows ([`super::instrument::Instrument::turn_floor`]: the table's
+    /// spread once its error is taken out), since nothing else times the
+    /// turns. A turn slip k changes the turn rate by k |W|, read
+    /// at `turn_rate` (rad/s, the rows' information-weighted |W|).
+    pub min_turn_scale: f64,
+    /// The turn rate the rows weigh most (rad/s), for the turn slip's size.
+    pub turn_rate: f64,
 }
 
 /// Result of the selection.
@@ -120,7 +133,18 @@ pub fn search_step_time(part: Part, current: &Fit, s: &SelectSettings) -> Option
     super::split::search_split(part, current, &step, range).map(|f| f.time)
 }
 
-fn score(round: usize, f: &Fit, base_bic: f64, min_latency: f64) -> CandidateScore {
+/// Whether the instruments can resolve effect `e` at settings `s` (see
+/// [`CandidateScore::resolvable`]).
+fn resolvable(e: &Effect, s: &SelectSettings) -> bool {
+    match *e {
+        Effect::Latency { delay } => delay.abs() >= s.min_latency,
+        Effect::WheelBaseScale { scale } => scale.abs() >= s.min_turn_scale,
+        Effect::TurnSlip { k } => (k * s.turn_rate).abs() >= s.min_turn_scale,
+        _ => true,
+    }
+}
+
+fn score(round: usize, f: &Fit, base_bic: f64, s: &SelectSettings) -> CandidateScore {
     let i = f.effects.len() - 1;
     let (parameters, stderr) = named(f, i);
     let w = wald(f, i);
@@ -133,7 +157,7 @@ fn score(round: usize, f: &Fit, base_bic: f64, min_latency: f64) -> CandidateSco
         p_value: chi2_sf(w, free_params(&f.effects[i]).len()),
         identifiable: f.identifiable,
         physical: physical(&f.effects[i]),
-        resolvable: !matches!(f.effects[i], Effect::Latency { delay } if delay.abs() < min_latency),
+        resolvable: resolvable(&f.effects[i], s),
     }
 }
 
@@ -174,7 +198,7 @@ pub fn forward(part: Part, usable: &[String], s: &SelectSettings) -> Selection {
             let mut effs = current.effects.clone();
             effs.push(new);
             let f = fit(part, &effs, current.scale, s.max_iter, 1);
-            let sc = score(round, &f, current.bic, s.min_latency);
+            let sc = score(round, &f, current.bic, s);
             let ok = sc.identifiable
                 && sc.physical
                 && sc.resolvable
@@ -371,6 +395,8 @@ mod tests {
             step_min_rows: 2,
             max_steps: 2,
             min_latency: 0.0,
+            min_turn_scale: 0.0,
+            turn_rate: 0.0,
         }
     }
 
@@ -749,5 +775,39 @@ mod tests {
         let sel = named(0.03);
         assert!(sel.model.effects.is_empty(), "{:?}", sel.model.effects);
         assert!(!sel.tried[0].resolvable && sel.tried[0].delta_bic > 10.0);
+    }
+
+    #[test]
+    fn a_turn_effect_within_the_scan_matchers_turn_error_is_not_resolvable() {
+        // Without a gyro the scan matcher's turn error on the rows is 0.5 %,
+        // the rows weighing turns of 0.6 rad/s most.
+        let s = SelectSettings {
+            min_turn_scale: 0.005,
+            turn_rate: 0.6,
+            min_latency: 0.01,
+            ..settings(10.0, 1e-3, 2)
+        };
+        let wb = |scale: f64| Effect::WheelBaseScale { scale };
+        assert!(!resolvable(&wb(0.004), &s) && !resolvable(&wb(-0.0049), &s));
+        assert!(resolvable(&wb(0.005), &s) && resolvable(&wb(-0.006), &s));
+        // Turn slip k changes the turn rate by k |W|: 0.0075 · 0.6 = 0.45 %.
+        let slip = |k: f64| Effect::TurnSlip { k };
+        assert!(!resolvable(&slip(0.0075), &s));
+        assert!(resolvable(&slip(0.01), &s));
+        // The latency keeps its own floor; a radius is not a turn-rate
+        // effect alone (it moves the forward speed too).
+        assert!(!resolvable(&Effect::Latency { delay: 0.009 }, &s));
+        assert!(resolvable(&Effect::Latency { delay: -0.011 }, &s));
+        let radius = Effect::RadiusScale {
+            right: 0.001,
+            left: 0.001,
+        };
+        assert!(resolvable(&radius, &s));
+        // With a gyro (no floor) every size is resolvable.
+        let gyro = SelectSettings {
+            min_turn_scale: 0.0,
+            ..s
+        };
+        assert!(resolvable(&wb(1e-4), &gyro) && resolvable(&slip(1e-4), &gyro));
     }
 }

@@ -118,11 +118,15 @@ fn state_instrument(
     };
     let (value, note) = if inst.enabled {
         (
-            "scan-to-scan ICP's error per pair, by geometry, step and rotation",
+            "scan-to-scan ICP's error per pair, by geometry, step and rotation (turns in \
+             place apart)",
             "measured on the simulated LMS111 wheelchair (docs/results/icp-instrument.md); for \
              another scanner an assumption. A leftover structure it accounts for is reported \
-             with source scan_matching and does not count against the verdict; \
-             [diagnose.instrument] enabled = false calls every leftover structure the robot's",
+             with source scan_matching and does not count against the verdict; the gyro's scale \
+             is checked against the scan-matched turns read on its scale, and without a gyro \
+             the fit reads them so, naming a wheel base or turn slip only beyond the table's \
+             spread; [diagnose.instrument] enabled = false calls every leftover structure the \
+             robot's and takes the scan matching's turns as they come",
         )
     } else {
         (
@@ -133,13 +137,33 @@ fn state_instrument(
     a.set("instrument", value, source, Some(note.into()));
 }
 
-/// States the shortest latency the diagnosis names and why.
+/// States the wheel averaging window and the shortest latency the diagnosis
+/// names, and why.
 fn state_latency_floor(
     a: &mut crate::assumptions::Assumptions,
     rec: &crate::recording::Recording,
     p: &diagnose::DiagnoseParams,
 ) {
     let encoder = diagnose::resolution::timing_resolution(&rec.wheels);
+    let window = diagnose::resolution::smoothing_window(p.wheel_smoothing, encoder);
+    a.set(
+        "wheel_smoothing_s",
+        window,
+        if window > p.wheel_smoothing {
+            Origin::Estimated
+        } else if p.wheel_smoothing == diagnose::DiagnoseParams::default().wheel_smoothing {
+            Origin::Default
+        } else {
+            Origin::Config
+        },
+        Some(format!(
+            "the wheel angles are averaged over this centred window before the replay: \
+             [diagnose] wheel_smoothing ({:.3} s), widened to {} tick periods of the encoder \
+             at this run's wheel rate when longer (0: no averaging)",
+            p.wheel_smoothing,
+            diagnose::resolution::WINDOW_TICKS
+        )),
+    );
     let instrument = p.instrument.timing_floor();
     let note = format!(
         "a latency under it is not named: the wheel encoders time the wheels to one tick \

@@ -170,6 +170,9 @@ def _radii(right, left):
 # −0.0245 and −0.0368 (what radius_scale should read; the turns move a
 # further 0.05 % per (m/s)(rad/s) onto the outer wheel).
 TYRE = "tyre_load:mass=100,com_y=0.065,height=0.5,stiffness=50000"
+# The control: the same tyres with the centre of mass on the ground, so no
+# load moves in turns and the standing radii are the whole departure.
+TYRE_FLAT = "tyre_load:mass=100,com_y=0.065,height=0,stiffness=50000"
 TYRE_RADII = tuple(-100 * 9.80665 * (0.5 + s * 0.065 / 0.65) / 50000 / 0.32 for s in (-1, 1))
 
 
@@ -207,6 +210,8 @@ LAWS = [
     (f"simulated {TYRE}", "physics in the simulator: tyres deflecting under an off-centre "
      f"load (static radius_scale right {TYRE_RADII[0]:.4f}, left {TYRE_RADII[1]:.4f})",
      _radii(*TYRE_RADII)),
+    (f"simulated {TYRE_FLAT}", "the same tyres, the centre of mass on the ground: no load moves "
+     "in turns (the control of the row above)", _radii(*TYRE_RADII)),
 ]
 
 
@@ -218,9 +223,11 @@ def _law_diagnosis(runner, clean, scenario, law):
         # Not a rewrite: the simulator drives the same scenario and seed
         # with the physics switched on.
         seed = dict(LAW_SCENARIOS)[scenario]
-        bag = runner.path(f"law-{scenario}-tyre.mcap")
+        spec = law.split(" ", 1)[1]
+        height = dict(kv.split("=") for kv in spec.split(":", 1)[1].split(","))["height"]
+        bag = runner.path(f"law-{scenario}-tyre-h{height}.mcap")
         runner.run(["simulate", "--scenario", scenario, "--seed", seed, "--duration", "150",
-                    "--effect", law.split(" ", 1)[1], "--out", bag])
+                    "--effect", spec, "--out", bag])
     else:
         name = law.replace(":", "_").replace("=", "_").replace(",", "_")
         bag = runner.path(f"law-{scenario}-{name}.mcap")

@@ -24,7 +24,10 @@ DURATION = 150
 # Inner bin bounds, as `diagnose::instrument::Instrument` holds them.
 ANISOTROPY = [2.0, 2.5, 3.0]
 STEP = [0.012, 0.02]
-ROTATION = [0.002, 0.005, 0.01]
+ROTATION = [0.002, 0.005, 0.01, 0.02]
+# A pair whose forward step is under this (m) turns in place: the laser,
+# off the axle, swings on an arc with nothing of a forward motion.
+IN_PLACE_STEP = 0.002
 # Rows a run needs in a cell to count in its run-to-run spread.
 MIN_ROWS = 50
 
@@ -75,9 +78,12 @@ def cells(runs):
     """The table: per cell the pooled relative error Σ w e x / Σ w x² over
     every run, the standard deviation of the runs' own estimates (runs with
     at least MIN_ROWS rows there) and the rows. A cell seen in fewer than
-    three runs is allowed its whole error again as spread."""
+    three runs is allowed its whole error again as spread. The turn rate's
+    cells are per rotation bin, for pairs moving forward (row 0) and turning
+    in place (row 1); an in-place cell no pair fell in takes the moving
+    pairs' cell (and says so by its row count, 0)."""
     shape_v = (len(ANISOTROPY) + 1, len(STEP) + 1)
-    shape_w = (len(ROTATION) + 1,)
+    shape_w = (2, len(ROTATION) + 1)
 
     def table(shape, key):
         num_, den, n = np.zeros(shape), np.zeros(shape), np.zeros(shape, int)
@@ -87,7 +93,8 @@ def cells(runs):
                 idx = (_bin(ANISOTROPY, d["anisotropy"]), _bin(STEP, np.abs(d["v"]) * d["dt"]))
                 e, x, wt = d["icp_v"] - d["v"], d["v"], d["wv"]
             else:
-                idx = (_bin(ROTATION, np.abs(d["w"]) * d["dt"]),)
+                idx = ((np.abs(d["v"]) * d["dt"] < IN_PLACE_STEP).astype(int),
+                       _bin(ROTATION, np.abs(d["w"]) * d["dt"]))
                 e, x, wt = d["icp_w"] - d["w"], d["w"], d["ww"]
             moving = np.abs(x) > (0.05 if key == "v" else 0.02)
             for cell in np.ndindex(*shape):
@@ -104,6 +111,10 @@ def cells(runs):
             own = per_run.get(cell, [])
             spread = float(np.std(own)) if len(own) >= 3 else max(abs(err), float(np.std(own or [0])))
             out[cell] = (float(err), spread, int(n[cell]), len(own))
+        if key == "w":
+            for j in range(shape[1]):
+                if out[(1, j)][2] == 0:
+                    out[(1, j)] = out[(0, j)][:2] + (0, 0)
         return out
 
     return table(shape_v, "v"), table(shape_w, "w")
@@ -150,10 +161,12 @@ def block_icp_instrument(runner, csm):
         rows.append(f"| {a.strip()} | " + " | ".join(
             f"{num(100 * e, 2)} ± {num(100 * s, 2)} % ({n} rows, {k} runs)" for e, s, n, k in cellv)
             + " |")
-    rows += ["", "| turn rate: rotation per pair | relative error |", "|---|---|"]
+    rows += ["", f"| turn rate: rotation per pair | moving | in place (step < {num(1000 * IN_PLACE_STEP, 0)} mm) |",
+             "|---|---|---|"]
+    cellw = lambda e, s, n, k: (f"{num(100 * e, 2)} ± {num(100 * s, 2)} % ({n} rows, {k} runs)" if n
+                                else f"{num(100 * e, 2)} ± {num(100 * s, 2)} % (no pair: the moving cell)")
     for i, r in enumerate(_bounds(ROTATION, "mrad", 1000)):
-        e, s, n, k = turn[(i,)]
-        rows.append(f"| {r} | {num(100 * e, 2)} ± {num(100 * s, 2)} % ({n} rows, {k} runs) |")
+        rows.append(f"| {r} | {cellw(*turn[(0, i)])} | {cellw(*turn[(1, i)])} |")
     return rows
 
 
@@ -163,9 +176,10 @@ def rust_table(fwd, turn):
     lines = ["forward: vec!["]
     for i in range(len(ANISOTROPY) + 1):
         lines.append("    vec![" + ", ".join(f(fwd[(i, j)]) for j in range(len(STEP) + 1)) + "],")
-    lines += ["],", "turn: vec!["]
-    lines += [f"    {f(turn[(i,)])}," for i in range(len(ROTATION) + 1)]
-    lines.append("],")
+    for key, row in (("turn", 0), ("turn_in_place", 1)):
+        lines += ["],", f"{key}: vec!["] if row == 0 else [f"{key}: vec!["]
+        lines += [f"    {f(turn[(row, i)])}," for i in range(len(ROTATION) + 1)]
+        lines.append("],")
     return "\n".join(lines)
 
 

@@ -161,7 +161,10 @@ PAGES = {
         "Each cell: ICP's relative error, Σ w e x / Σ w x² over the pairs there (x the true "
         "forward speed or turn rate, e ICP's error, w 1/σ² of ICP's covariance), ± the standard "
         "deviation of the runs' own estimates (runs with at least 50 pairs there; a cell seen in "
-        "fewer than three runs takes its whole error again as spread). "
+        "fewer than three runs takes its whole error again as spread). The turn rate's cells "
+        "are split by the pair's forward step: moving, or turning in place (under 2 mm; only "
+        "the square turns in place, with the laser 0.45 m behind the axle swinging on an arc); "
+        "an in-place cell no pair fell in takes the moving one. "
         "`diagnose::instrument::Instrument::default()` holds this table "
         "(`python3 tools/icp_error_table.py` prints it as code).",
         "the-scan-matcher-as-an-instrument",
