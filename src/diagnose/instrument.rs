@@ -229,19 +229,19 @@ impl Instrument {
     }
 
     /// The smallest relative turn-rate departure the scan matching can
-    /// vouch for on `rows` (each `(dt, v, w, σ_w)`: a pair's length (s),
-    /// forward speed (m/s), turn rate (rad/s) and the turn rate's σ), and
-    /// the turn rate those rows weigh most: the table's error plus
-    /// `spreads` times its spread, and |w|, each averaged with each pair's
-    /// information on the turn, (w/σ_w)². `[0, 0]` when the model is off or
-    /// nothing turned.
-    pub fn turn_floor(&self, rows: impl Iterator<Item = (f64, f64, f64, f64)>) -> [f64; 2] {
+    /// vouch for on `rows` (binned by each row's own forward speed and turn
+    /// rate), and the turn rate those rows weigh most: the table's error
+    /// plus `spreads` times its spread, and |w|, each averaged with each
+    /// row's information on the turn, (w/σ_w)². `[0, 0]` when the model is
+    /// off or nothing turned.
+    pub fn turn_floor(&self, rows: &[IcpRow]) -> [f64; 2] {
         if !self.enabled {
             return [0.0, 0.0];
         }
         let (mut floor, mut rate, mut weight) = (0.0, 0.0, 0.0);
-        for (dt, v, w, sigma) in rows {
-            let info = (w / sigma).powi(2);
+        for r in rows {
+            let (dt, v, w) = (r.t1 - r.t0, r.z[0], r.z[2]);
+            let info = (w / r.sigma[2]).powi(2);
             if !(info.is_finite() && dt > 0.0) {
                 continue;
             }
@@ -360,24 +360,31 @@ mod tests {
             spreads: 2.0,
             ..Instrument::default()
         };
+        // (dt s, forward m/s, turn rad/s, σ of the turn rad/s).
+        let icp = |dt: f64, v: f64, w: f64, s: f64| IcpRow {
+            t0: 1.0,
+            t1: 1.0 + dt,
+            z: [v, 0.0, w],
+            sigma: [0.01, 0.01, s],
+        };
         // One pair turning 12 mrad in place (σ 0.01 rad/s: information
         // 0.6²/0.01² = 3600) and one turning 12 mrad on the move with four
         // times the σ (information 225): (3600·0.008 + 225·0.003) / 3825.
-        let rows = [(0.02, 0.0, 0.6, 0.01), (0.02, 1.0, 0.6, 0.04)];
+        let rows = [icp(0.02, 0.0, 0.6, 0.01), icp(0.02, 1.0, 0.6, 0.04)];
         let want = (3600.0 * 0.008 + 225.0 * 0.003) / 3825.0;
-        let [floor, rate] = m.turn_floor(rows.into_iter());
+        let [floor, rate] = m.turn_floor(&rows);
         assert!((floor - want).abs() < 1e-12 && (rate - 0.6).abs() < 1e-12);
         // A pair that does not turn carries no information on the turn.
-        let still = [(0.02, 1.0, 0.0, 0.01), (0.02, 1.0, -0.3, 0.04)];
-        let [floor, rate] = m.turn_floor(still.into_iter());
+        let still = [icp(0.02, 1.0, 0.0, 0.01), icp(0.02, 1.0, -0.3, 0.04)];
+        let [floor, rate] = m.turn_floor(&still);
         assert!((floor - 0.003).abs() < 1e-12 && (rate - 0.3).abs() < 1e-12);
         // Nothing turned, or the model off: no floor.
-        assert_eq!(m.turn_floor([(0.02, 1.0, 0.0, 0.01)].into_iter()), [0.0; 2]);
+        assert_eq!(m.turn_floor(&[icp(0.02, 1.0, 0.0, 0.01)]), [0.0; 2]);
         let off = Instrument {
             enabled: false,
             ..m.clone()
         };
-        assert_eq!(off.turn_floor(rows.into_iter()), [0.0; 2]);
+        assert_eq!(off.turn_floor(&rows), [0.0; 2]);
     }
 
     #[test]

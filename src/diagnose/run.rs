@@ -554,11 +554,7 @@ fn turn_floor(train: Part, p: &DiagnoseParams) -> [f64; 2] {
     if train.gyro.len() >= 20 {
         return [0.0, 0.0];
     }
-    let rows = train
-        .icp
-        .iter()
-        .map(|r| (r.t1 - r.t0, r.z[0], r.z[2], r.sigma[2]));
-    p.instrument.turn_floor(rows)
+    p.instrument.turn_floor(train.icp)
 }
 
 /// Shortest latency named (s): one encoder tick period at the run's wheel
