@@ -279,7 +279,8 @@ mod tests {
             forward: vec![vec![[1.0, 0.1], [2.0, 0.2]], vec![[3.0, 0.3], [4.0, 0.4]]],
             rotation_edges: vec![0.005],
             turn: vec![[5.0, 0.5], [6.0, 0.6]],
-            in_place_step: 0.002,
+            // 2 mm, as a 0.1 m/s pair of 20 ms moves (the bound exactly).
+            in_place_step: 0.1 * 0.02,
             turn_in_place: vec![[7.0, 0.7], [8.0, 0.8]],
             ..Instrument::default()
         };
@@ -297,9 +298,9 @@ mod tests {
         assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.0, 0.1), [7.0, 0.7]);
         assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.5, -0.5), [6.0, 0.6]);
         assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), -0.5, 0.1), [5.0, 0.5]);
-        // A 1.9 mm step is in place, a 2 mm one is not (the bound moves).
-        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.095, 0.5), [8.0, 0.8]);
-        assert_eq!(m.cell(2, &row(0.02, 0.1, 0.1), 0.1, 0.5), [6.0, 0.6]);
+        // A 1.9 mm step is in place, one of exactly the bound is not.
+        assert_eq!(m.turn_cell(0.02, 0.095, 0.5), [8.0, 0.8]);
+        assert_eq!(m.turn_cell(0.02, 0.1, 0.5), [6.0, 0.6]);
         // The lateral stream and the gyro carry no table.
         assert_eq!(m.cell(1, &row(0.02, 0.1, 0.1), 1.0, 1.0), [0.0, 0.0]);
         assert_eq!(m.cell(3, &row(0.02, 0.1, 0.1), 1.0, 1.0), [0.0, 0.0]);
