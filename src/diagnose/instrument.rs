@@ -398,8 +398,8 @@ mod tests {
             ..Instrument::default()
         };
         let row = |v: f64, w: f64| IcpRow {
-            t0: 0.0,
-            t1: 0.02,
+            t0: 10.0,
+            t1: 10.02,
             z: [v, 0.0, w],
             sigma: [0.01; 3],
         };
@@ -409,11 +409,31 @@ mod tests {
         assert!((out[0].z[2] - 0.5 / 0.995).abs() < 1e-12);
         assert!((out[1].z[2] - 0.5 / 0.99).abs() < 1e-12);
         assert_eq!(out[2].z[2], 0.1);
-        assert_eq!((out[1].z[0], out[1].t1), (1.0, 0.02));
+        assert_eq!((out[1].z[0], out[1].t1), (1.0, 10.02));
         let off = Instrument {
             enabled: false,
             ..m
         };
         assert_eq!(off.turns_debiased(&[row(1.0, 0.5)])[0].z[2], 0.5);
+    }
+
+    #[test]
+    fn rows_read_on_the_scale_keep_the_spreads_and_lose_the_errors() {
+        let m = Instrument::default();
+        let out = m.turn_errors_taken_out();
+        for (a, b) in [(&m.turn, &out.turn), (&m.turn_in_place, &out.turn_in_place)] {
+            assert_eq!(a.len(), b.len());
+            for (c, d) in a.iter().zip(b) {
+                assert_eq!(*d, [0.0, c[1]]);
+            }
+        }
+        // Every cell had an error to lose; nothing else changes.
+        assert!(m.turn.iter().chain(&m.turn_in_place).all(|c| c[0] != 0.0));
+        let back = Instrument {
+            turn: m.turn.clone(),
+            turn_in_place: m.turn_in_place.clone(),
+            ..out
+        };
+        assert_eq!(back, m);
     }
 }
