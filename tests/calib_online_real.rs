@@ -163,18 +163,7 @@ fn tracker_ape(rec: &Path, k: [f64; 3], dt: f64, dir: &Path) -> f64 {
     let robot = dir.join("robot.toml");
     lego_with(k, &robot);
     let out = dir.join("none");
-    ok_json(&odocal(&[
-        "calibrate",
-        "--input",
-        rec.to_str().unwrap(),
-        "--robot",
-        robot.to_str().unwrap(),
-        "--method",
-        "none",
-        "--out",
-        out.to_str().unwrap(),
-        "--json",
-    ]));
+    calibrate(rec, robot.to_str().unwrap(), "none", &out);
     let cfg = dir.join("reference.toml");
     std::fs::write(&cfg, "[topics]\nreference = \"/reference\"\n").unwrap();
     let e = ok_json(&odocal(&[

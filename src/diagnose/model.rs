@@ -84,9 +84,6 @@ pub struct Replay {
     /// One encoder tick period at the run's wheel rate (s; 0 when the
     /// angles are not quantised), [`super::resolution`].
     pub timing_resolution: f64,
-    /// The averaging window used (s): the configured one, widened for
-    /// coarse encoders ([`super::resolution::smoothing_window`]).
-    pub smoothing: f64,
 }
 
 /// Predicted body velocities over an interval: forward V, lateral L (m/s) and
@@ -145,7 +142,6 @@ impl Replay {
             right,
             left,
             timing_resolution,
-            smoothing,
         }
     }
 

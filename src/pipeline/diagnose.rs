@@ -85,7 +85,7 @@ pub fn run(job: &DiagnoseJob) -> Result<Diagnosis, PipelineError> {
             nominal.drop_unused_wheel_keys(&mut d.assumptions, values);
             nominal.state_prior(&mut d.assumptions, &prior, cfg.icp.prior, wheels);
             state_instrument(&mut d.assumptions, &cfg.diagnose.instrument);
-            state_latency_floor(&mut d.assumptions, &rec, &cfg.diagnose);
+            state_timing(&mut d.assumptions, &rec, &cfg.diagnose);
             d.wheel_source = (rec.wheels.len() >= 2).then(|| {
                 super::wheels::describe(&read, &nominal, rec.wheels.len(), rec.wheel_values)
             });
@@ -139,7 +139,7 @@ fn state_instrument(
 
 /// States the wheel averaging window and the shortest latency the diagnosis
 /// names, and why.
-fn state_latency_floor(
+fn state_timing(
     a: &mut crate::assumptions::Assumptions,
     rec: &crate::recording::Recording,
     p: &diagnose::DiagnoseParams,
