@@ -379,6 +379,13 @@ mod tests {
         let still = [icp(0.02, 1.0, 0.0, 0.01), icp(0.02, 1.0, -0.3, 0.04)];
         let [floor, rate] = m.turn_floor(&still);
         assert!((floor - 0.003).abs() < 1e-12 && (rate - 0.3).abs() < 1e-12);
+        // The rotation is the pair's own: 1 rad/s over 4 ms (under the
+        // 5 mrad edge) takes the small rotations' cell, 0.04 + 2 · 0.02;
+        // a row of no length is left out whatever its information.
+        let short = [icp(0.004, 1.0, 1.0, 0.01), icp(0.0, 1.0, 3.0, 0.03)];
+        let [floor, rate] = m.turn_floor(&short);
+        assert!((floor - 0.08).abs() < 1e-12, "{floor}");
+        assert!((rate - 1.0).abs() < 1e-12, "{rate}");
         // Nothing turned, or the model off: no floor.
         assert_eq!(m.turn_floor(&[icp(0.02, 1.0, 0.0, 0.01)]), [0.0; 2]);
         let off = Instrument {
