@@ -26,7 +26,7 @@ mod tests;
 pub use estimate::{closed_form_start, estimate, estimate_with_laser, residual_scales};
 pub use intervals::{aggregate, IntervalBuilder, LaserMotion};
 pub use model::{inverse, oplus, Unknowns, P3};
-pub use report::{BatchEstimate, Valued};
+pub use report::{BatchEstimate, Correlation, LaserValued, Valued};
 
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};

@@ -528,7 +528,460 @@ fn hand_over_scales(robust: [f64; 3], widening: f64) -> [f64; 3] {
 
 #[cfg(test)]
 mod tests {
-    use super::hand_over_scales;
+    use super::*;
+    use crate::calib::synth::{generate, SynthData, SynthParams};
+    use crate::geom::{between, pose, xyt};
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    /// The scan matcher's σ's of a 1 s interval `[x m, y m, θ rad]`.
+    const SIGMA: [f64; 3] = [2e-3, 2e-3, 1e-3];
+
+    fn chair() -> DiffDrive {
+        DiffDrive {
+            r_right: 0.3210,
+            r_left: 0.3150,
+            wheel_base: 0.6600,
+        }
+    }
+
+    /// A 50 s run of `truth` (wheel clock = true time) and its scan
+    /// matcher's 1 s intervals on the laser's clock, which stamps each
+    /// instant `offset` s before the wheels do, the laser at `laser`
+    /// (base_from_laser): each interval's laser displacement is the true
+    /// base motion seen from the laser, `laser⁻¹ ⊕ B ⊕ laser`, with noise
+    /// of the σ's it states (seed 7).
+    fn stream(truth: DiffDrive, laser: P3, offset: f64) -> (SynthData, Vec<Interval>) {
+        let p = SynthParams {
+            duration: 50.0,
+            ..SynthParams::default()
+        };
+        let data = generate(&p, truth, 3);
+        let l = pose(laser[0], laser[1], laser[2]);
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+        let mut normal = || -> f64 { StandardNormal.sample(&mut rng) };
+        let intervals = (0..48)
+            .map(|k| {
+                let (t0, t1) = (k as f64, k as f64 + 1.0);
+                let at = |t: f64| data.reference.pose_at(t + offset).unwrap();
+                let b = between(&at(t0), &at(t1));
+                let d = xyt(&(l.inverse() * b * l));
+                Interval {
+                    s: [0, 1, 2].map(|i| d[i] + SIGMA[i] * normal()),
+                    cov: Some(Matrix3::from_diagonal(&Vector3::from(SIGMA.map(|x| x * x)))),
+                    duration: 1.0,
+                    wheels: WheelMotion::Span { t0, t1 },
+                }
+            })
+            .collect();
+        (data, intervals)
+    }
+
+    fn front(nominal: Option<DiffDrive>, stated: Option<P3>, mount: MountChoice) -> FrontEnd {
+        let p = OnlineParams {
+            mount,
+            ..OnlineParams::default()
+        };
+        let stated = stated.map(|l| (l, "robot file".to_string()));
+        FrontEnd::new(
+            &p,
+            &BatchParams::default(),
+            &CheckParams::default(),
+            nominal,
+            stated,
+        )
+    }
+
+    /// Runs the stream through `f`, draining after every interval; the
+    /// observations handed on, with the interval count when the filters
+    /// started.
+    fn run(f: &mut FrontEnd, data: &SynthData, ivs: &[Interval]) -> (Vec<Mounted>, Option<usize>) {
+        for w in &data.wheels {
+            f.push_wheel(w);
+        }
+        let (mut out, mut started_after) = (Vec::new(), None);
+        for (k, iv) in ivs.iter().enumerate() {
+            f.push_interval(iv.clone());
+            if f.started().is_some() && started_after.is_none() {
+                started_after = Some(k + 1);
+            }
+            f.drain(&mut |m| out.push(m));
+        }
+        (out, started_after)
+    }
+
+    fn rel(a: f64, b: f64) -> f64 {
+        (a / b - 1.0).abs()
+    }
+
+    #[test]
+    fn a_far_off_nominal_a_late_laser_and_a_wrong_mounting_are_found_after_the_warm_up() {
+        let truth = chair();
+        let laser = [0.30, -0.05, 0.04];
+        let (data, ivs) = stream(truth, laser, 0.2);
+        // Nominal radii 15 % over the truth, wheel base 15 % under; the
+        // mounting stated at the axle, turned the other way.
+        let nominal = DiffDrive {
+            r_right: 0.37,
+            r_left: 0.37,
+            wheel_base: 0.56,
+        };
+        let stated = [0.0, 0.0, -0.04];
+        let mut f = front(Some(nominal), Some(stated), MountChoice::Check);
+        let (out, started_after) = run(&mut f, &data, &ivs);
+        // The first fit is due when the intervals span the warm-up's 20 s.
+        assert_eq!(started_after, Some(20));
+        let s = *f.started().unwrap();
+        assert_eq!((s.t, s.from_warmup, s.search), (20.0, true, 0.1));
+        let k = s.centre;
+        for (e, t, n) in [
+            (k.r_right, truth.r_right, nominal.r_right),
+            (k.r_left, truth.r_left, nominal.r_left),
+            (k.wheel_base, truth.wheel_base, nominal.wheel_base),
+        ] {
+            assert!(rel(e, t) < 0.01, "start {e} against the truth {t}");
+            assert!(rel(n, t) > 0.1);
+        }
+        // The clock and the mounting, and the stated one reported as
+        // contradicted and replaced.
+        assert!(
+            (f.time_offset() - 0.2).abs() < 0.01,
+            "offset {}",
+            f.time_offset()
+        );
+        let l = f.laser();
+        assert!(
+            (l[0] - laser[0]).abs() < 0.02 && (l[1] - laser[1]).abs() < 0.02,
+            "{l:?}"
+        );
+        assert!((l[2] - laser[2]).abs() < 0.01, "{l:?}");
+        let r = f.report();
+        assert!(r.laser.contradicted);
+        assert_eq!(r.laser.source, "estimated");
+        let check = r.laser.check.unwrap();
+        assert!(
+            check.starts_with("the robot file mounting x 0.0000 m"),
+            "{check}"
+        );
+        assert!(
+            check.ends_with("contradicted: the estimate is used"),
+            "{check}"
+        );
+        assert!(r.laser.x.std > 0.0 && r.laser.x.std < 0.02);
+        assert_eq!(r.time_offset.source, "estimated");
+        assert_eq!(r.warmup.unwrap().from, "warm-up");
+        // Fits at 20 s, then every 15 s: 35 s; the stream ends at 48 s.
+        let at: Vec<f64> = r.solves.iter().map(|x| x.t).collect();
+        assert_eq!(at, [20.0, 35.0]);
+        assert!(r.solves.iter().all(|x| x.refused.is_none()));
+        // Every interval handed on once, in order, as a velocity observation
+        // on the laser's clock whose V and W are the truth's over the
+        // wheels' matching span (the mounting undone).
+        assert_eq!(out.len(), ivs.len());
+        for (k, m) in out.iter().enumerate() {
+            let Mounted::Observation(o) = m else {
+                panic!("a step for a timed interval");
+            };
+            assert_eq!((o.t0, o.t1), (k as f64, k as f64 + 1.0));
+            let (v, w) = data.mean_velocity(o.t0 + 0.2, o.t1 + 0.2);
+            assert!(
+                (o.v - v).abs() < 6.0 * o.sigma_v.max(1e-3),
+                "{k}: V {} against {v}",
+                o.v
+            );
+            assert!(
+                (o.w - w).abs() < 6.0 * o.sigma_w.max(1e-3),
+                "{k}: W {} against {w}",
+                o.w
+            );
+        }
+    }
+
+    #[test]
+    fn a_stated_mounting_the_stream_agrees_with_is_kept_and_one_it_contradicts_only_when_told() {
+        let truth = chair();
+        let laser = [0.30, -0.05, 0.04];
+        let (data, ivs) = stream(truth, laser, 0.0);
+        let mut f = front(Some(truth), Some(laser), MountChoice::Check);
+        run(&mut f, &data, &ivs);
+        assert_eq!(f.laser(), laser);
+        let r = f.report();
+        assert!(!r.laser.contradicted);
+        assert_eq!(r.laser.source, "robot file");
+        assert_eq!((r.laser.x.std, r.laser.yaw.std), (0.0, 0.0));
+        assert!(r
+            .laser
+            .check
+            .unwrap()
+            .ends_with("consistent: the stated one is kept"));
+        // Contradicted, but kept as configured.
+        let wrong = [0.0, 0.0, 0.0];
+        let mut f = front(Some(truth), Some(wrong), MountChoice::Stated);
+        run(&mut f, &data, &ivs);
+        assert_eq!(f.laser(), wrong);
+        let r = f.report();
+        assert!(r.laser.contradicted);
+        assert_eq!(r.laser.source, "robot file");
+        assert!(r
+            .laser
+            .check
+            .unwrap()
+            .ends_with("contradicted, but kept as configured ([calib.online] mount)"));
+        // Estimated, whatever is stated: no check is made.
+        let mut f = front(Some(truth), Some(laser), MountChoice::Estimate);
+        run(&mut f, &data, &ivs);
+        let r = f.report();
+        assert_eq!(
+            (r.laser.source.as_str(), r.laser.check),
+            ("estimated", None)
+        );
+        assert!((f.laser()[0] - laser[0]).abs() < 0.02);
+        // Nothing stated: the estimate.
+        let mut f = front(Some(truth), None, MountChoice::Check);
+        run(&mut f, &data, &ivs);
+        assert_eq!(f.report().laser.source, "estimated");
+        assert!((f.laser()[2] - laser[2]).abs() < 0.01);
+    }
+
+    #[test]
+    fn no_nominal_values_start_from_the_window_itself() {
+        let truth = chair();
+        let (data, ivs) = stream(truth, [0.3, 0.0, 0.0], 0.1);
+        let mut f = front(None, Some([0.3, 0.0, 0.0]), MountChoice::Check);
+        let (_, started_after) = run(&mut f, &data, &ivs);
+        assert_eq!(started_after, Some(20));
+        let k = f.started().unwrap().centre;
+        assert!(rel(k.r_right, truth.r_right) < 0.01, "{k:?}");
+        assert!(rel(k.wheel_base, truth.wheel_base) < 0.01, "{k:?}");
+    }
+
+    #[test]
+    fn failed_fits_are_retried_as_the_window_grows_then_the_nominal_starts_the_filters() {
+        // No wheel samples: every fit is refused. Intervals of 1 s from 0 s:
+        // a retry needs 3 s and a quarter more intervals (25, 32 (31.25),
+        // 40, 50, 63 (62.5), 79 (78.125)); at 90 s the warm-up has run out
+        // and the filters start from the nominal values with the wider
+        // search; then a fit every 15 s (94 s, 109 s).
+        let truth = chair();
+        let mut f = front(Some(truth), None, MountChoice::Check);
+        let mut started_at = None;
+        for k in 0..110 {
+            f.push_interval(Interval {
+                s: [0.1, 0.0, 0.01],
+                cov: Some(Matrix3::identity() * 1e-6),
+                duration: 1.0,
+                wheels: WheelMotion::Span {
+                    t0: k as f64,
+                    t1: k as f64 + 1.0,
+                },
+            });
+            if started_at.is_none() && f.started().is_some() {
+                started_at = Some(k + 1);
+            }
+        }
+        let r = f.report();
+        let at: Vec<f64> = r.solves.iter().map(|x| x.t).collect();
+        assert_eq!(at, [20.0, 25.0, 32.0, 40.0, 50.0, 63.0, 79.0, 94.0, 109.0]);
+        assert!(r.solves.iter().all(|x| x.refused.is_some()));
+        assert_eq!(started_at, Some(90));
+        let s = *f.started().unwrap();
+        assert_eq!(
+            (s.t, s.from_warmup, s.search, s.centre),
+            (90.0, false, 0.2, truth)
+        );
+        assert_eq!(r.warmup.unwrap().from, "nominal");
+        assert_eq!((f.time_offset(), f.laser()), (0.0, [0.0; 3]));
+        assert_eq!(r.time_offset.source, "default");
+        // Without nominal values nothing starts, and a stream that ends
+        // before the warm-up fits once more at its end.
+        let mut f = front(None, None, MountChoice::Check);
+        for k in 0..100 {
+            f.push_interval(Interval {
+                s: [0.1, 0.0, 0.01],
+                cov: None,
+                duration: 1.0,
+                wheels: WheelMotion::Span {
+                    t0: k as f64,
+                    t1: k as f64 + 1.0,
+                },
+            });
+        }
+        assert!(f.started().is_none());
+        let mut short = front(Some(truth), None, MountChoice::Check);
+        for k in 0..10 {
+            short.push_interval(Interval {
+                s: [0.1, 0.0, 0.01],
+                cov: Some(Matrix3::identity() * 1e-6),
+                duration: 1.0,
+                wheels: WheelMotion::Span {
+                    t0: k as f64,
+                    t1: k as f64 + 1.0,
+                },
+            });
+        }
+        assert!(short.report().solves.is_empty() && short.started().is_none());
+        short.finish();
+        assert_eq!(short.report().solves.len(), 1);
+        assert_eq!(short.started().unwrap().t, 10.0);
+        assert!(!short.started().unwrap().from_warmup);
+        let mut out = Vec::new();
+        short.drain(&mut |m| out.push(m));
+        assert_eq!(out.len(), 10);
+    }
+
+    #[test]
+    fn an_interval_is_handed_on_with_the_scaled_covariance_or_the_tuples_residuals() {
+        let mut f = front(None, None, MountChoice::Check);
+        f.scales = [2.0, 3.0, 4.0];
+        // Straight along the laser's x at the base origin: V is the
+        // displacement over 2 s, its σ twice the x σ over 2 s, W's four
+        // times the θ σ.
+        let cov = Matrix3::from_diagonal(&Vector3::new(1e-6, 4e-6, 9e-6));
+        let timed = Interval {
+            s: [0.4, 0.0, 0.0],
+            cov: Some(cov),
+            duration: 2.0,
+            wheels: WheelMotion::Span { t0: 1.0, t1: 3.0 },
+        };
+        let Some(Mounted::Observation(o)) = f.mounted(&timed, 1.0, 3.0) else {
+            panic!("no observation");
+        };
+        assert!((o.v - 0.2).abs() < 1e-12 && o.w.abs() < 1e-12);
+        assert!(
+            (o.sigma_v - 2.0 * 1e-3 / 2.0).abs() < 1e-12,
+            "{}",
+            o.sigma_v
+        );
+        assert!(
+            (o.sigma_w - 4.0 * 3e-3 / 2.0).abs() < 1e-12,
+            "{}",
+            o.sigma_w
+        );
+        // The laser 0.5 m ahead, turned by 0.1 rad: its own forward 0.4 m
+        // is 0.4 m at 0.1 rad to the base's heading, of which V takes the
+        // component along it.
+        f.laser = [0.5, 0.0, 0.1];
+        let Some(Mounted::Observation(o)) = f.mounted(&timed, 1.0, 3.0) else {
+            panic!("no observation");
+        };
+        assert!((o.v - 0.2 * 0.1f64.cos()).abs() < 1e-9, "{}", o.v);
+        // A tuple: wheel rates from its sub-steps over its span (right, then
+        // left), σ's from the residuals, none before a fit gave them.
+        f.laser = [0.0; 3];
+        let tuple = Interval {
+            s: [0.4, 0.0, 0.2],
+            cov: None,
+            duration: 2.0,
+            wheels: WheelMotion::Steps(vec![[0.1, 0.2], [0.3, 0.4]]),
+        };
+        assert_eq!(f.mounted(&tuple, 0.0, 2.0), None);
+        f.noise = Some([0.01, 0.02, 0.03]);
+        let Some(Mounted::Step(st)) = f.mounted(&tuple, 0.0, 2.0) else {
+            panic!("no step");
+        };
+        assert_eq!((st.t0, st.t1), (0.0, 2.0));
+        assert!((st.omega_right - 0.3).abs() < 1e-12 && (st.omega_left - 0.2).abs() < 1e-12);
+        let m = st.measurements();
+        assert_eq!(m.len(), 2);
+        assert_eq!(m[0].kind, Kind::V);
+        assert_eq!(m[1].kind, Kind::W);
+        assert!((m[1].value - 0.1).abs() < 1e-12 && (m[1].sigma - 0.015).abs() < 1e-12);
+        // No duration: nothing.
+        assert_eq!(f.mounted(&timed, 3.0, 3.0), None);
+    }
+
+    #[test]
+    fn the_mounting_is_a_mean_over_new_data_only() {
+        // Two fits of one unknown-yaw mounting: the first over 10 intervals,
+        // the second over 20 of which 10 are new, so it counts half. Yaw
+        // 3.1 and −3.1 rad (3.183 taken near the first): the mean
+        // (1e4 · 3.1 + 5e3 · 3.1832) / 1.5e4, not the wrapped −0.
+        let mut f = front(None, None, MountChoice::Check);
+        let v = |value: f64| Valued { value, std: 0.01 };
+        let estimate = |x: f64, yaw: f64| BatchEstimate {
+            r_right: v(0.3),
+            r_left: v(0.3),
+            wheel_base: v(0.6),
+            laser: crate::calib::batch::LaserValued {
+                x: v(x),
+                y: v(0.0),
+                yaw: v(yaw),
+            },
+            time_offset: None,
+            correlation: crate::calib::batch::Correlation {
+                names: Vec::new(),
+                matrix: Vec::new(),
+            },
+            observability: Default::default(),
+            closed_form: [0.0; 6],
+            intervals: 0,
+            dropped: 0,
+            chi2: 0.0,
+            dof: 0,
+            noise_sigma: None,
+            std_widening: 1.0,
+            notes: Vec::new(),
+            excitation: Default::default(),
+            covariance: nalgebra::DMatrix::identity(7, 7) * 1e-4,
+        };
+        for k in 0..10 {
+            f.window.push(span(k));
+        }
+        let (m, c) = f.mount_mean(&estimate(0.1, 3.1));
+        assert!((m[0] - 0.1).abs() < 1e-12 && (c[(0, 0)] - 1e-4).abs() < 1e-15);
+        for k in 10..20 {
+            f.window.push(span(k));
+        }
+        let (m, c) = f.mount_mean(&estimate(0.2, -3.1));
+        let second = -3.1 + std::f64::consts::TAU;
+        assert!(
+            (m[0] - (0.1 * 1e4 + 0.2 * 5e3) / 1.5e4).abs() < 1e-12,
+            "{m:?}"
+        );
+        assert!(
+            (m[2] - (3.1 * 1e4 + second * 5e3) / 1.5e4).abs() < 1e-12,
+            "{m:?}"
+        );
+        assert!((c[(0, 0)] - 1.0 / 1.5e4).abs() < 1e-15);
+        // The same window again: nothing new, nothing counted.
+        let (again, _) = f.mount_mean(&estimate(0.9, 0.0));
+        assert_eq!(again, m);
+    }
+
+    fn span(k: usize) -> Interval {
+        Interval {
+            s: [0.1, 0.0, 0.0],
+            cov: None,
+            duration: 1.0,
+            wheels: WheelMotion::Span {
+                t0: k as f64,
+                t1: k as f64 + 1.0,
+            },
+        }
+    }
+
+    #[test]
+    fn the_route_says_how_observations_were_made() {
+        let mut f = front(None, None, MountChoice::Check);
+        assert!(f.route().starts_with(
+            "scan-matched motions composed into intervals of at least 1 s or 0.3 rad, moved"
+        ));
+        assert!(f
+            .route()
+            .ends_with("of the last 120 s, first after 20 s and then every 15 s"));
+        f.p.interval_s = 0.0;
+        assert!(f
+            .route()
+            .starts_with("every scan-matched motion on its own, moved"));
+        f.push_interval(Interval {
+            wheels: WheelMotion::Steps(vec![[0.1, 0.1]]),
+            ..span(0)
+        });
+        assert!(f
+            .route()
+            .starts_with("one filter step per tuple (interval)"));
+    }
 
     #[test]
     fn the_filters_are_never_more_certain_than_the_fits_chi2() {
