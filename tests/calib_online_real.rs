@@ -131,20 +131,28 @@ fn mines_rover_every_online_method_agrees_with_the_batch_from_the_nominal_values
     );
 }
 
-/// The LEGO robot file with its kinematics replaced by `k` (m).
-fn lego_with(k: [f64; 3], path: &Path) {
-    let file = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scans/robots/lego-robot.toml"),
+/// The bundled robot file `robot`, and its lines without the radii and the
+/// wheel base.
+fn without_kinematics(robot: &str) -> (String, Vec<String>) {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scans/robots/{robot}.toml")),
     )
     .unwrap();
-    let kept: Vec<&str> = file
+    let kept = text
         .lines()
         .filter(|l| {
             !["r_right", "r_left", "wheel_base"]
                 .iter()
-                .any(|p| l.starts_with(p))
+                .any(|k| l.starts_with(k))
         })
+        .map(str::to_owned)
         .collect();
+    (text, kept)
+}
+
+/// The LEGO robot file with its kinematics replaced by `k` (m).
+fn lego_with(k: [f64; 3], path: &Path) {
+    let (_, kept) = without_kinematics("lego-robot");
     let head = format!(
         "r_right = {}\nr_left = {}\nwheel_base = {}\n",
         k[0], k[1], k[2]
@@ -336,18 +344,7 @@ fn robots_without_nominal_values_calibrate_from_scratch() {
         ("mines-rover", "mines-rover/exp1.mcap"),
     ] {
         let rec = data.join(rel);
-        let text = std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scans/robots/{robot}.toml")),
-        )
-        .unwrap();
-        let kept: Vec<&str> = text
-            .lines()
-            .filter(|l| {
-                !["r_right", "r_left", "wheel_base"]
-                    .iter()
-                    .any(|k| l.starts_with(k))
-            })
-            .collect();
+        let (text, kept) = without_kinematics(robot);
         assert_eq!(
             kept.len() + 3,
             text.lines().count(),
