@@ -191,4 +191,84 @@ mod tests {
         u.slide();
         assert_eq!(u.len(), 11);
     }
+
+    #[test]
+    fn forgets_before_a_change_and_reads_the_wheels_it_keeps() {
+        // Offsets up to 0.5 s: wheels kept from 1.5 s before the oldest
+        // interval (the sample before that bound too, for interpolation).
+        let mut w = GeometryWindow::new(100.0, 1000, -0.5);
+        for i in 0..200 {
+            let t = i as f64 * 0.1;
+            w.push_wheel(&WheelSample {
+                stamp: t,
+                left: t,
+                right: 2.0 * t,
+            });
+        }
+        // Untimed intervals are laid end to end by their durations.
+        let mut u = GeometryWindow::new(100.0, 1000, 0.0);
+        let tuple = |d: f64| Interval {
+            wheels: WheelMotion::Steps(vec![[0.1, 0.1]]),
+            duration: d,
+            ..span(0.0)
+        };
+        assert_eq!(u.push(tuple(0.5)), (0.0, 0.5));
+        assert_eq!(u.push(tuple(0.25)), (0.5, 0.75));
+        // Tuples carry their wheels: no track, whatever wheels there are.
+        u.push_wheel(&WheelSample {
+            stamp: 0.0,
+            left: 0.0,
+            right: 0.0,
+        });
+        u.push_wheel(&WheelSample {
+            stamp: 1.0,
+            left: 0.0,
+            right: 0.0,
+        });
+        assert!(u.problem().track.is_none());
+        for k in 0..10 {
+            assert_eq!(w.push(span(k as f64)), (k as f64, k as f64 + 1.0));
+        }
+        // Not sliding: nothing is forgotten for age, and every wheel sample
+        // from the start is kept.
+        assert_eq!(w.len(), 10);
+        assert_eq!(w.wheels.len(), 200);
+        // A change at 4.5 s: the intervals starting before it go (0..=4),
+        // the one starting at 5 s stays; wheels before 5 − 1.5 s go but
+        // the last sample before that bound.
+        w.forget_before(4.5);
+        assert_eq!(w.len(), 5);
+        assert_eq!(w.intervals[0].1, 5.0);
+        assert!(
+            (w.wheels[0].stamp - 3.4).abs() < 1e-9,
+            "{}",
+            w.wheels[0].stamp
+        );
+        let p = w.problem();
+        assert_eq!(p.intervals.len(), 5);
+        let track = p.track.unwrap();
+        assert_eq!(track.t.len(), w.wheels.len());
+        assert!((track.right[3] - 2.0 * track.t[3]).abs() < 1e-12);
+        assert!((track.left[3] - track.t[3]).abs() < 1e-12);
+        // A change after every interval's start leaves none, and the wheels
+        // as they were; an empty window reads nothing.
+        w.forget_before(100.0);
+        assert!(w.is_empty());
+        assert_eq!(w.problem().intervals.len(), 0);
+        // One wheel sample is no track.
+        let mut one = GeometryWindow::new(10.0, 10, 0.0);
+        one.push_wheel(&WheelSample {
+            stamp: 0.0,
+            left: 0.0,
+            right: 0.0,
+        });
+        one.push(span(0.0));
+        assert!(one.problem().track.is_none());
+        // Over the cap, the oldest go first even before sliding.
+        let mut cap = GeometryWindow::new(1000.0, 12, 0.0);
+        for k in 0..20 {
+            cap.push(span(k as f64));
+        }
+        assert_eq!((cap.len(), cap.intervals[0].1), (12, 8.0));
+    }
 }
