@@ -962,6 +962,38 @@ mod tests {
     }
 
     #[test]
+    fn motions_become_intervals_and_a_change_empties_the_window_before_it() {
+        // Ten scan pairs of 0.1 s from 500 s make one interval of 1 s.
+        let mut f = front(None, None, MountChoice::Check);
+        let motion = |k: usize| LaserMotion {
+            t0: 500.0 + 0.1 * k as f64,
+            t1: 500.0 + 0.1 * (k + 1) as f64,
+            s: [0.01, 0.0, 0.001],
+            cov: Matrix3::identity() * 1e-8,
+            valid: true,
+        };
+        for k in 0..9 {
+            f.push_motion(&motion(k));
+        }
+        assert_eq!(f.window.len(), 0);
+        f.push_motion(&motion(9));
+        assert_eq!(f.window.len(), 1);
+        let (_, t0, t1) = f.pending[0];
+        assert!((t0 - 500.0).abs() < 1e-9 && (t1 - 501.0).abs() < 1e-9);
+        // The warm-up counts from the stream's first interval (500 s), not
+        // from 0: the first fit at 520 s.
+        let mut g = front(Some(chair()), None, MountChoice::Check);
+        for k in 500..530 {
+            g.push_interval(span(k));
+        }
+        let at: Vec<f64> = g.report().solves.iter().map(|x| x.t).collect();
+        assert_eq!(at, [520.0, 525.0]);
+        // A change at 510.5 s: the intervals starting before it are gone.
+        g.changed_at(510.5);
+        assert_eq!(g.window.len(), 19);
+    }
+
+    #[test]
     fn the_route_says_how_observations_were_made() {
         let mut f = front(None, None, MountChoice::Check);
         assert!(f.route().starts_with(
