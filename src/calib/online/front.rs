@@ -875,18 +875,31 @@ mod tests {
             duration: 2.0,
             wheels: WheelMotion::Steps(vec![[0.1, 0.2], [0.3, 0.4]]),
         };
-        assert_eq!(f.mounted(&tuple, 0.0, 2.0), None);
+        assert_eq!(f.mounted(&tuple, 1.0, 3.0), None);
         f.noise = Some([0.01, 0.02, 0.03]);
-        let Some(Mounted::Step(st)) = f.mounted(&tuple, 0.0, 2.0) else {
+        let Some(Mounted::Step(st)) = f.mounted(&tuple, 1.0, 3.0) else {
             panic!("no step");
         };
-        assert_eq!((st.t0, st.t1), (0.0, 2.0));
+        assert_eq!((st.t0, st.t1), (1.0, 3.0));
         assert!((st.omega_right - 0.3).abs() < 1e-12 && (st.omega_left - 0.2).abs() < 1e-12);
         let m = st.measurements();
         assert_eq!(m.len(), 2);
         assert_eq!(m[0].kind, Kind::V);
         assert_eq!(m[1].kind, Kind::W);
         assert!((m[1].value - 0.1).abs() < 1e-12 && (m[1].sigma - 0.015).abs() < 1e-12);
+        // V's σ: straight, the x residual over 2 s; turned half round (the
+        // chord across the heading), the y residual times the arc's length
+        // over its chord, π/2.
+        let sigma_v = |s: P3| match f.mounted(&Interval { s, ..tuple.clone() }, 1.0, 3.0) {
+            Some(Mounted::Step(st)) => st.measurements()[0].sigma,
+            other => panic!("{other:?}"),
+        };
+        assert!((sigma_v([0.4, 0.0, 0.0]) - 0.01 / 2.0).abs() < 1e-12);
+        let half_round = sigma_v([0.0, 0.4, std::f64::consts::PI]);
+        assert!(
+            (half_round - std::f64::consts::FRAC_PI_2 * 0.02 / 2.0).abs() < 1e-9,
+            "{half_round}"
+        );
         // No duration: nothing.
         assert_eq!(f.mounted(&timed, 3.0, 3.0), None);
     }
