@@ -140,5 +140,9 @@ mod tests {
         let late = [(20.0, v(0.0, 0.01)), (35.0, v(-0.18, 0.004))];
         assert_eq!(OffsetReport::of(&late).unwrap().converged_s, None);
         assert!(OffsetReport::of(&[]).is_none());
+        // The tolerance is twice the last std plus 1 ms: 8.5 ms off a last
+        // fit of std 4 ms is within it (9 ms), so the first fit has settled.
+        let edge = [(20.0, v(-0.1715, 0.01)), (35.0, v(-0.180, 0.004))];
+        assert_eq!(OffsetReport::of(&edge).unwrap().converged_s, Some(20.0));
     }
 }

@@ -74,4 +74,30 @@ mod tests {
         assert!(velocity(2.0, 3.0, s, &cov, [0.0; 3]).unwrap().v < 0.0);
         assert!(velocity(2.0, 2.0, s, &cov, laser).is_none());
     }
+
+    #[test]
+    fn v_sigma_is_the_covariance_along_the_chord_times_the_arc_over_it() {
+        // A quarter turn in 1 s, the laser on the axle: the chord lies at
+        // 45° to the start heading, so its variance is
+        // ½ σ²x + σxy + ½ σ²y = (0.5 + 0.5 + 0.5) · 1e-4 with the
+        // correlated x and y below; the arc is π/4 / sin(π/4) = 1.1107 times
+        // the chord.
+        let q = std::f64::consts::FRAC_PI_2;
+        let s = crate::geom::xyt(&crate::geom::arc_increment(0.5, q, 1.0));
+        let cov = Matrix3::new(1e-4, 0.5e-4, 0.0, 0.5e-4, 1e-4, 0.0, 0.0, 0.0, 1e-6);
+        let o = velocity(0.0, 1.0, s, &cov, [0.0; 3]).unwrap();
+        assert!((o.v - 0.5).abs() < 1e-9 && (o.w - q).abs() < 1e-12, "{o:?}");
+        let expected = 1.110_720_7 * 1.5e-4f64.sqrt();
+        assert!(
+            (o.sigma_v - expected).abs() < 1e-8,
+            "{} against {expected}",
+            o.sigma_v
+        );
+        // Over 2 s, half the velocities and half their σ's.
+        let o2 = velocity(0.0, 2.0, s, &cov, [0.0; 3]).unwrap();
+        assert!((o2.sigma_v - expected / 2.0).abs() < 1e-8);
+        // No finite duration: nothing.
+        assert!(velocity(0.0, f64::INFINITY, s, &cov, [0.0; 3]).is_none());
+        assert!(velocity(1.0, 0.0, s, &cov, [0.0; 3]).is_none());
+    }
 }

@@ -236,7 +236,11 @@ mod tests {
         // A change at 4.5 s: the intervals starting before it go (0..=4),
         // the one starting at 5 s stays; wheels before 5 − 1.5 s go but
         // the last sample before that bound.
+        assert!(!w.is_empty());
         w.forget_before(4.5);
+        assert_eq!(w.len(), 5);
+        // A change at an interval's very start keeps that interval.
+        w.forget_before(5.0);
         assert_eq!(w.len(), 5);
         assert_eq!(w.intervals[0].1, 5.0);
         assert!(
@@ -255,6 +259,17 @@ mod tests {
         w.forget_before(100.0);
         assert!(w.is_empty());
         assert_eq!(w.problem().intervals.len(), 0);
+        // Two wheel samples are always kept, however old.
+        let mut old = GeometryWindow::new(10.0, 10, 0.0);
+        for i in 0..3 {
+            old.push_wheel(&WheelSample {
+                stamp: 0.1 * i as f64,
+                left: 0.0,
+                right: 0.0,
+            });
+        }
+        old.push(span(100.0));
+        assert_eq!(old.wheels.len(), 2);
         // One wheel sample is no track.
         let mut one = GeometryWindow::new(10.0, 10, 0.0);
         one.push_wheel(&WheelSample {
