@@ -554,16 +554,18 @@ impl Calibrator for ParticleFilter {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calib::change::DetectorParams;
     use crate::calib::params::NoiseParams;
     use crate::calib::steps::Kind;
+    use rand_distr::{Distribution, StandardNormal};
 
-    /// A plain filter of three particles placed by hand: no process noise,
-    /// no model σ, Gaussian likelihood, no observability scaling, no
-    /// Liu–West move, no resampling.
-    fn three(rr: [f64; 3], rl: [f64; 3], d: [f64; 3]) -> ParticleFilter {
-        let s = PfSettings {
+    /// The settings of a plain filter of `n` particles drawn in the
+    /// default ranges: no process noise, no model σ, Gaussian likelihood,
+    /// no observability scaling, no Liu–West move, no resampling.
+    fn plain(n: usize) -> PfSettings {
+        PfSettings {
             adaptive_pf: false,
-            particles: 3,
+            particles: n,
             seed: 1,
             resampler: Scheme::Systematic,
             trigger: Trigger::Neff,
@@ -583,8 +585,12 @@ mod tests {
             detector: None,
             per_step: false,
             ranges: Ranges::default(),
-        };
-        let mut f = ParticleFilter::new(&s);
+        }
+    }
+
+    /// A plain filter of three particles placed by hand.
+    fn three(rr: [f64; 3], rl: [f64; 3], d: [f64; 3]) -> ParticleFilter {
+        let mut f = ParticleFilter::new(&plain(3));
         f.p.rr = rr.to_vec();
         f.p.rl = rl.to_vec();
         f.p.d = d.to_vec();
@@ -660,5 +666,208 @@ mod tests {
         let bad = Matrix3::new(1e-6, 2e-6, 0.0, 2e-6, 1e-6, 0.0, 0.0, 0.0, 4e-6);
         let d = cholesky(&bad);
         assert_eq!(d, [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 2e-3]]);
+    }
+
+    /// `n` particles drawn in the default ranges, resampled at every step
+    /// with the Liu–West shrink `a`.
+    fn cloud(n: usize, a: f64) -> ParticleFilter {
+        let mut s = plain(n);
+        s.trigger = Trigger::Every;
+        s.noise.kernel_shrink = a;
+        ParticleFilter::new(&s)
+    }
+
+    fn mean_std(x: &[f64]) -> (f64, f64) {
+        let n = x.len() as f64;
+        let m = x.iter().sum::<f64>() / n;
+        let v = x.iter().map(|a| (a - m).powi(2)).sum::<f64>() / n;
+        (m, v.sqrt())
+    }
+
+    #[test]
+    fn the_velocity_model_s_variance_adds_to_the_measurement_s_once() {
+        // V measured at 0.47 ± 0.01 m/s, the model's σ_V 0.02 m/s per 0.02 s
+        // step: over a step of 0.02 s the likelihood's variance is
+        // 1e-4 + 4e-4; over 0.1 s the model's is (0.02/0.1)² of that,
+        // 1.6e-5, and the variance 1.16e-4.
+        for (dt, var) in [(0.02, 5e-4), (0.1, 1.16e-4)] {
+            let mut f = three([0.30, 0.32, 0.30], [0.30, 0.30, 0.30], [0.60, 0.60, 0.50]);
+            f.model_var = [4e-4, 0.0];
+            f.step(&CalibStep::new(0.0, dt, 2.0, 1.0).with(Kind::V, 0.47, 0.01));
+            let ll = |v: f64| -(v - 0.47f64).powi(2) / (2.0 * var);
+            let l = [ll(0.45), ll(0.47), ll(0.45)];
+            let z: f64 = l.iter().map(|x| x.exp()).sum();
+            let got = f.weights().normalized();
+            for k in 0..3 {
+                let w = l[k].exp() / z;
+                assert!(
+                    (got[k] - w).abs() < 1e-12,
+                    "dt {dt}, {k}: {} vs {w}",
+                    got[k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_random_walk_grows_per_root_second_and_the_wheel_base_s_by_its_observability() {
+        // Every particle at R 0.30 / 0.30, D 0.60; σ 1e-3 per √s; wheels at
+        // 2 and 1 rad/s turn the robot at (0.6 − 0.3)/0.6 = 0.5 rad/s, half
+        // the 1 rad/s at which D counts as observed. Over 0.25 s the radii
+        // spread by 1e-3 · 0.5 and D by half that; per step (the paper's),
+        // by 1e-3 and 0.5e-3.
+        for (per_step, sr) in [(false, 5e-4), (true, 1e-3)] {
+            let n = 20_000;
+            let mut f = cloud(n, 1.0);
+            f.trigger = Trigger::Neff;
+            f.per_step = per_step;
+            f.sigma = 1e-3;
+            f.observability_turn_rate = 1.0;
+            f.p.rr = vec![0.3; n];
+            f.p.rl = vec![0.3; n];
+            f.p.d = vec![0.6; n];
+            f.belief.mean = [0.3, 0.3, 0.6];
+            let e = f.step(&CalibStep::new(0.0, 0.25, 2.0, 1.0));
+            assert!(!e.resampled);
+            let (_, s_rr) = mean_std(&f.particles().rr);
+            let (_, s_rl) = mean_std(&f.particles().rl);
+            let (_, s_d) = mean_std(&f.particles().d);
+            for (got, want) in [(s_rr, sr), (s_rl, sr), (s_d, 0.5 * sr)] {
+                assert!(
+                    (got / want - 1.0).abs() < 0.03,
+                    "per step {per_step}: {got} against {want}"
+                );
+            }
+            assert!((e.std_r_right / sr - 1.0).abs() < 0.03);
+        }
+    }
+
+    #[test]
+    fn liu_west_resampling_keeps_the_belief_s_mean_and_spread() {
+        // A measured step weighs the cloud; the resampled and moved cloud
+        // (shrink 0.9: each particle drawn to 0.9 of its ancestor's offset
+        // from the mean, plus a Gaussian of √(1 − 0.81) of the belief's
+        // covariance) has the weighted belief's mean and std again, now
+        // with equal weights. Without the move (shrink 1) every particle
+        // is a copy of an ancestor.
+        let step = CalibStep::new(0.0, 0.1, 2.0, 1.0)
+            .with(Kind::V, 0.47, 0.005)
+            .with(Kind::W, 0.52, 0.05);
+        let n = 20_000;
+        let mut f = cloud(n, 0.9);
+        let e = f.step(&step);
+        assert!(e.resampled && f.particles().len() == n && !f.particles().is_empty());
+        let w = f.weights().normalized();
+        assert!(w.iter().all(|x| (x - 1.0 / n as f64).abs() < 1e-15));
+        for (x, m, sd) in [
+            (&f.particles().rr, e.r_right, e.std_r_right),
+            (&f.particles().rl, e.r_left, e.std_r_left),
+            (&f.particles().d, e.wheel_base, e.std_wheel_base),
+        ] {
+            let (gm, gs) = mean_std(x);
+            assert!(
+                (gm - m).abs() < 0.05 * sd,
+                "mean {gm} against {m} (std {sd})"
+            );
+            assert!((gs / sd - 1.0).abs() < 0.04, "std {gs} against {sd}");
+        }
+        // The prior's spread of R_R is (0.335 − 0.305)/√12 = 8.7 mm; the
+        // measurement narrowed it.
+        assert!(e.std_r_right < 0.8 * 0.03 / 12f64.sqrt());
+        let mut g = cloud(n, 1.0);
+        let before = g.particles().rr.clone();
+        g.step(&step);
+        assert!(g.particles().rr.iter().all(|x| before.contains(x)));
+        assert_eq!(g.particles().len(), n);
+    }
+
+    #[test]
+    fn the_change_detector_fires_after_a_step_of_the_radii_and_not_before() {
+        // A cloud within 0.3 % of R 0.30 / 0.30, D 0.60, 400 steps of 0.1 s
+        // measured there, then the right radius 3 % larger: the detector
+        // (the default settings) stays quiet on the first, fires on the
+        // second; with none configured, nothing fires.
+        let detector = crate::calib::change::ChangeParams::default().detector(0.3);
+        let run = |det: Option<DetectorParams>| {
+            let mut s = plain(2000);
+            s.neff_ratio = 0.5;
+            s.noise.kernel_shrink = 0.95;
+            s.noise.param_sigma = 1e-5;
+            s.detector = det;
+            s.ranges = Ranges {
+                r_right: [0.299, 0.301],
+                r_left: [0.299, 0.301],
+                wheel_base: [0.598, 0.602],
+            };
+            let mut f = ParticleFilter::new(&s);
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
+            let mut fired_at = Vec::new();
+            let mut quiet = 0.0f64;
+            for k in 0..800 {
+                let t = 0.1 * k as f64;
+                let rr = if k < 400 { 0.30 } else { 0.309 };
+                let (wr, wl) = (2.0 + (0.3 * t).sin(), 2.0 + (0.5 * t).cos());
+                let v = 0.5 * (rr * wr + 0.3 * wl);
+                let w = (rr * wr - 0.3 * wl) / 0.6;
+                let e1: f64 = StandardNormal.sample(&mut rng);
+                let e2: f64 = StandardNormal.sample(&mut rng);
+                let e = f.step(
+                    &CalibStep::new(t, t + 0.1, wr, wl)
+                        .with(Kind::V, v + 0.002 * e1, 0.002)
+                        .with(Kind::W, w + 0.005 * e2, 0.005),
+                );
+                if e.changed {
+                    fired_at.push(k);
+                }
+                if k == 399 {
+                    quiet = f.change_statistic();
+                }
+            }
+            (fired_at, f.jumps(), quiet)
+        };
+        let (fired, jumps, quiet) = run(Some(detector));
+        assert!(fired.iter().all(|&k| k >= 400), "fired at {fired:?}");
+        assert!(!fired.is_empty() && fired[0] < 450, "fired at {fired:?}");
+        assert_eq!(jumps, fired.len());
+        assert!(quiet > 0.0 && quiet < detector.threshold(), "{quiet}");
+        let (none, jumps, statistic) = run(None);
+        assert!(none.is_empty() && jumps == 0 && statistic == 0.0);
+    }
+
+    #[test]
+    fn farina_s_velocity_jitter_moves_v_and_w_before_they_are_weighed() {
+        // Every particle predicts V 0.45 m/s and W 0.5 rad/s (R 0.30 / 0.30,
+        // D 0.60, wheels at 2 and 1 rad/s); a jitter of 0.1 spreads them
+        // uniformly over ±0.1 (std 0.1/√3), and each weight is then the
+        // likelihood of its own jittered V and W.
+        let n = 20_000;
+        let mut f = ParticleFilter::new(&plain(n));
+        f.jitter = 0.1;
+        f.p.rr = vec![0.3; n];
+        f.p.rl = vec![0.3; n];
+        f.p.d = vec![0.6; n];
+        f.step(
+            &CalibStep::new(0.0, 0.1, 2.0, 1.0)
+                .with(Kind::V, 0.46, 0.05)
+                .with(Kind::W, 0.52, 0.1),
+        );
+        let (v, w) = (&f.particles().v, &f.particles().w);
+        assert!(v.iter().all(|x| (x - 0.45).abs() <= 0.1 + 1e-12));
+        assert!(w.iter().all(|x| (x - 0.5).abs() <= 0.1 + 1e-12));
+        let (mv, sv) = mean_std(v);
+        let (_, sw) = mean_std(w);
+        let uniform = 0.1 / 3f64.sqrt();
+        assert!((mv - 0.45).abs() < 0.002 && (sv / uniform - 1.0).abs() < 0.02);
+        assert!((sw / uniform - 1.0).abs() < 0.02);
+        let ll = |k: usize| -(v[k] - 0.46).powi(2) / 5e-3 - (w[k] - 0.52).powi(2) / 2e-2;
+        let wn = f.weights().normalized();
+        for k in [1, 100, 5000] {
+            let ratio = wn[k] / wn[0];
+            let want = (ll(k) - ll(0)).exp();
+            assert!(
+                (ratio / want - 1.0).abs() < 1e-9,
+                "{k}: {ratio} against {want}"
+            );
+        }
     }
 }
