@@ -870,4 +870,47 @@ mod tests {
             );
         }
     }
+
+    #[test]
+    fn the_adaptive_count_follows_the_radii_s_dispersion_and_the_cloud_is_shown_whole() {
+        // Fariña's rule: ceil(6 (σ_R + σ_L) / 1e-5 m) particles at each
+        // resampling, here within [10, 100 000]; the fixed rule keeps the
+        // count.
+        let step = CalibStep::new(0.0, 0.1, 2.0, 1.0)
+            .with(Kind::V, 0.47, 0.005)
+            .with(Kind::W, 0.52, 0.05);
+        let rules = |rule: CountRule| {
+            let mut s = plain(5000);
+            s.adaptive_pf = true;
+            s.trigger = Trigger::Every;
+            s.adaptive = Some(AdaptiveParams {
+                rule,
+                per_particle: 1e-5,
+                dispersion_sigmas: 6.0,
+                n_min: 10,
+                n_max: 100_000,
+                ..AdaptiveParams::default()
+            });
+            let mut f = ParticleFilter::new(&s);
+            let e = f.step(&step);
+            (e, f)
+        };
+        let (e, f) = rules(CountRule::Dispersion);
+        let want = (6.0 * (e.std_r_right + e.std_r_left) / 1e-5).ceil() as usize;
+        assert!(want > 1000 && want != 5000, "{want}");
+        assert_eq!(f.particles().len(), want);
+        assert_eq!(f.name(), "adaptive-pf");
+        let (_, fixed) = rules(CountRule::Fixed);
+        assert_eq!(fixed.particles().len(), 5000);
+        // The cloud of the radii with its weights, one per particle.
+        let c = f.cloud().unwrap();
+        assert_eq!(
+            (c.r_right.len(), c.r_left.len(), c.weights.len()),
+            (want, want, want)
+        );
+        assert_eq!(c.r_right, &f.particles().rr[..]);
+        assert_eq!(c.r_left, &f.particles().rl[..]);
+        assert!((c.weights.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+        assert_eq!(ParticleFilter::new(&plain(3)).name(), "pf");
+    }
 }
