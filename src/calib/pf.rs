@@ -740,6 +740,23 @@ mod tests {
             }
             assert!((e.std_r_right / sr - 1.0).abs() < 0.03);
         }
+        // D half observed also in the predicted W: with the belief at R
+        // 0.30 / 0.30, D 0.50 the wheels turn it at (0.6 − 0.3)/0.5 =
+        // 0.6 rad/s, observability 0.6, and each particle's W uses the
+        // wheel base 0.6 D + 0.4 · (0.5/0.6) (R_R + R_L).
+        let mut f = three([0.30, 0.32, 0.30], [0.30, 0.30, 0.30], [0.60, 0.60, 0.50]);
+        f.observability_turn_rate = 1.0;
+        f.belief.mean = [0.3, 0.3, 0.5];
+        f.step(&CalibStep::new(0.0, 0.1, 2.0, 1.0));
+        let want = [0.3 / 0.56, 0.34 / (0.36 + 0.4 / 1.2 * 0.62), 0.3 / 0.5];
+        for k in 0..3 {
+            let got = f.particles().w[k];
+            assert!(
+                (got - want[k]).abs() < 1e-12,
+                "{k}: W {got} against {}",
+                want[k]
+            );
+        }
     }
 
     #[test]
@@ -771,6 +788,12 @@ mod tests {
             );
             assert!((gs / sd - 1.0).abs() < 0.04, "std {gs} against {sd}");
         }
+        // Moved, no two particles share a value (resampling alone repeats
+        // about a third of them and more).
+        let mut rr = f.particles().rr.clone();
+        rr.sort_by(f64::total_cmp);
+        rr.dedup();
+        assert_eq!(rr.len(), n);
         // The prior's spread of R_R is (0.335 − 0.305)/√12 = 8.7 mm; the
         // measurement narrowed it.
         assert!(e.std_r_right < 0.8 * 0.03 / 12f64.sqrt());
@@ -778,6 +801,10 @@ mod tests {
         let before = g.particles().rr.clone();
         g.step(&step);
         assert!(g.particles().rr.iter().all(|x| before.contains(x)));
+        let mut copies = g.particles().rr.clone();
+        copies.sort_by(f64::total_cmp);
+        copies.dedup();
+        assert!(copies.len() < n * 2 / 3, "{} distinct", copies.len());
         assert_eq!(g.particles().len(), n);
     }
 
@@ -840,10 +867,15 @@ mod tests {
         // D 0.60, wheels at 2 and 1 rad/s); a jitter of 0.1 spreads them
         // uniformly over ±0.1 (std 0.1/√3), and each weight is then the
         // likelihood of its own jittered V and W.
+        // Every other particle has R_R 0.31 m and predicts V 0.46 m/s and
+        // W 0.5333 rad/s: its weight too is the likelihood of its own
+        // jittered V and W, not of its prediction.
         let n = 20_000;
         let mut f = ParticleFilter::new(&plain(n));
         f.jitter = 0.1;
-        f.p.rr = vec![0.3; n];
+        f.p.rr = (0..n)
+            .map(|k| if k % 2 == 0 { 0.30 } else { 0.31 })
+            .collect();
         f.p.rl = vec![0.3; n];
         f.p.d = vec![0.6; n];
         f.step(
@@ -852,12 +884,15 @@ mod tests {
                 .with(Kind::W, 0.52, 0.1),
         );
         let (v, w) = (&f.particles().v, &f.particles().w);
-        assert!(v.iter().all(|x| (x - 0.45).abs() <= 0.1 + 1e-12));
-        assert!(w.iter().all(|x| (x - 0.5).abs() <= 0.1 + 1e-12));
-        let (mv, sv) = mean_std(v);
-        let (_, sw) = mean_std(w);
+        let pv = |k: usize| if k % 2 == 0 { 0.45 } else { 0.46 };
+        let pw = |k: usize| if k % 2 == 0 { 0.5 } else { 0.32 / 0.6 };
+        let dv: Vec<f64> = (0..n).map(|k| v[k] - pv(k)).collect();
+        let dw: Vec<f64> = (0..n).map(|k| w[k] - pw(k)).collect();
+        assert!(dv.iter().chain(&dw).all(|x| x.abs() <= 0.1 + 1e-12));
+        let (mv, sv) = mean_std(&dv);
+        let (_, sw) = mean_std(&dw);
         let uniform = 0.1 / 3f64.sqrt();
-        assert!((mv - 0.45).abs() < 0.002 && (sv / uniform - 1.0).abs() < 0.02);
+        assert!(mv.abs() < 0.002 && (sv / uniform - 1.0).abs() < 0.02);
         assert!((sw / uniform - 1.0).abs() < 0.02);
         let ll = |k: usize| -(v[k] - 0.46).powi(2) / 5e-3 - (w[k] - 0.52).powi(2) / 2e-2;
         let wn = f.weights().normalized();
@@ -912,5 +947,6 @@ mod tests {
         assert_eq!(c.r_left, &f.particles().rl[..]);
         assert!((c.weights.iter().sum::<f64>() - 1.0).abs() < 1e-9);
         assert_eq!(ParticleFilter::new(&plain(3)).name(), "pf");
+        assert!(Particles::default().is_empty());
     }
 }
