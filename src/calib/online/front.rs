@@ -767,15 +767,7 @@ mod tests {
         let mut f = front(Some(truth), None, MountChoice::Check);
         let mut started_at = None;
         for k in 0..110 {
-            f.push_interval(Interval {
-                s: [0.1, 0.0, 0.01],
-                cov: Some(Matrix3::identity() * 1e-6),
-                duration: 1.0,
-                wheels: WheelMotion::Span {
-                    t0: k as f64,
-                    t1: k as f64 + 1.0,
-                },
-            });
+            f.push_interval(with_cov(k));
             if started_at.is_none() && f.started().is_some() {
                 started_at = Some(k + 1);
             }
@@ -797,28 +789,12 @@ mod tests {
         // before the warm-up fits once more at its end.
         let mut f = front(None, None, MountChoice::Check);
         for k in 0..100 {
-            f.push_interval(Interval {
-                s: [0.1, 0.0, 0.01],
-                cov: None,
-                duration: 1.0,
-                wheels: WheelMotion::Span {
-                    t0: k as f64,
-                    t1: k as f64 + 1.0,
-                },
-            });
+            f.push_interval(span(k));
         }
         assert!(f.started().is_none());
         let mut short = front(Some(truth), None, MountChoice::Check);
         for k in 0..10 {
-            short.push_interval(Interval {
-                s: [0.1, 0.0, 0.01],
-                cov: Some(Matrix3::identity() * 1e-6),
-                duration: 1.0,
-                wheels: WheelMotion::Span {
-                    t0: k as f64,
-                    t1: k as f64 + 1.0,
-                },
-            });
+            short.push_interval(with_cov(k));
         }
         assert!(short.report().solves.is_empty() && short.started().is_none());
         short.finish();
@@ -1004,6 +980,14 @@ mod tests {
         // A change at 510.5 s: the intervals starting before it are gone.
         g.changed_at(510.5);
         assert_eq!(g.window.len(), 19);
+    }
+
+    /// `span(k)` with the scan matcher's covariance.
+    fn with_cov(k: usize) -> Interval {
+        Interval {
+            cov: Some(Matrix3::identity() * 1e-6),
+            ..span(k)
+        }
     }
 
     #[test]
