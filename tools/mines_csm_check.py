@@ -31,6 +31,7 @@ tick check gives 1.054. Scans and wheels are paired by stamp, as the tick
 check pairs them (no time offset).
 """
 import argparse
+import bisect
 import json
 import math
 import os
@@ -72,11 +73,9 @@ def read(bag):
     return scans, wheels
 
 
-def wheels_at(wheels, t):
-    """Wheel angles linearly interpolated at t (held beyond the ends)."""
-    import bisect
-
-    ts = [w[0] for w in wheels]
+def wheels_at(wheels, ts, t):
+    """Wheel angles linearly interpolated at t (held beyond the ends); ts
+    are the wheels' stamps."""
     i = bisect.bisect_left(ts, t)
     if i == 0:
         return wheels[0][1:]
@@ -137,7 +136,8 @@ def session(bag, sm_tum, work):
     scans, wheels = read(bag)
     if len(scans) < 2 * WINDOW_SCANS or not wheels:
         sys.exit(f"{bag}: too few scans or no /joint_states")
-    angles = [wheels_at(wheels, t) for t, _ in scans]
+    ts = [w[0] for w in wheels]
+    angles = [wheels_at(wheels, ts, t) for t, _ in scans]
     odo = nominal_odometry(angles)
     log = work / (bag.stem + ".json")
     with open(log, "w") as f:
