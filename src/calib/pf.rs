@@ -670,13 +670,14 @@ mod tests {
 
     /// `n` particles drawn in the default ranges, resampled at every step
     /// with the Liu–West shrink `a`.
-    fn cloud(n: usize, a: f64) -> ParticleFilter {
+    fn resampling(n: usize, a: f64) -> ParticleFilter {
         let mut s = plain(n);
         s.trigger = Trigger::Every;
         s.noise.kernel_shrink = a;
         ParticleFilter::new(&s)
     }
 
+    /// Mean and (population) standard deviation.
     fn mean_std(x: &[f64]) -> (f64, f64) {
         let n = x.len() as f64;
         let m = x.iter().sum::<f64>() / n;
@@ -718,8 +719,7 @@ mod tests {
         // by 1e-3 and 0.5e-3.
         for (per_step, sr) in [(false, 5e-4), (true, 1e-3)] {
             let n = 20_000;
-            let mut f = cloud(n, 1.0);
-            f.trigger = Trigger::Neff;
+            let mut f = ParticleFilter::new(&plain(n));
             f.per_step = per_step;
             f.sigma = 1e-3;
             f.observability_turn_rate = 1.0;
@@ -771,7 +771,7 @@ mod tests {
             .with(Kind::V, 0.47, 0.005)
             .with(Kind::W, 0.52, 0.05);
         let n = 20_000;
-        let mut f = cloud(n, 0.9);
+        let mut f = resampling(n, 0.9);
         let e = f.step(&step);
         assert!(e.resampled && f.particles().len() == n && !f.particles().is_empty());
         let w = f.weights().normalized();
@@ -797,7 +797,7 @@ mod tests {
         // The prior's spread of R_R is (0.335 − 0.305)/√12 = 8.7 mm; the
         // measurement narrowed it.
         assert!(e.std_r_right < 0.8 * 0.03 / 12f64.sqrt());
-        let mut g = cloud(n, 1.0);
+        let mut g = resampling(n, 1.0);
         let before = g.particles().rr.clone();
         g.step(&step);
         assert!(g.particles().rr.iter().all(|x| before.contains(x)));
