@@ -134,3 +134,91 @@ impl Calibrator for AugmentedKf {
         "akf"
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calib::params::{NoiseParams, Ranges};
+
+    /// Radii 0.30 ± 0.01 m and wheel base 0.60 ± 0.10 m (uniform: variances
+    /// 1/30 000 and 1/300 m²), no random walk, the velocity model's σ_V
+    /// `model_v` per 0.02 s step, Gaussian likelihood, `w_obs` (rad/s) the
+    /// turn rate at which D counts as observed (0: always).
+    fn filter(model_v: f64, walk: f64, w_obs: f64) -> AugmentedKf {
+        AugmentedKf::new(&KalmanSettings {
+            noise: NoiseParams {
+                model_sigma_v: model_v,
+                model_sigma_w: 0.0,
+                kalman_param_sigma: walk,
+                robust_dof: 0.0,
+                observability_turn_rate: w_obs,
+                sigma_floor: 1e-9,
+                ..NoiseParams::default()
+            },
+            detector: None,
+            per_step: false,
+            ranges: Ranges {
+                r_right: [0.29, 0.31],
+                r_left: [0.29, 0.31],
+                wheel_base: [0.5, 0.7],
+            },
+        })
+    }
+
+    #[test]
+    fn one_measured_speed_moves_each_radius_by_its_share_of_the_prediction_s_variance() {
+        // Wheels at 2 and 1 rad/s: V = (2 R_R + R_L)/2 = 0.45 m/s, whose
+        // variance is (1² + 0.5²)/30 000 = 4.1667e-5 m²/s², plus the model's
+        // 0.005² = 2.5e-5; with the measurement's 0.01² the innovation's is
+        // 1.6667e-4. V measured 0.02 m/s over: R_R gains 1/30 000 / 1.6667e-4
+        // = 0.2 of it, R_L 0.1; D, which V does not see, stays; V itself
+        // moves by (4.1667e-5 + 2.5e-5) / 1.6667e-4 = 0.4; R_R's variance
+        // keeps 1 − 0.2 of itself.
+        let mut f = filter(0.005, 0.0, 0.0);
+        let e = f.step(&CalibStep::new(0.0, 0.02, 2.0, 1.0).with(Kind::V, 0.47, 0.01));
+        assert!((e.r_right - 0.304).abs() < 1e-12, "{}", e.r_right);
+        assert!((e.r_left - 0.302).abs() < 1e-12, "{}", e.r_left);
+        assert!((e.wheel_base - 0.6).abs() < 1e-12);
+        assert!((e.v - 0.458).abs() < 1e-12, "{}", e.v);
+        assert!((e.std_r_right - (0.8f64 / 30_000.0).sqrt()).abs() < 1e-12);
+        assert!((e.std_wheel_base - (1.0f64 / 300.0).sqrt()).abs() < 1e-12);
+        assert_eq!(f.name(), "akf");
+    }
+
+    #[test]
+    fn a_measured_turn_rate_moves_the_wheel_base_by_its_share() {
+        // W = (2 R_R − R_L)/D = 0.5 rad/s; its Jacobian (2, −1, −0.5)/0.6,
+        // so its variance is (4 + 1)/0.36/30 000 + 0.25/0.36/300 =
+        // 2.7778e-3, 5.2778e-3 with the measurement's 0.05². W measured
+        // 0.05 over: D moves by −(0.5/0.6/300) / 5.2778e-3 · 0.05.
+        let mut f = filter(0.0, 0.0, 0.0);
+        let e = f.step(&CalibStep::new(0.0, 0.02, 2.0, 1.0).with(Kind::W, 0.55, 0.05));
+        let s = 5.0 / 0.36 / 30_000.0 + 0.25 / 0.36 / 300.0 + 0.0025;
+        let d = 0.6 - (0.5 / 0.6 / 300.0) / s * 0.05;
+        assert!(
+            (e.wheel_base - d).abs() < 1e-12,
+            "{} against {d}",
+            e.wheel_base
+        );
+        assert!((e.r_right - (0.3 + (2.0 / 0.6 / 30_000.0) / s * 0.05)).abs() < 1e-12);
+        assert!((e.r_left - (0.3 - (1.0 / 0.6 / 30_000.0) / s * 0.05)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_parameters_walk_per_root_second_and_the_wheel_base_by_its_observability() {
+        // σ 1e-3 per √s over 0.25 s adds 2.5e-7 m² to each radius; the
+        // wheels turn the robot at 0.5 rad/s, half the 1 rad/s at which D is
+        // observed, so D's walk is a quarter of that.
+        let mut f = filter(0.0, 1e-3, 1.0);
+        let e = f.step(&CalibStep::new(0.0, 0.25, 2.0, 1.0));
+        let grew = |std: f64, prior: f64| std * std - prior;
+        assert!((grew(e.std_r_right, 1.0 / 30_000.0) - 2.5e-7).abs() < 1e-15);
+        assert!((grew(e.std_r_left, 1.0 / 30_000.0) - 2.5e-7).abs() < 1e-15);
+        assert!((grew(e.std_wheel_base, 1.0 / 300.0) - 0.25 * 2.5e-7).abs() < 1e-15);
+        // Per step (the paper's), the whole σ² each step.
+        let mut g = filter(0.0, 1e-3, 0.0);
+        g.per_step = true;
+        let e = g.step(&CalibStep::new(0.0, 0.25, 2.0, 1.0));
+        assert!((grew(e.std_r_right, 1.0 / 30_000.0) - 1e-6).abs() < 1e-15);
+    }
+}
