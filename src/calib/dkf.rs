@@ -239,4 +239,94 @@ mod tests {
         // The negative control: ungated, the same bound fails.
         assert!(moved[1] > 3.0, "ungated: R moved only {} σ", moved[1]);
     }
+
+    /// Radii 0.30 ± 0.01 m and wheel base 0.60 ± 0.10 m (variances
+    /// 1/30 000 and 1/300 m²); the state filter's prior σ 0.01 m/s and
+    /// 0.05 rad/s; no model σ, gate or Student-t; `walk` the parameters' σ
+    /// per √s, `w_obs` the turn rate at which D counts as observed.
+    fn hand(walk: f64, w_obs: f64) -> DualKf {
+        DualKf::new(&crate::calib::params::KalmanSettings {
+            noise: crate::calib::params::NoiseParams {
+                kalman_velocity_sigma: 0.01,
+                kalman_turn_sigma: 0.05,
+                kalman_param_sigma: walk,
+                kalman_gate: 0.0,
+                model_sigma_v: 0.0,
+                model_sigma_w: 0.0,
+                robust_dof: 0.0,
+                observability_turn_rate: w_obs,
+                sigma_floor: 1e-9,
+                ..Default::default()
+            },
+            detector: None,
+            per_step: false,
+            ranges: Ranges {
+                r_right: [0.29, 0.31],
+                r_left: [0.29, 0.31],
+                wheel_base: [0.5, 0.7],
+            },
+        })
+    }
+
+    #[test]
+    fn the_state_filter_s_speed_observes_the_parameters_by_hand() {
+        // Wheels at 2 and 1 rad/s predict V 0.45 m/s. The state filter
+        // (prior 1e-4, measurement 0.01² = 1e-4) takes half of the 0.02
+        // innovation: V 0.46, variance 5e-5 = 1.5/30 000. The parameter
+        // filter reads that V against (2 R_R + R_L)/2, whose variance is
+        // 1.25/30 000: R_R gains 1/2.75 = 4/11 of the 0.01, R_L 2/11, D
+        // nothing; R_R keeps 7/11 of its variance.
+        let mut f = hand(0.0, 0.0);
+        let e = f.step(&CalibStep::new(0.0, 0.02, 2.0, 1.0).with(Kind::V, 0.47, 0.01));
+        assert!((e.v - 0.46).abs() < 1e-12, "{}", e.v);
+        assert!(
+            (e.r_right - (0.3 + 0.04 / 11.0)).abs() < 1e-12,
+            "{}",
+            e.r_right
+        );
+        assert!(
+            (e.r_left - (0.3 + 0.02 / 11.0)).abs() < 1e-12,
+            "{}",
+            e.r_left
+        );
+        assert!((e.wheel_base - 0.6).abs() < 1e-12);
+        assert!((e.std_r_right - (7.0 / 11.0 / 30_000.0f64).sqrt()).abs() < 1e-12);
+        assert_eq!(f.name(), "dkf");
+    }
+
+    #[test]
+    fn the_state_filter_s_turn_rate_observes_the_wheel_base_by_hand() {
+        // W predicted 0.5 rad/s; the state filter (prior and measurement
+        // 0.05²) takes half of the 0.05: W 0.525, variance 1.25e-3. Its
+        // Jacobian (2, −1, −0.5)/0.6: predicted variance
+        // 5/0.36/30 000 + 0.25/0.36/300; D moves by −(0.5/0.6/300) over that
+        // plus 1.25e-3, times 0.025.
+        let mut f = hand(0.0, 0.0);
+        let e = f.step(&CalibStep::new(0.0, 0.02, 2.0, 1.0).with(Kind::W, 0.55, 0.05));
+        let s = 5.0 / 0.36 / 30_000.0 + 0.25 / 0.36 / 300.0 + 1.25e-3;
+        let d = 0.6 - (0.5 / 0.6 / 300.0) / s * 0.025;
+        assert!((e.w - 0.525).abs() < 1e-12, "{}", e.w);
+        assert!(
+            (e.wheel_base - d).abs() < 1e-12,
+            "{} against {d}",
+            e.wheel_base
+        );
+        assert!((e.r_left - (0.3 - (1.0 / 0.6 / 30_000.0) / s * 0.025)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_parameters_walk_per_root_second_and_the_wheel_base_by_its_observability() {
+        // σ 1e-3 per √s over 0.25 s adds 2.5e-7 m²; the robot turns at half
+        // the turn rate that observes D, so D's walk is a quarter of it;
+        // per step, the whole 1e-6.
+        let grew = |std: f64, prior: f64| std * std - prior;
+        let mut f = hand(1e-3, 1.0);
+        let e = f.step(&CalibStep::new(0.0, 0.25, 2.0, 1.0));
+        assert!((grew(e.std_r_left, 1.0 / 30_000.0) - 2.5e-7).abs() < 1e-15);
+        assert!((grew(e.std_wheel_base, 1.0 / 300.0) - 0.25 * 2.5e-7).abs() < 1e-15);
+        let mut g = hand(1e-3, 0.0);
+        g.per_step = true;
+        let e = g.step(&CalibStep::new(0.0, 0.25, 2.0, 1.0));
+        assert!((grew(e.std_r_right, 1.0 / 30_000.0) - 1e-6).abs() < 1e-15);
+    }
 }
