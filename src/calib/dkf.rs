@@ -329,4 +329,22 @@ mod tests {
         let e = g.step(&CalibStep::new(0.0, 0.25, 2.0, 1.0));
         assert!((grew(e.std_r_right, 1.0 / 30_000.0) - 1e-6).abs() < 1e-15);
     }
+
+    #[test]
+    fn a_student_t_weight_spares_the_filter_an_outlier_and_not_a_fit() {
+        // With 4 degrees of freedom a V half a σ from the prediction moves
+        // R_R as the Gaussian update does, within 2 %; one 20 σ off moves it
+        // less than a fifth as far.
+        let moved = |dof: f64, z: f64| {
+            let mut f = hand(0.0, 0.0);
+            f.dof = dof;
+            let e = f.step(&CalibStep::new(0.0, 0.02, 2.0, 1.0).with(Kind::V, z, 0.01));
+            e.r_right - 0.3
+        };
+        let near = 0.45 + 0.005;
+        assert!((moved(4.0, near) / moved(0.0, near) - 1.0).abs() < 0.02);
+        let far = 0.45 + 0.2;
+        assert!(moved(4.0, far) < 0.2 * moved(0.0, far));
+        assert!(moved(4.0, far) > 0.0);
+    }
 }
