@@ -292,6 +292,26 @@ mod tests {
         assert!((e.wheel_base - 0.6).abs() < 1e-12);
         assert!((e.std_r_right - (7.0 / 11.0 / 30_000.0f64).sqrt()).abs() < 1e-12);
         assert_eq!(f.name(), "dkf");
+        // The residual, 0.01 against σ √(2.75/30 000) = 0.0096, lies inside
+        // a 3 σ gate: the same update.
+        let mut g = hand(0.0, 0.0);
+        g.gate = 3.0;
+        let e = g.step(&CalibStep::new(0.0, 0.02, 2.0, 1.0).with(Kind::V, 0.47, 0.01));
+        assert!(
+            (e.r_right - (0.3 + 0.04 / 11.0)).abs() < 1e-12,
+            "{}",
+            e.r_right
+        );
+        // The velocity model's σ_V 0.005 per 0.02 s adds 0.75/30 000 to
+        // the parameter filter's measurement: R_R gains 1/3.5 of the 0.01.
+        let mut m = hand(0.0, 0.0);
+        m.model_var = [2.5e-5, 0.0];
+        let e = m.step(&CalibStep::new(0.0, 0.02, 2.0, 1.0).with(Kind::V, 0.47, 0.01));
+        assert!(
+            (e.r_right - (0.3 + 0.01 / 3.5)).abs() < 1e-12,
+            "{}",
+            e.r_right
+        );
     }
 
     #[test]
