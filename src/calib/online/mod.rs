@@ -141,3 +141,51 @@ impl OnlineParams {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_setting_out_of_range_is_refused_by_name() {
+        assert_eq!(OnlineParams::default().validate(), Ok(()));
+        let bad = |f: fn(&mut OnlineParams)| {
+            let mut p = OnlineParams::default();
+            f(&mut p);
+            p.validate().unwrap_err()
+        };
+        let interval = "online.interval_s must be ≥ 0 and online.interval_rad > 0";
+        assert_eq!(bad(|p| p.interval_s = -0.1), interval);
+        assert_eq!(bad(|p| p.interval_s = f64::NAN), interval);
+        assert_eq!(bad(|p| p.interval_rad = 0.0), interval);
+        let warmup = "online.warmup_s must be ≥ 0 and ≤ online.warmup_max_s";
+        assert_eq!(bad(|p| p.warmup_s = -1.0), warmup);
+        assert_eq!(bad(|p| p.warmup_max_s = 19.0), warmup);
+        assert_eq!(bad(|p| p.warmup_max_s = f64::INFINITY), warmup);
+        let times = "online.retry_s, window_s and resolve_s must be > 0 s";
+        assert_eq!(bad(|p| p.retry_s = 0.0), times);
+        assert_eq!(bad(|p| p.window_s = 0.0), times);
+        assert_eq!(bad(|p| p.resolve_s = -1.0), times);
+        assert_eq!(
+            bad(|p| p.max_intervals = 9),
+            "online.max_intervals must be at least 10"
+        );
+        let prob = "online.mount_probability must be in (0, 1)";
+        assert_eq!(bad(|p| p.mount_probability = 0.0), prob);
+        assert_eq!(bad(|p| p.mount_probability = 1.0), prob);
+        let search = "online.search_warm and search_nominal must be in (0, 1)";
+        assert_eq!(bad(|p| p.search_warm = 0.0), search);
+        assert_eq!(bad(|p| p.search_nominal = 1.0), search);
+        assert_eq!(bad(|p| p.search_warm = f64::NAN), search);
+        // On the edges that are allowed.
+        let mut edge = OnlineParams {
+            interval_s: 0.0,
+            warmup_s: 0.0,
+            max_intervals: 10,
+            ..OnlineParams::default()
+        };
+        assert_eq!(edge.validate(), Ok(()));
+        edge.warmup_s = edge.warmup_max_s;
+        assert_eq!(edge.validate(), Ok(()));
+    }
+}
