@@ -44,6 +44,8 @@ from pathlib import Path
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
+import csm_export  # this folder's: the CSM log records the benchmark runs use
+
 NOMINAL_RADIUS_M = 0.077  # mines.py: WheeledVehicle(77, 165)
 NOMINAL_BASE_M = 0.330
 LASER_X_M = 0.145  # the bags' /tf_static, mines.py's URG04LX(70, 145)
@@ -100,22 +102,6 @@ def nominal_odometry(angles):
     return poses
 
 
-def csm_record(t, m, odo):
-    n = len(m.ranges)
-    theta = [m.angle_min + i * m.angle_increment for i in range(n)]
-    valid = [int(math.isfinite(r) and m.range_min <= r <= m.range_max) for r in m.ranges]
-    return {
-        "nrays": n,
-        "min_theta": theta[0],
-        "max_theta": theta[-1],
-        "theta": theta,
-        "readings": [float(r) if v else -1.0 for r, v in zip(m.ranges, valid)],
-        "valid": valid,
-        "odometry": [odo[0], odo[1], math.remainder(odo[2], 2 * math.pi)],
-        "timestamp": [int(t), int(round((t - int(t)) * 1e6))],
-    }
-
-
 def read_tum(path):
     """Poses (x, y, yaw) of a TUM file, in its order."""
     rows = []
@@ -139,10 +125,14 @@ def session(bag, sm_tum, work):
     ts = [w[0] for w in wheels]
     angles = [wheels_at(wheels, ts, t) for t, _ in scans]
     odo = nominal_odometry(angles)
+    # The scans in CSM's log format as csm_export.py writes them, each with
+    # the nominal odometry at its own stamp.
+    ns = [csm_export.stamp(m.header) for _, m in scans]
+    odom = [(t, *o) for t, o in zip(ns, odo)]
     log = work / (bag.stem + ".json")
     with open(log, "w") as f:
-        for (t, m), o in zip(scans, odo):
-            f.write(json.dumps(csm_record(t, m, o)) + "\n")
+        for t, (_, m) in zip(ns, scans):
+            f.write(json.dumps(csm_export.record(t, m, odom, ns)) + "\n")
     tum = work / (bag.stem + ".tum")
     with open(tum, "w") as out, open(work / (bag.stem + ".err"), "w") as err:
         subprocess.run(
