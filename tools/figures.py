@@ -23,6 +23,7 @@ or --only):
   what-changed      the changes named at each firing on 25 simulated runs
   real-diagnosis    the diagnosis of the real recordings
   real-firings      the firings of the real recordings and the bundled one
+  null-firings      changes reported and re-spreads on 60 simulated null runs
   table-ii-scans    [Farina, Table II] on simulated scans through ICP, 30 runs
                     (slow: ~1.5 min; its time per step is not compared)
   blind-suite       the blind diagnosis suite, 125 simulated runs (slow: ~4 min)
@@ -70,6 +71,7 @@ BLOCKS = {
     "what-changed": (changes.block_what_changed, False),
     "real-diagnosis": (diagnosis.block_real_diagnosis, False),
     "real-firings": (changes.block_real_firings, False),
+    "null-firings": (changes.block_null_firings, False),
     "table-ii-scans": (calibration.block_table_ii_scans, True),
     "blind-suite": (diagnosis.block_blind_suite, True),
     "independent-laws": (diagnosis.block_independent_laws, True),

@@ -110,13 +110,13 @@ impl Calibrator for AugmentedKf {
         for i in 2..5 {
             self.x[i] = self.x[i].max(1e-6);
         }
-        let mut changed = false;
+        let mut fired = None;
         if let Some(c) = &mut self.change {
             let theta = Vector3::new(self.x[2], self.x[3], self.x[4]);
             let mut pt = self.p.fixed_view::<3, 3>(2, 2).into_owned();
-            if c.end_step(&theta, &mut pt) {
+            fired = c.end_step(&theta, &mut pt);
+            if fired.is_some() {
                 self.p.fixed_view_mut::<3, 3>(2, 2).copy_from(&pt);
-                changed = true;
             }
         }
         let mut est = kalman_estimate(
@@ -126,7 +126,7 @@ impl Calibrator for AugmentedKf {
             [self.x[0], self.x[1]],
             self.q[2],
         );
-        est.changed = changed;
+        super::change::Firing::mark(fired, &mut est);
         est
     }
 

@@ -121,10 +121,10 @@ impl Calibrator for DualKf {
         }
         self.p_theta = 0.5 * (self.p_theta + self.p_theta.transpose());
         self.theta = self.theta.map(|t| t.max(1e-6));
-        let changed = self
+        let fired = self
             .change
             .as_mut()
-            .is_some_and(|c| c.end_step(&self.theta, &mut self.p_theta));
+            .and_then(|c| c.end_step(&self.theta, &mut self.p_theta));
         let mut est = kalman_estimate(
             s.t1,
             self.theta.into(),
@@ -136,7 +136,7 @@ impl Calibrator for DualKf {
             [x[0], x[1]],
             self.q_theta,
         );
-        est.changed = changed;
+        super::change::Firing::mark(fired, &mut est);
         est
     }
 

@@ -119,6 +119,7 @@ pub(super) fn kalman_estimate(
         resampled: false,
         weights_reset: false,
         changed: false,
+        respread: false,
     }
 }
 

@@ -104,9 +104,14 @@ pub struct Estimate {
     /// Whether every weight underflowed and the weights were reset.
     #[serde(skip)]
     pub weights_reset: bool,
-    /// Whether the change detector fired at this step ([`ChangeDetector`]).
+    /// Whether the change detector fired at this step on a change
+    /// ([`ChangeDetector`], [`change::Jump::settled`]).
     #[serde(skip)]
     pub changed: bool,
+    /// Whether the change detector fired at this step against a belief
+    /// still narrowing: the filter re-spread itself; not a change.
+    #[serde(skip)]
+    pub respread: bool,
 }
 
 impl Estimate {

@@ -35,6 +35,7 @@ impl Calibrator for Nominal {
             resampled: false,
             weights_reset: false,
             changed: false,
+            respread: false,
         }
     }
 

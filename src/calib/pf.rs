@@ -240,7 +240,7 @@ impl ParticleFilter {
             }
         }
         if let Some(det) = &mut self.change {
-            det.observe(s.dt(), &fused, &pred, [jv, jw]);
+            det.observe(s.dt(), &cov, &fused, &pred, [jv, jw]);
         }
         (u, w_seen)
     }
@@ -377,6 +377,7 @@ impl ParticleFilter {
             resampled: false,
             weights_reset: reset,
             changed: false,
+            respread: false,
         }
     }
 
@@ -533,7 +534,7 @@ impl Calibrator for ParticleFilter {
             self.resample(n_new, Some(spread));
             self.jumps += 1;
             est.resampled = true;
-            est.changed = true;
+            super::change::Firing::mark(Some(super::change::Firing::of(&jump)), &mut est);
         } else if self
             .trigger
             .fires(&self.weights, self.neff_ratio, self.max_weight_factor)

@@ -98,6 +98,12 @@ pub struct CalibSummary {
     /// command that ran; `diagnose::onset`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub changes: Vec<crate::effects::change::NamedChange>,
+    /// Times (s) at which the change detector fired against a belief still
+    /// narrowing ([`super::change::Jump::settled`] false): the filter
+    /// re-spread itself, as on a change, but no change of the robot is
+    /// reported for it.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub respreads_s: Vec<f64>,
 }
 
 /// Result of [`crate::calib::run()`].
@@ -171,6 +177,7 @@ impl CalibSummary {
             online: None,
             start: None,
             changes: Vec::new(),
+            respreads_s: Vec::new(),
             multipliers: Multipliers {
                 left_wheel_radius: ratio(final_params.r_left, nominal.r_left),
                 right_wheel_radius: ratio(final_params.r_right, nominal.r_right),

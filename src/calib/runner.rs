@@ -25,6 +25,8 @@ pub struct Runner {
     steps: usize,
     resets: usize,
     firings: usize,
+    /// Times (s) of the steps at which the detector fired as a re-spread.
+    respreads: Vec<f64>,
     last: Option<Estimate>,
 }
 
@@ -41,6 +43,7 @@ impl Runner {
             steps: 0,
             resets: 0,
             firings: 0,
+            respreads: Vec::new(),
             last: None,
         }
     }
@@ -63,7 +66,10 @@ impl Runner {
         let e = cal.step(s);
         self.total_s += t.elapsed().as_secs_f64();
         self.resets += e.weights_reset as usize;
-        self.firings += e.changed as usize;
+        self.firings += (e.changed || e.respread) as usize;
+        if e.respread {
+            self.respreads.push(e.t);
+        }
         let dt = s.t1 - s.t0.max(covered);
         if dt > 0.0 {
             self.pose *= e.drive().increment(s.omega_right * dt, s.omega_left * dt);
@@ -90,20 +96,23 @@ impl Runner {
         self.resets
     }
 
-    /// Steps at which the change detector fired.
+    /// Steps at which the change detector fired (on a change or as a
+    /// re-spread).
     pub fn firings(&self) -> usize {
         self.firings
     }
 
     /// The summary after the steps so far (the nominal parameters before any).
     pub fn summary(&self) -> CalibSummary {
-        CalibSummary::after(
+        let mut s = CalibSummary::after(
             self.name,
             self.last.as_ref(),
             self.nominal,
             self.steps,
             self.total_s,
-        )
+        );
+        s.respreads_s = self.respreads.clone();
+        s
     }
 }
 

@@ -295,6 +295,7 @@ mod tests {
             resampled: false,
             weights_reset: false,
             changed: false,
+            respread: false,
         }
     }
 

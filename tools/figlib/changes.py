@@ -5,6 +5,7 @@ import os
 
 from .calibration import calibrate
 from .common import ROOT, num, span
+from .instrument import wilson
 
 # (effect spec, unit, scale to it and decimals of the estimate); seeds 1-5,
 # 60 s of the corridor loop, the change at 30 s.
@@ -141,4 +142,62 @@ def block_real_firings(runner, csm):
             [f"{below} below the margin"] if below else [])
         cell = "; ".join(named) if named else "none" + (f": {', '.join(left)}" if left else "")
         rows.append(f"| {label} | {fired} | {cell} | {before} |")
+    return rows
+
+
+# Null runs: nothing changes; every scenario, seeds 1-5, at two lengths.
+NULL_SCENARIOS = ["hall", "corridor-loop", "square", "square-ccw", "figure-eight", "random-walk"]
+NULL_LENGTHS = ["60", "150"]
+
+
+def null_changes(runner, scenario, seed, secs):
+    """(`changes`, `respreads_s`) of `calibrate --json` (the default
+    Adaptive-PF) on a simulated run of `scenario` where nothing changes."""
+    name = f"null-firing-{scenario}-{seed}-{secs}"
+    bag = runner.path(f"{name}.mcap")
+    runner.run(["simulate", "--scenario", scenario, "--seed", seed, "--duration", secs,
+                "--out", bag])
+    out = json.loads(runner.run(["calibrate", "--input", bag, "--out", runner.path(name),
+                                 "--json"]))
+    return out.get("changes", []), out.get("respreads_s", [])
+
+
+def null_cell(runs):
+    """Runs with a change reported (their firings' times and what was
+    named), and runs whose filter re-spread itself (and when)."""
+    fired = [c for r, _ in runs for c in r]
+    cell = f"{sum(1 for r, _ in runs if r)} of {len(runs)}"
+    if fired:
+        named = [c["effect"] for c in fired if c["effect"] != "undetermined"]
+        cell += (f", at {', '.join(num(c['time_s'], 1) for c in fired)}; "
+                 + (", ".join(named) if named else "none named"))
+    spread = [t for _, r in runs for t in r]
+    cell += f" · {sum(1 for _, r in runs if r)} of {len(runs)}"
+    return cell + (f", at {', '.join(num(t, 1) for t in spread)}" if spread else "")
+
+
+def block_null_firings(runner, csm):
+    """Where nothing changed: per scenario and length, how many runs
+    reported a change (and when, and what), and how many re-spread their
+    filter (and when)."""
+    futures = {(sc, s, n): runner.pool.submit(null_changes, runner, sc, s, n)
+               for sc in NULL_SCENARIOS for s in SEEDS for n in NULL_LENGTHS}
+    rows = ["| scenario | " + " | ".join(f"{n} s: runs with a change reported · runs re-spread"
+                                         for n in NULL_LENGTHS) + " |",
+            "|---|" + "---|" * len(NULL_LENGTHS)]
+    quiet = {n: 0 for n in NULL_LENGTHS}
+    for sc in NULL_SCENARIOS:
+        cells = []
+        for n in NULL_LENGTHS:
+            runs = [futures[(sc, s, n)].result() for s in SEEDS]
+            quiet[n] += sum(1 for r, _ in runs if not r)
+            cells.append(null_cell(runs))
+        rows.append(f"| {sc} | " + " | ".join(cells) + " |")
+    total = len(NULL_SCENARIOS) * len(SEEDS)
+    cells = []
+    for n in NULL_LENGTHS:
+        lo, hi = wilson(quiet[n], total)
+        cells.append(f"{quiet[n]} of {total} report no change (95 % Wilson "
+                     f"{num(100 * lo, 1)}–{num(100 * hi, 1)} %)")
+    rows.append("| all | " + " | ".join(cells) + " |")
     return rows

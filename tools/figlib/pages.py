@@ -96,6 +96,17 @@ PAGES = {
         "simulated run with a radius step at 40 s.",
         "what-changed-at-each-firing",
     ),
+    "null-firings": (
+        "Changes reported where nothing changed (simulated)",
+        "Null runs of every scenario: `odocal simulate --scenario SC --seed S --duration L "
+        "--out x.mcap` (seeds 1–5, L = 60 and 150 s), then `odocal calibrate --input x.mcap "
+        "--out DIR --json` (the Adaptive-PF, its change detector and the mounting watch, "
+        "started from the front end's warm-up): the runs that reported a change (`changes`: "
+        "each firing's time and what was named there), and those whose filter re-spread "
+        "itself while converging (`respreads_s`: a firing against a belief still narrowing, "
+        "no change reported).",
+        "what-changed-at-each-firing",
+    ),
     "real-diagnosis": (
         "Diagnosis of the real recordings",
         "`odocal diagnose --measured REC --robot NAME --json`; held-out = the last 30 %; "
