@@ -352,6 +352,47 @@ mod tests {
     }
 
     #[test]
+    fn each_bound_and_shape_is_checked_on_its_own() {
+        let with = |f: &dyn Fn(&mut Instrument)| {
+            let mut m = Instrument::default();
+            f(&mut m);
+            m.validate()
+        };
+        // Two equal bounds are no bin; a bound not finite none either.
+        assert!(with(&|m| m.anisotropy_edges = vec![2.0, 2.0, 3.0]).is_err());
+        assert!(with(&|m| m.step_edges = vec![0.012, 0.012]).is_err());
+        assert!(with(&|m| m.rotation_edges = vec![0.002, 0.005, 0.01, 0.01]).is_err());
+        assert!(with(&|m| m.rotation_edges = vec![0.002, 0.005, 0.01, f64::INFINITY]).is_err());
+        // One row too many, or one row a cell short, each alone.
+        let e = with(&|m| m.forward.push(vec![[0.0, 0.0]; 3])).unwrap_err();
+        assert!(e.contains("forward needs 4 rows of 3 cells"), "{e}");
+        assert!(with(&|m| m.forward[2].pop().map_or((), |_| ())).is_err());
+        // A cell not finite, in the forward table or in place.
+        assert!(with(&|m| m.forward[0][1] = [f64::NAN, 0.0]).is_err());
+        assert!(with(&|m| m.turn_in_place[4] = [0.0, f64::INFINITY]).is_err());
+        assert!(with(&|m| m.turn[0] = [0.0, 0.0]).is_ok());
+        // The spreads allowed: 0 and more.
+        assert!(with(&|m| m.spreads = 0.0).is_ok());
+        for bad in [-0.5, f64::NAN, f64::INFINITY] {
+            let e = with(&|m| m.spreads = bad).unwrap_err();
+            assert!(e.contains("spreads"), "{bad}: {e}");
+        }
+        assert!(with(&|m| m.in_place_step = f64::INFINITY).is_err());
+        assert!(with(&|m| m.timing = f64::INFINITY).is_err());
+    }
+
+    #[test]
+    fn the_timing_floor_is_the_table_s_while_the_model_is_on() {
+        let m = Instrument::default();
+        assert_eq!(m.timing_floor(), 0.006);
+        let off = Instrument {
+            enabled: false,
+            ..m
+        };
+        assert_eq!(off.timing_floor(), 0.0);
+    }
+
+    #[test]
     fn the_turn_floor_weighs_each_pair_by_its_information_on_the_turn() {
         let m = Instrument {
             rotation_edges: vec![0.005],
