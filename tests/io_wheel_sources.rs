@@ -151,13 +151,19 @@ fn an_odometry_twist_calibrates_the_controllers_multipliers() {
         ("left_wheel_radius", rl / CTRL_RADIUS, 3e-3),
         ("wheel_separation", d / CTRL_SEPARATION, 3e-3),
     ];
-    for (key, truth, tol) in want {
-        let got = num(&m[key]);
-        assert!(
-            (got - truth).abs() < tol,
-            "{key}: {got:.5}, truth {truth:.5}"
-        );
-    }
+    let within = |got: &dyn Fn(&str) -> f64| -> Result<(), String> {
+        for (key, truth, tol) in want {
+            let g = got(key);
+            if (g - truth).abs() >= tol {
+                return Err(format!("{key}: {g:.5}, truth {truth:.5}"));
+            }
+        }
+        Ok(())
+    };
+    within(&|key| num(&m[key])).unwrap();
+    // The negative control: the controller's configured values (every
+    // multiplier 1) fail the same check.
+    assert!(within(&|_| 1.0).is_err());
     // The odometry's scales, by driving the controller with the true wheels:
     // a straight metre (each wheel turns 1/R_true) and an in-place turn.
     let reported_metre = CTRL_RADIUS * (1.0 / rr + 1.0 / rl) / 2.0;
@@ -169,6 +175,9 @@ fn an_odometry_twist_calibrates_the_controllers_multipliers() {
         (linear - 1.0 / reported_metre).abs() < 2e-3,
         "linear {linear}"
     );
+    // (An odometry taken as right in distance, scale 1, fails that bound;
+    // its turns here happen to be right within 0.3 %.)
+    assert!((1.0 - 1.0 / reported_metre).abs() > 2e-3);
     assert!(
         (angular - true_turn / reported_turn).abs() < 3e-3,
         "angular {angular}, truth {}",
