@@ -93,14 +93,20 @@ fn umbmark_correction_improves_fresh_runs() {
     assert!(figures[3].improvement > 10.0, "{}", figures[3].improvement);
     // After two passes the diameter ratio and the ratio b / r_mean that turns
     // depend on are recovered.
-    let k = figures[1].corrected;
-    assert!(
-        (k.r_right / k.r_left - truth.r_right / truth.r_left).abs() < 2e-4,
-        "{k:?}"
-    );
     let turn = |b: f64, rr: f64, rl: f64| b / (rr + rl);
-    let rel = turn(k.wheel_base, k.r_right, k.r_left)
-        / turn(truth.wheel_base, truth.r_right, truth.r_left)
-        - 1.0;
-    assert!(rel.abs() < 5e-4, "{rel}");
+    let recovered = |k: &DiffDrive| -> Result<(), String> {
+        let ratio = k.r_right / k.r_left - truth.r_right / truth.r_left;
+        let rel = turn(k.wheel_base, k.r_right, k.r_left)
+            / turn(truth.wheel_base, truth.r_right, truth.r_left)
+            - 1.0;
+        if ratio.abs() < 2e-4 && rel.abs() < 5e-4 {
+            Ok(())
+        } else {
+            Err(format!("{k:?}: ratio off by {ratio}, b / r_mean by {rel}"))
+        }
+    };
+    recovered(&figures[1].corrected).unwrap();
+    // The negative control: the nominal robot (ratio 1, b / r_mean 1.5 %
+    // short) fails the same check.
+    assert!(recovered(&NOMINAL).is_err());
 }
