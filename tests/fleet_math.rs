@@ -77,6 +77,10 @@ fn wear_is_flagged_with_its_rate() {
             let est = w.values[&format!("{side}_m_per_day")];
             assert!((est / rate - 1.0).abs() < 0.2, "seed {seed}: {side} {est}");
         }
+        // The negative control: the same seed's history without wear raises
+        // no alarm.
+        let flat = analyse_robot("chair", &history(seed, |_| (0.0, 0.0)), &p, [1.0; 3]);
+        assert!(flat.alarms.is_empty(), "seed {seed}: {:?}", flat.alarms);
     }
 }
 
@@ -92,6 +96,10 @@ fn a_step_is_flagged_on_its_day_and_is_not_wear() {
         assert_eq!(s.recording, "day3.mcap");
         assert!((s.values["r_right_step_m"] - 1.5e-3).abs() < 4.0 * SIGMA);
         assert!(!s.values.contains_key("r_left_step_m"), "{:?}", s.values);
+        // The negative control: the same seed's history without the step
+        // raises no alarm.
+        let flat = analyse_robot("chair", &history(seed, |_| (0.0, 0.0)), &p, [1.0; 3]);
+        assert!(flat.alarms.is_empty(), "seed {seed}: {:?}", flat.alarms);
     }
 }
 
