@@ -136,6 +136,22 @@ fn every_effect_is_named_estimated_within_20_percent_and_gains() {
             if let Err(m) = check(&d, &[e], &e.to_string()) {
                 failures.push(m);
             }
+            // The negative control: the same diagnosis with the effect named
+            // at a quarter of its estimate fails the same check.
+            let mut short = d.clone();
+            for c in &mut short.causes {
+                c.parameters.values_mut().for_each(|v| *v *= 0.25);
+            }
+            if short
+                .causes
+                .iter()
+                .any(|c| c.parameters.values().any(|v| *v != 0.0))
+            {
+                assert!(
+                    check(&short, &[e], "control").is_err(),
+                    "{e}: a quarter passes"
+                );
+            }
         }
     }
     assert_eq!(runs, 2 * EFFECT_NAMES.len());
