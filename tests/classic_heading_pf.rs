@@ -108,7 +108,15 @@ fn table_2_experiment_orders_the_scenarios_like_the_seed() {
         rows[2].error_percent < rows[1].error_percent,
         "heading fusion helps"
     );
-    assert!((params.k_left / p.truth.k_left - 1.0).abs() < 0.01);
+    let within = |k: f64| (k / p.truth.k_left - 1.0).abs() < 0.01;
+    assert!(
+        within(params.k_left),
+        "{} vs {}",
+        params.k_left,
+        p.truth.k_left
+    );
+    // The negative control: the uncalibrated gain fails the same check.
+    assert!(!within(p.uncalibrated.k_left));
     let md = path_error_markdown(&rows);
     assert_eq!(md.lines().count(), 5);
     assert!(md.contains("| calibrated_odometry | 22 |") && md.contains("| 0.234 |"));
