@@ -772,8 +772,13 @@ mod tests {
             !jump.settled && (jump.statistic - 1.16).abs() < 1e-12,
             "{jump:?}"
         );
+        let mut tie = again.clone();
         again.confirm = 0.99 * t;
         assert!(again.end_step(&Matrix3::zeros()).expect("fires").settled);
+        // A second reading exactly at the confirmation is no change.
+        tie.confirm = quad_pinv(&(tie.f2 + tie.g_root * tie.g_root.transpose()), &tie.g);
+        assert!((tie.confirm - t).abs() < 1e-12);
+        assert!(!tie.end_step(&Matrix3::zeros()).expect("fires").settled);
         // The default confirmation: the χ²₃ quantile of 1 − 10⁻³, 16.266.
         let d = ChangeParams::default().detector(1.0);
         assert!((d.confirm_threshold() - 16.266).abs() < 1e-3);
