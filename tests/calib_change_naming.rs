@@ -7,34 +7,44 @@
 use crate::support::{odocal, scratch};
 use std::path::Path;
 
-/// Simulates 60 s with `effect` (none when empty), calibrates, returns the `--json` output and
-/// the history CSV.
-fn run(dir: &Path, effect: &str) -> (serde_json::Value, String) {
+/// `odocal simulate ARGS` with `effect` (none when empty) into `dir`/run.mcap;
+/// `odocal calibrate --json` of it into `dir`/cal. Returns the `--json`
+/// output (the same `changes` as `summary.json`) and the history CSV.
+fn simulated_and_calibrated(
+    dir: &Path,
+    args: &[&str],
+    effect: &str,
+) -> (serde_json::Value, String) {
     let bag = dir.join("run.mcap");
-    let truth = dir.join("truth.json");
-    let out = dir.join("cal");
-    let mut args = vec![
-        "simulate",
-        "--seed",
-        "2",
-        "--duration",
-        "60",
-        "--out",
-        bag.to_str().unwrap(),
-        "--truth",
-        truth.to_str().unwrap(),
-    ];
+    let mut sim = vec!["simulate", "--out", bag.to_str().unwrap()];
+    sim.extend(args);
     if !effect.is_empty() {
-        args.extend(["--effect", effect]);
+        sim.extend(["--effect", effect]);
     }
-    let s = odocal(&args);
+    let s = odocal(&sim);
     assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let out = dir.join("cal");
     let json = calibrate(&bag, &out);
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(json["changes"], summary["changes"]);
     let csv = std::fs::read_to_string(out.join("calibration.csv")).unwrap();
     (json, csv)
+}
+
+/// Simulates 60 s (seed 2) with `effect` (none when empty), calibrates,
+/// returns the `--json` output and the history CSV.
+fn run(dir: &Path, effect: &str) -> (serde_json::Value, String) {
+    let truth = dir.join("truth.json");
+    let args = [
+        "--seed",
+        "2",
+        "--duration",
+        "60",
+        "--truth",
+        truth.to_str().unwrap(),
+    ];
+    simulated_and_calibrated(dir, &args, effect)
 }
 
 /// `odocal calibrate --json` of `bag` into `out`.
@@ -251,7 +261,7 @@ fn nothing_is_named_on_a_run_where_nothing_changed() {
 }
 
 /// `odocal calibrate --json` of a `secs` s simulated run of `scenario` and
-/// `seed` with `effect` (none when empty), and its history's firings.
+/// `seed` with `effect` (none when empty), and its history.
 fn scenario_run(
     scenario: &str,
     seed: &str,
@@ -262,29 +272,8 @@ fn scenario_run(
         "change-naming-{scenario}-{seed}-{}",
         effect.is_empty()
     ));
-    let bag = d.join("run.mcap");
-    let mut args = vec![
-        "simulate",
-        "--scenario",
-        scenario,
-        "--seed",
-        seed,
-        "--duration",
-        secs,
-        "--out",
-        bag.to_str().unwrap(),
-    ];
-    if !effect.is_empty() {
-        args.extend(["--effect", effect]);
-    }
-    let s = odocal(&args);
-    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
-    let out = d.join("cal");
-    let json = calibrate(&bag, &out);
-    (
-        json,
-        std::fs::read_to_string(out.join("calibration.csv")).unwrap(),
-    )
+    let args = ["--scenario", scenario, "--seed", seed, "--duration", secs];
+    simulated_and_calibrated(&d, &args, effect)
 }
 
 /// The filters start from a cloud ±10 % wide and converge during the run's
