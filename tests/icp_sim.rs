@@ -403,7 +403,12 @@ fn icp_sim_prior_blend_does_not_follow_a_scaled_odometry() {
         blend += b / members.len() as f64;
         fixed += f / members.len() as f64;
     }
-    assert!(blend.abs() < 1e-3, "blended prior: {:.3} %", 100.0 * blend);
+    let within = |err: f64| err.abs() < 1e-3;
+    assert!(within(blend), "blended prior: {:.3} %", 100.0 * blend);
+    // The negative control: the odometry the prior leans on fails the same
+    // check (its path 2 % long).
+    let odom_err = odom.path_length() / truth.path_length() - 1.0;
+    assert!(!within(odom_err), "odometry {:.3} %", 100.0 * odom_err);
     // Both come out within 0.1 % (before the lines' direction noise was
     // told apart from information: +0.079 % and +0.074 % on one member;
     // after: +0.065 % and +0.065 % over the ensemble, where the corridor's
