@@ -206,6 +206,10 @@ fn icp_sim_corridor_is_accurate_unbiased_and_consistent() {
         "path length off by {:.3} %",
         100.0 * len_err
     );
+    // The negative control: the biased odometry given as the prior fails
+    // the same check (its path 2 % long).
+    let odom_err = odom.path_length() / true_len - 1.0;
+    assert!(odom_err.abs() >= 1e-3, "odometry {:.3} %", 100.0 * odom_err);
     // Unbiased heading: the mean signed error of the heading increments is
     // within 3 standard errors of zero.
     let (mu, se) = heading_bias(&motions, &truth);
@@ -365,6 +369,10 @@ fn icp_sim_sweeping_back_laser_square_is_unbiased() {
     assert!(stats.failed_pairs * 50 <= stats.pairs, "{stats:?}");
     assert!((rx - 1.0).abs() <= 0.005, "Σdx ICP / true = {rx}");
     assert!((rt - 1.0).abs() <= 0.005, "Σdθ ICP / true = {rt}");
+    // The negative control: the wheel odometry given as the prior, 2 %
+    // short, fails the same bound on its path.
+    let odom = run.odom.path_length() / truth.path_length();
+    assert!((odom - 1.0).abs() > 0.005, "odometry / true = {odom}");
     assert!((1.5..4.5).contains(&nees), "mean NEES {nees}");
 }
 
