@@ -178,9 +178,14 @@ fn diagnose(a: DiagnoseArgs) -> anyhow::Result<()> {
             r.size,
             r.unit,
             r.p_value,
-            r.reason
-                .as_ref()
-                .map_or_else(String::new, |why| format!(", the scan matcher's: {why}"))
+            r.reason.as_ref().map_or_else(String::new, |why| {
+                let whose = if r.is_robot() {
+                    "the robot's"
+                } else {
+                    "the scan matcher's"
+                };
+                format!(", {whose}: {why}")
+            })
         );
     }
     out!("held out from t = {:.1} s", d.series.split);

@@ -54,7 +54,7 @@ impl Cause {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Fault {
     /// Its name (`swapped_wheels`, `mirrored_wheels`, `wheel_out_of_round`,
-    /// `floor_slip`, `varying_latency`, `gyro_scale`).
+    /// `floor_slip`, `varying_latency`, `gyro_scale`, `tyre_load_transfer`).
     pub name: String,
     /// Its estimated size, with units in the keys' docs of each fault.
     pub parameters: BTreeMap<String, f64>,

@@ -199,3 +199,103 @@ pub fn floor_slip(f: &super::floor::SlipFit) -> Fault {
             .into(),
     }
 }
+
+/// The name of tyres whose rolling radius follows their load.
+pub const TYRE_LOAD_TRANSFER: &str = "tyre_load_transfer";
+
+/// Tyres whose radius follows their load ([`super::load`]): each radius
+/// shorter on the outer wheel and longer on the inner by κ v ω. Parameters:
+/// `kappa` (relative radius change per m/s² of lateral acceleration, s²/m)
+/// and `kappa_stderr` (Newey–West), `encoder_gain_alternative` (the
+/// encoder gain, s/rad, that fits in its place), `vuong_z` (the load law
+/// against that gain; positive favours the load) and `told_apart` (1 when
+/// the gain is rejected, 0 when the run's speeds cannot tell the two
+/// apart).
+pub fn tyre_load_transfer(
+    f: &super::load::LoadFit,
+    reading: super::load::Reading,
+    gain_model: &super::fit::Fit,
+) -> Fault {
+    let apart = reading == super::load::Reading::Load;
+    let mut parameters = BTreeMap::new();
+    for (k, v) in [
+        ("kappa", f.kappa),
+        ("kappa_stderr", f.stderr),
+        ("encoder_gain_alternative", gain_k(gain_model)),
+        ("vuong_z", f.vuong_z),
+        ("told_apart", if apart { 1.0 } else { 0.0 }),
+    ] {
+        parameters.insert(k.to_string(), v);
+    }
+    let against = if apart {
+        format!(
+            "an encoder over-reading with its rate fits worse (Vuong z = {:+.1})",
+            f.vuong_z
+        )
+    } else {
+        format!(
+            "an encoder over-reading with its rate (encoder_gain k = {:.4} s/rad) fits as \
+             well (Vuong z = {:+.1}): at one speed the two are one law, and this run's \
+             changes of speed do not tell them apart; a drive that takes the same turns \
+             at two speeds does",
+            gain_k(gain_model),
+            f.vuong_z
+        )
+    };
+    Fault {
+        name: TYRE_LOAD_TRANSFER.into(),
+        parameters,
+        evidence: format!(
+            "the wheels over-read in turns by a lateral-acceleration law: each radius \
+             {:.2} ± {:.2} % shorter on the outer wheel and longer on the inner per m/s² \
+             of v·ω (Newey–West), what tyres deflecting under the load a turn moves \
+             outwards do; {against}; the effects below are fitted with that part taken out",
+            100.0 * f.kappa,
+            100.0 * f.stderr
+        ),
+        fix: "the tyres deflect with load (pressure low, soft tyres, a high centre of \
+              mass): inflate or stiffen them, or calibrate at the turns and speeds the \
+              robot drives; constant radii hold only on average"
+            .into(),
+    }
+}
+
+/// What stays open when a run cannot tell tyres deflecting under load from
+/// an encoder gain ([`super::load::Reading::Either`]): the over-reading in
+/// the turn-rate stream, with the gain's reading in full (`gain_model`, the
+/// effects first selected) in its reason.
+pub fn load_or_gain(f: &super::load::LoadFit, gain_model: &super::fit::Fit) -> Remaining {
+    let effects: Vec<String> = gain_model
+        .effects
+        .iter()
+        .map(|e| {
+            let p: Vec<String> = e
+                .params()
+                .iter()
+                .map(|(k, v)| format!("{k} {v:.4}"))
+                .collect();
+            format!("{} ({})", e.name(), p.join(", "))
+        })
+        .collect();
+    Remaining {
+        stream: "icp_w".into(),
+        structure: "speed-dependent".into(),
+        size: gain_k(gain_model),
+        unit: "s/rad (the encoder gain's k)".into(),
+        p_value: f.p_value,
+        source: super::diagnosis::ROBOT.into(),
+        reason: Some(format!(
+            "the wheels over-read with speed in turns, either by tyres deflecting under \
+             load ({TYRE_LOAD_TRANSFER}: the causes and the fault named) or by encoders \
+             over-reading with their rate (then: {}); this run's speeds cannot tell them \
+             apart (Vuong z = {:+.1}); drive the same turns at two speeds to decide",
+            effects.join(", "),
+            f.vuong_z
+        )),
+    }
+}
+
+/// The encoder gain k (s/rad) a model's effects add up to.
+fn gain_k(model: &super::fit::Fit) -> f64 {
+    crate::effects::Departures::of(&model.effects).encoder_gain
+}

@@ -24,6 +24,7 @@ pub mod free;
 pub mod gain;
 pub mod gyro_check;
 pub mod instrument;
+pub mod load;
 pub mod model;
 pub mod mount;
 pub mod odometry;
@@ -104,6 +105,9 @@ pub struct DiagnoseParams {
     /// The gyro's turn scale checked against the scan matching before the
     /// fit (a gyro scale is a fault of the gyro, not an effect of the table).
     pub gyro_check: gyro_check::GyroCheck,
+    /// Tyres whose radius follows their load told apart from an encoder
+    /// gain (the same law at one speed).
+    pub load: load::LoadSettings,
     /// Maximum number of effects selected.
     pub max_effects: usize,
     /// Levenberg–Marquardt iterations per fit.
@@ -132,6 +136,7 @@ impl Default for DiagnoseParams {
             floors: remaining::Floors::default(),
             instrument: instrument::Instrument::default(),
             gyro_check: gyro_check::GyroCheck::default(),
+            load: load::LoadSettings::default(),
             max_effects: 4,
             max_iter: 30,
             candidates: EFFECT_NAMES.iter().map(|s| s.to_string()).collect(),
@@ -184,6 +189,7 @@ impl DiagnoseParams {
         }
         self.instrument.validate().map_err(DiagnoseError::Params)?;
         self.gyro_check.validate().map_err(DiagnoseError::Params)?;
+        self.load.validate().map_err(DiagnoseError::Params)?;
         if self.max_iter == 0 || self.ljung_box_lags == 0 {
             return bad("max_iter and ljung_box_lags must be ≥ 1".into());
         }

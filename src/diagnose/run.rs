@@ -10,6 +10,7 @@ use super::faults::{self, OUT_OF_ROUND};
 use super::fit::Fit;
 use super::floor::{self, FloorSettings};
 use super::gain::heldout_gain;
+use super::load::{self, Reading};
 use super::model::Replay;
 use super::remaining::{remaining_tests, wheel_regressors, RemainingTest, PERIODIC};
 use super::residuals::{stream_stats, structure};
@@ -81,7 +82,71 @@ pub fn run(
         found.push(fault);
         return Ok(pass.diagnosis(&replay, m, p, robot, found));
     }
+    if let Some((pass, fault, either)) = load_transfer(&rows, &pass, &icp0, &gyro0, robot, p) {
+        found.push(fault);
+        let mut d = pass.diagnosis(&replay, m, p, robot, found);
+        if let Some(r) = either {
+            // Not a finding: which of the two laws it is stays open.
+            d.remaining.push(r);
+            d.remaining_structure = true;
+            d.verdict = verdict(&d.causes, &d.remaining, &d.faults);
+        }
+        return Ok(d);
+    }
     Ok(pass.diagnosis(&replay, m, p, robot, found))
+}
+
+/// Tyres whose radius follows their load ([`load`]), looked for when the
+/// selection named an encoder gain (at one speed the two are one law):
+/// when the load law is the reading, or either is, the table effects are
+/// selected again on the rows with the load's part taken out, and the fault
+/// is named if that selection no longer needs an encoder gain. Returns the
+/// pass on the corrected rows, the fault and, when the run cannot tell the
+/// two laws apart, what is left open: the gain's reading in full (its
+/// effects as first selected), so that neither is presented as the finding.
+fn load_transfer(
+    r: &Rows,
+    pass: &Pass,
+    icp0: &[IcpRow],
+    gyro0: &[GyroRow],
+    robot: &RobotConfig,
+    p: &DiagnoseParams,
+) -> Option<(Pass, Fault, Option<Remaining>)> {
+    let xm = Departures::of(&pass.model().effects);
+    if xm.encoder_gain == 0.0 {
+        return None;
+    }
+    let all = Part {
+        replay: r.replay,
+        icp: &pass.icp,
+        gyro: &pass.gyro,
+    };
+    let fit = load::compare(all, &xm, robot, &pass.model().scale, &p.load)?;
+    let reading = fit.reading(&p.load);
+    if reading == Reading::Gain {
+        return None;
+    }
+    let rows = Part {
+        replay: r.replay,
+        icp: icp0,
+        gyro: gyro0,
+    };
+    let (icp, gyro) = load::without_load(rows, &xm, robot, fit.kappa);
+    let again = select_twice(r, &icp, &gyro, p).ok()?;
+    let gain_left = again
+        .model()
+        .effects
+        .iter()
+        .any(|e| e.kind() == EffectKind::EncoderGain);
+    if gain_left {
+        return None;
+    }
+    let either = (reading == Reading::Either).then(|| faults::load_or_gain(&fit, pass.model()));
+    Some((
+        again,
+        faults::tyre_load_transfer(&fit, reading, pass.model()),
+        either,
+    ))
 }
 
 /// The gyro's fault when its turn scale is one ([`super::gyro_check`]);

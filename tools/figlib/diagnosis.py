@@ -149,16 +149,23 @@ def _table_effect(effect, key, truth):
     return check
 
 
-def _radii(right, left):
-    """Right when `radius_scale` is named alone with both wheels within 20 %
-    of (`right`, `left`)."""
+def _radii(right, left, kappa=None):
+    """Right when `radius_scale` is named alone among the table effects with
+    both wheels within 20 % of (`right`, `left`), and the only fault named,
+    if any, is `tyre_load_transfer` with its `kappa` within 20 % of `kappa`
+    (none at all when `kappa` is None: no load moves)."""
     def check(d):
         names = [c["effect"] for c in d["causes"]]
         if names != ["radius_scale"]:
             return False
         p = d["causes"][0]["parameters"]
-        return all(abs(p.get(k, float("nan")) - t) <= 0.2 * abs(t)
-                   for k, t in (("right", right), ("left", left)))
+        radii = all(abs(p.get(k, float("nan")) - t) <= 0.2 * abs(t)
+                    for k, t in (("right", right), ("left", left)))
+        faults = d["faults"]
+        if kappa is None or not faults:
+            return radii and not faults
+        return (radii and len(faults) == 1 and faults[0]["name"] == "tyre_load_transfer"
+                and abs(faults[0]["parameters"]["kappa"] - kappa) <= 0.2 * kappa)
     return check
 
 
@@ -174,6 +181,9 @@ TYRE = "tyre_load:mass=100,com_y=0.065,height=0.5,stiffness=50000"
 # load moves in turns and the standing radii are the whole departure.
 TYRE_FLAT = "tyre_load:mass=100,com_y=0.065,height=0,stiffness=50000"
 TYRE_RADII = tuple(-100 * 9.80665 * (0.5 + s * 0.065 / 0.65) / 50000 / 0.32 for s in (-1, 1))
+# The turn's share: each radius changes by ∓κ v ω of the nominal, κ = m h /
+# (D k r) in s²/m (relative radius per m/s² of lateral acceleration).
+TYRE_KAPPA = 100 * 0.5 / (0.65 * 50000 * 0.32)
 
 
 def _out_of_table(fault=None, key=None, truth=None):
@@ -208,8 +218,9 @@ LAWS = [
     ("backlash:right_wheel=0.02", "out of the table: 0.02 rad backlash, right", _out_of_table()),
     ("quantise:512", "out of the table: 512 ticks per revolution", _out_of_table()),
     (f"simulated {TYRE}", "physics in the simulator: tyres deflecting under an off-centre "
-     f"load (static radius_scale right {TYRE_RADII[0]:.4f}, left {TYRE_RADII[1]:.4f})",
-     _radii(*TYRE_RADII)),
+     f"load (static radius_scale right {TYRE_RADII[0]:.4f}, left {TYRE_RADII[1]:.4f}; "
+     f"in turns `tyre_load_transfer` kappa {TYRE_KAPPA:.4f} s²/m, if named)",
+     _radii(*TYRE_RADII, kappa=TYRE_KAPPA)),
     (f"simulated {TYRE_FLAT}", "the same tyres, the centre of mass on the ground: no load moves "
      "in turns (the control of the row above)", _radii(*TYRE_RADII)),
 ]
