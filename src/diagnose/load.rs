@@ -19,7 +19,7 @@
 //! forward-speed and turn-rate streams (the same number of parameters each;
 //! the regressors are the exact first-order change of the replayed motion,
 //! the rows weighted by their σ times each stream's profiled σ scale). The
-//! two non-nested fits are compared by Vuong's statistic [Vuong1989]
+//! two non-nested fits are compared by Vuong's statistic \[Vuong1989\]
 //! with a Newey–West variance (scan-matching errors are serially
 //! correlated): a load law significant, of a size a tyre can have and not
 //! rejected against the gain is the diagnosis's reading, either
@@ -276,7 +276,7 @@ pub fn compare(
     })
 }
 
-/// Vuong's statistic [Vuong1989] of per-row log-likelihood
+/// Vuong's statistic \[Vuong1989\] of per-row log-likelihood
 /// differences `d` (the gain's squared normalised residual minus the load
 /// law's; twice the Gaussian log-likelihood ratio): their sum over its
 /// standard deviation, the variance Newey–West over `lags` rows.
