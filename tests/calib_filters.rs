@@ -316,6 +316,21 @@ fn the_change_detector_stays_quiet_without_a_change() {
     }
 }
 
+/// The wheel base (m) a run held at `t` s.
+fn base_at(r: &CalibrationRun, t: f64) -> f64 {
+    r.history.iter().rfind(|h| h.t <= t).unwrap().wheel_base
+}
+
+/// How far (m) a run's wheel base strays after `t` s from where it was then.
+fn wander_after(r: &CalibrationRun, t: f64) -> f64 {
+    let d = base_at(r, t);
+    r.history
+        .iter()
+        .filter(|h| h.t > t)
+        .map(|h| (h.wheel_base - d).abs())
+        .fold(0.0, f64::max)
+}
+
 /// Turns for 20 s (D becomes known), then drives straight for 60 s, where W
 /// carries no information about D: no filter may let D wander.
 #[test]
@@ -331,14 +346,8 @@ fn wheel_base_holds_still_where_it_is_unobservable() {
     let mut failed = vec![];
     for m in [Method::AdaptivePf, Method::Pf, Method::Dkf, Method::Akf] {
         let r = calibrate(m, seed, &st);
-        let at = |t: f64| r.history.iter().rfind(|h| h.t <= t).unwrap().wheel_base;
-        let (d20, dend) = (at(20.0), at(80.0));
-        let wander = r
-            .history
-            .iter()
-            .filter(|h| h.t > 20.0)
-            .map(|h| (h.wheel_base - d20).abs())
-            .fold(0.0, f64::max);
+        let (d20, dend) = (base_at(&r, 20.0), base_at(&r, 80.0));
+        let wander = wander_after(&r, 20.0);
         eprintln!(
             "{}: D at 20 s {:.4}, end {:.4}, truth {:.4}, max wander {:.2} mm",
             m.as_str(),
@@ -347,15 +356,28 @@ fn wheel_base_holds_still_where_it_is_unobservable() {
             d.truth.wheel_base,
             wander * 1e3
         );
-        // The fixed-noise `pf` (σ = 0.5 mm of [Farina] per step on every
-        // parameter) never settles D even while turning; it is held to a
-        // looser bound than the filters that converge.
-        let bound = if m == Method::Pf { 0.03 } else { 5e-3 };
+        let bound = 5e-3;
         if wander >= bound {
             failed.push(format!("{}: D wandered {wander} m", m.as_str()));
         }
     }
     assert!(failed.is_empty(), "{failed:?}");
+    // Negative control: the fixed PF with [Farina]'s published process
+    // noise (0.5 mm per step on every parameter) lets D walk where nothing
+    // holds it, beyond the converging filters' bound.
+    let p = CalibParams {
+        method: Method::Pf,
+        seed,
+        preset: Preset::Published,
+        ..Default::default()
+    };
+    let mut cal = build(&p, NOMINAL).unwrap();
+    let r = run(cal.as_mut(), &st, NOMINAL);
+    let wander = wander_after(&r, 20.0);
+    assert!(
+        wander >= 5e-3,
+        "the published PF's D wandered only {wander} m"
+    );
 }
 
 /// [Farina, Table I] on our data, small: the fixed PF with every

@@ -379,6 +379,22 @@ fn cli_demo_names_a_radius_step_in_its_report() {
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("## What changed"), "{report}");
     assert!(report.contains("radius_step right ="), "{report}");
+    // Negative control: the same drive without the step names none.
+    std::fs::create_dir_all(d.join("clean")).unwrap();
+    let (clean, _) = simulated(&d.join("clean"), &["--duration", "60"]);
+    let out = d.join("demo-clean");
+    let sum = json(&odocal(&[
+        "demo",
+        "--input",
+        s(&clean),
+        "--out",
+        s(&out),
+        "--json",
+    ]));
+    let none = sum["changes"].as_array().map_or(0, |c| {
+        c.iter().filter(|c| c["effect"] == "radius_step").count()
+    });
+    assert_eq!(none, 0, "a step named without one: {}", sum["changes"]);
     std::fs::remove_dir_all(&d).unwrap();
 }
 
