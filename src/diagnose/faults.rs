@@ -203,44 +203,62 @@ pub fn floor_slip(f: &super::floor::SlipFit) -> Fault {
 /// The name of tyres whose rolling radius follows their load.
 pub const TYRE_LOAD_TRANSFER: &str = "tyre_load_transfer";
 
+/// The encoder gain a load law was compared with ([`super::load::compare`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GainAlternative {
+    /// The selection's encoder gain (s/rad).
+    pub gain: f64,
+    /// Vuong's z of the load law against it (positive favours the load).
+    pub vuong_z: f64,
+    /// Whether the gain was rejected (else the run cannot tell them apart).
+    pub told_apart: bool,
+}
+
+impl GainAlternative {
+    /// The comparison `f` read at `reading`, the gain `gain` (s/rad).
+    pub fn of(f: &super::load::LoadFit, reading: super::load::Reading, gain: f64) -> Self {
+        Self {
+            gain,
+            vuong_z: f.vuong_z,
+            told_apart: reading == super::load::Reading::Load,
+        }
+    }
+}
+
 /// Tyres whose radius follows their load ([`super::load`]): each radius
 /// shorter on the outer wheel and longer on the inner by κ v ω. Parameters:
 /// `kappa` (relative radius change per m/s² of lateral acceleration, s²/m)
-/// and `kappa_stderr` (Newey–West), `encoder_gain_alternative` (the
-/// encoder gain, s/rad, that fits in its place), `vuong_z` (the load law
-/// against that gain; positive favours the load) and `told_apart` (1 when
-/// the gain is rejected, 0 when the run's speeds cannot tell the two
-/// apart).
-pub fn tyre_load_transfer(
-    f: &super::load::LoadFit,
-    reading: super::load::Reading,
-    gain_model: &super::fit::Fit,
-) -> Fault {
-    let apart = reading == super::load::Reading::Load;
+/// and `kappa_stderr` (Newey–West); when it was compared with a selected
+/// encoder gain, also `encoder_gain_alternative` (that gain, s/rad),
+/// `vuong_z` (the load law against it; positive favours the load) and
+/// `told_apart` (1 when the gain is rejected, 0 when the run's speeds
+/// cannot tell the two apart).
+pub fn tyre_load_transfer(k: &super::load::Kappa, alt: Option<GainAlternative>) -> Fault {
     let mut parameters = BTreeMap::new();
-    for (k, v) in [
-        ("kappa", f.kappa),
-        ("kappa_stderr", f.stderr),
-        ("encoder_gain_alternative", gain_k(gain_model)),
-        ("vuong_z", f.vuong_z),
-        ("told_apart", if apart { 1.0 } else { 0.0 }),
-    ] {
-        parameters.insert(k.to_string(), v);
+    parameters.insert("kappa".to_string(), k.kappa);
+    parameters.insert("kappa_stderr".to_string(), k.stderr);
+    if let Some(a) = alt {
+        parameters.insert("encoder_gain_alternative".to_string(), a.gain);
+        parameters.insert("vuong_z".to_string(), a.vuong_z);
+        parameters.insert("told_apart".to_string(), f64::from(u8::from(a.told_apart)));
     }
-    let against = if apart {
-        format!(
+    let against = match alt {
+        Some(a) if a.told_apart => format!(
             "an encoder over-reading with its rate fits worse (Vuong z = {:+.1})",
-            f.vuong_z
-        )
-    } else {
-        format!(
+            a.vuong_z
+        ),
+        Some(a) => format!(
             "an encoder over-reading with its rate (encoder_gain k = {:.4} s/rad) fits as \
              well (Vuong z = {:+.1}): at one speed the two are one law, and this run's \
              changes of speed do not tell them apart; a drive that takes the same turns \
              at two speeds does",
-            gain_k(gain_model),
-            f.vuong_z
-        )
+            a.gain, a.vuong_z
+        ),
+        None => "read against the radii the selection named, with the scan matcher's own \
+                 forward-speed and turn-rate errors taken out of its rows (along a corridor \
+                 ICP reads the forward speed short by about what the load makes the radii \
+                 short)"
+            .to_string(),
     };
     Fault {
         name: TYRE_LOAD_TRANSFER.into(),
@@ -250,8 +268,8 @@ pub fn tyre_load_transfer(
              {:.2} ± {:.2} % shorter on the outer wheel and longer on the inner per m/s² \
              of v·ω (Newey–West), what tyres deflecting under the load a turn moves \
              outwards do; {against}; the effects below are fitted with that part taken out",
-            100.0 * f.kappa,
-            100.0 * f.stderr
+            100.0 * k.kappa,
+            100.0 * k.stderr
         ),
         fix: "the tyres deflect with load (pressure low, soft tyres, a high centre of \
               mass): inflate or stiffen them, or calibrate at the turns and speeds the \
@@ -262,11 +280,14 @@ pub fn tyre_load_transfer(
 
 /// What stays open when a run cannot tell tyres deflecting under load from
 /// an encoder gain ([`super::load::Reading::Either`]): the over-reading in
-/// the turn-rate stream, with the gain's reading in full (`gain_model`, the
-/// effects first selected) in its reason.
-pub fn load_or_gain(f: &super::load::LoadFit, gain_model: &super::fit::Fit) -> Remaining {
-    let effects: Vec<String> = gain_model
-        .effects
+/// the turn-rate stream, with the gain's reading in full (`gain_reading`:
+/// the effects that reading names) in its reason.
+pub fn load_or_gain(
+    f: &super::load::LoadFit,
+    gain_reading: &[crate::effects::Effect],
+) -> Remaining {
+    let p_value = f.load.p_value;
+    let effects: Vec<String> = gain_reading
         .iter()
         .map(|e| {
             let p: Vec<String> = e
@@ -280,9 +301,9 @@ pub fn load_or_gain(f: &super::load::LoadFit, gain_model: &super::fit::Fit) -> R
     Remaining {
         stream: "icp_w".into(),
         structure: "speed-dependent".into(),
-        size: gain_k(gain_model),
+        size: crate::effects::Departures::of(gain_reading).encoder_gain,
         unit: "s/rad (the encoder gain's k)".into(),
-        p_value: f.p_value,
+        p_value,
         source: super::diagnosis::ROBOT.into(),
         reason: Some(format!(
             "the wheels over-read with speed in turns, either by tyres deflecting under \
@@ -293,9 +314,4 @@ pub fn load_or_gain(f: &super::load::LoadFit, gain_model: &super::fit::Fit) -> R
             f.vuong_z
         )),
     }
-}
-
-/// The encoder gain k (s/rad) a model's effects add up to.
-fn gain_k(model: &super::fit::Fit) -> f64 {
-    crate::effects::Departures::of(&model.effects).encoder_gain
 }

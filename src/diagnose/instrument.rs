@@ -216,6 +216,23 @@ impl Instrument {
             .collect()
     }
 
+    /// ICP rows with the forward speed and the turn rate each read on the
+    /// table's scale (as [`Self::turns_debiased`], the forward speed by its
+    /// cell of the row's own anisotropy and step). The rows unchanged when
+    /// the model is off.
+    pub fn debiased(&self, rows: &[IcpRow]) -> Vec<IcpRow> {
+        self.turns_debiased(rows)
+            .into_iter()
+            .map(|r| {
+                let mut z = r.z;
+                if self.enabled {
+                    z[0] /= 1.0 + self.cell(0, &r, r.z[0], r.z[2])[0];
+                }
+                IcpRow { z, ..r }
+            })
+            .collect()
+    }
+
     /// The model of rows already read on the table's scale
     /// ([`Self::turns_debiased`]): the turn cells' errors 0, their spreads
     /// kept.

@@ -25,6 +25,14 @@
 //! rejected against the gain is the diagnosis's reading, either
 //! [`Reading::Load`] (the gain rejected) or [`Reading::Either`] (the run's
 //! speeds cannot tell them apart, said so).
+//!
+//! When the selection named radii and no gain, the same comparison is made
+//! with the radii alone fitted again beside each law ([`Nuisance::Radii`]:
+//! at one speed the load's turn over-read is a wheel base, and the
+//! selection named none), on the rows with the scan matcher's own
+//! forward-speed and turn-rate errors taken out: along a corridor ICP reads
+//! the forward speed short by about what the load's turn over-read makes
+//! the radii short, and read as it comes the two agree on the wrong radii.
 
 use super::data::{GyroRow, IcpRow, Part};
 use super::stats::chi2_sf;
@@ -65,21 +73,39 @@ impl Default for LoadSettings {
     }
 }
 
-/// What the test found.
+/// The load law's size as fitted.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LoadFit {
+pub struct Kappa {
     /// Relative radius change per m/s² of lateral acceleration (s²/m):
     /// the outer wheel's radius shrinks and the inner one's grows by κ v ω.
     pub kappa: f64,
     /// Its Newey–West standard error (s²/m).
     pub stderr: f64,
+    /// p-value of κ = 0.
+    pub p_value: f64,
+}
+
+impl Kappa {
+    /// Whether it is a tyre's: positive, at most `max_kappa`, significant
+    /// (and the test enabled).
+    pub fn is_tyre(&self, s: &LoadSettings) -> bool {
+        s.enabled && self.kappa > 0.0 && self.kappa <= s.max_kappa && self.p_value < s.alpha
+    }
+}
+
+/// What the comparison with the encoder gain found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadFit {
+    /// The load law's fit.
+    pub load: Kappa,
     /// The encoder gain fitted in its place (s/rad), for the comparison.
     pub gain: f64,
+    /// The right and left radius scales that fit adds to the model's
+    /// (relative).
+    pub gain_radii: [f64; 2],
     /// Vuong's z of the load law against the gain (positive: the load law
     /// fits better).
     pub vuong_z: f64,
-    /// p-value of κ = 0.
-    pub p_value: f64,
 }
 
 /// What the test makes of the speed-dependent over-reading.
@@ -97,8 +123,7 @@ pub enum Reading {
 impl LoadFit {
     /// The reading at settings `s`.
     pub fn reading(&self, s: &LoadSettings) -> Reading {
-        let tyre = self.kappa > 0.0 && self.kappa <= s.max_kappa && self.p_value < s.alpha;
-        if !(s.enabled && tyre) || self.vuong_z < -s.vuong_z {
+        if !self.load.is_tyre(s) || self.vuong_z < -s.vuong_z {
             Reading::Gain
         } else if self.vuong_z > s.vuong_z {
             Reading::Load
@@ -230,16 +255,29 @@ fn hac_stderr(
     (v.is_finite() && v > 0.0).then(|| v.sqrt())
 }
 
+/// Which parameters are fitted again beside the gain or the load law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Nuisance {
+    /// Both radii and the wheel base: the selection named a gain, which a
+    /// wheel base may have stood in for.
+    RadiiAndBase,
+    /// Both radii: the selection named radii and no wheel base (at one
+    /// speed the load's turn over-read is a wheel base).
+    Radii,
+}
+
 /// The load law against the encoder gain on the rows of `all`, from the
 /// selected model `x` (its encoder gain taken out) with the streams'
-/// profiled σ `scale`. `None` when there are too few rows or a fit is
-/// singular (a run without turns says nothing of either).
+/// profiled σ `scale`, the `nuisance` parameters fitted again beside each.
+/// `None` when there are too few rows or a fit is singular (a run without
+/// turns says nothing of either).
 pub fn compare(
     all: Part,
     x: &Departures,
     robot: &RobotConfig,
     scale: &[f64; 4],
     s: &LoadSettings,
+    nuisance: Nuisance,
 ) -> Option<LoadFit> {
     let base = Departures {
         encoder_gain: 0.0,
@@ -249,31 +287,57 @@ pub fn compare(
     if y.len() < 8 * COLUMNS {
         return None;
     }
-    let with_gain = [0, 1, 2, GAIN];
-    let with_load = [0, 1, 2, LOAD];
+    let fixed: &[usize] = match nuisance {
+        Nuisance::RadiiAndBase => &[0, 1, 2],
+        Nuisance::Radii => &[0, 1],
+    };
+    let with_gain = [fixed, &[GAIN]].concat();
+    let with_load = [fixed, &[LOAD]].concat();
     let (bg, ug) = lsq(&y, &cols, &with_gain)?;
     let (bl, u) = lsq(&y, &cols, &with_load)?;
-    // Rows of all streams are stacked; the lag is counted in rows of the
-    // densest stream's rate, which over-covers the others.
-    let span = t.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-        - t.iter().copied().fold(f64::INFINITY, f64::min);
-    let lags = ((s.lag_seconds / span.max(1e-9)) * y.len() as f64)
-        .ceil()
-        .max(1.0) as usize;
-    let se = hac_stderr(&cols, &with_load, &u, lags, 3)?;
-    let z = bl[3] / se;
+    let lags = lags_for(&t, s.lag_seconds);
+    let load = kappa(&cols, &with_load, &bl, &u, lags)?;
     let d: Vec<f64> = ug.iter().zip(&u).map(|(a, b)| a * a - b * b).collect();
     // Fits that span the same columns (one speed) leave the same residuals
     // but for rounding, whose ratio means nothing: no preference.
     let rss: f64 = u.iter().map(|v| v * v).sum();
     let same = d.iter().sum::<f64>().abs() <= 1e-9 * rss;
     Some(LoadFit {
-        kappa: bl[3],
-        stderr: se,
-        gain: bg[3],
+        load,
+        gain: bg[fixed.len()],
+        gain_radii: [bg[0], bg[1]],
         vuong_z: if same { 0.0 } else { vuong(&d, lags) },
+    })
+}
+
+/// κ, the last of the columns `which` fitted with coefficients `beta` and
+/// residuals `u`, with its Newey–West standard error and p-value.
+fn kappa(
+    cols: &[[f64; COLUMNS]],
+    which: &[usize],
+    beta: &[f64],
+    u: &[f64],
+    lags: usize,
+) -> Option<Kappa> {
+    let j = which.len() - 1;
+    let stderr = hac_stderr(cols, which, u, lags, j)?;
+    let z = beta[j] / stderr;
+    Some(Kappa {
+        kappa: beta[j],
+        stderr,
         p_value: chi2_sf(z * z, 1),
     })
+}
+
+/// Newey–West lags (rows) covering `seconds` of the stacked rows at times
+/// `t`: the rows of all streams per second, which over-covers the sparser
+/// streams.
+fn lags_for(t: &[f64], seconds: f64) -> usize {
+    let span = t.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - t.iter().copied().fold(f64::INFINITY, f64::min);
+    ((seconds / span.max(1e-9)) * t.len() as f64)
+        .ceil()
+        .max(1.0) as usize
 }
 
 /// Vuong's statistic \[Vuong1989\] of per-row log-likelihood
@@ -416,6 +480,7 @@ mod tests {
             &robot,
             &[1.0; 4],
             &LoadSettings::default(),
+            Nuisance::RadiiAndBase,
         )
         .unwrap()
     }
@@ -471,7 +536,7 @@ mod tests {
             Reading::Load,
             "{tyres:?}"
         );
-        assert!((tyres.kappa - 0.01).abs() < 5e-4, "{tyres:?}");
+        assert!((tyres.load.kappa - 0.01).abs() < 5e-4, "{tyres:?}");
         let gain = compared(&[0.4, 1.0], Truth::Gain(0.004));
         assert_eq!(
             gain.reading(&LoadSettings::default()),
@@ -501,22 +566,56 @@ mod tests {
         }
     }
 
+    /// The radii alone fitted again beside each law (no wheel base to take
+    /// the turn over-read), at one speed: the tyres' κ recovered, and the
+    /// gain the same law there (Vuong's z near 0, either); nothing on the same
+    /// drive without load (the control).
+    #[test]
+    fn at_one_speed_with_the_radii_alone_the_load_is_found_and_either_law_fits() {
+        let robot = RobotConfig::default();
+        let s = LoadSettings::default();
+        let fit = |truth| {
+            let (replay, icp) = drive(&[0.8], truth, 9);
+            let all = Part {
+                replay: &replay,
+                icp: &icp,
+                gyro: &[],
+            };
+            let x = Departures::default();
+            compare(all, &x, &robot, &[1.0; 4], &s, Nuisance::Radii).unwrap()
+        };
+        let tyres = fit(Truth::Load(0.01));
+        assert_eq!(tyres.reading(&s), Reading::Either, "{tyres:?}");
+        assert!((tyres.load.kappa - 0.01).abs() < 1e-3, "{tyres:?}");
+        // The same span but for second-order terms: no preference.
+        assert!(tyres.vuong_z.abs() < 1.0, "{tyres:?}");
+        let none = fit(Truth::Load(0.0));
+        assert!(!none.load.is_tyre(&s), "{none:?}");
+        assert_eq!(none.reading(&s), Reading::Gain, "{none:?}");
+    }
+
     #[test]
     fn the_reading_follows_its_thresholds() {
         let s = LoadSettings::default();
         let f = LoadFit {
-            kappa: 0.01,
-            stderr: 0.001,
+            load: Kappa {
+                kappa: 0.01,
+                stderr: 0.001,
+                p_value: 1e-9,
+            },
             gain: 0.003,
+            gain_radii: [0.0; 2],
             vuong_z: 3.0,
-            p_value: 1e-9,
         };
         assert_eq!(f.reading(&s), Reading::Load);
         let at = |vuong_z, kappa, p_value| {
             LoadFit {
                 vuong_z,
-                kappa,
-                p_value,
+                load: Kappa {
+                    kappa,
+                    p_value,
+                    ..f.load
+                },
                 ..f
             }
             .reading(&s)
@@ -526,6 +625,7 @@ mod tests {
         assert_eq!(at(-2.59, 0.01, 1e-9), Reading::Gain);
         // κ must be a tyre's: positive, at most max_kappa, significant.
         assert_eq!(at(3.0, -0.01, 1e-9), Reading::Gain);
+        assert_eq!(at(3.0, 0.0, 1e-9), Reading::Gain);
         assert_eq!(at(3.0, 0.05, 1e-9), Reading::Load);
         assert_eq!(at(3.0, 0.0501, 1e-9), Reading::Gain);
         assert_eq!(at(3.0, 0.01, 1e-6), Reading::Gain);

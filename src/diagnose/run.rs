@@ -10,7 +10,7 @@ use super::faults::{self, OUT_OF_ROUND};
 use super::fit::Fit;
 use super::floor::{self, FloorSettings};
 use super::gain::heldout_gain;
-use super::load::{self, Reading};
+use super::load::{self, Nuisance, Reading};
 use super::model::Replay;
 use super::remaining::{remaining_tests, wheel_regressors, RemainingTest, PERIODIC};
 use super::residuals::{stream_stats, structure};
@@ -19,7 +19,7 @@ use super::series::series;
 use super::stability::{self, StabilitySettings};
 use super::trajectory::trajectory_gain;
 use super::{DiagnoseError, DiagnoseParams, Measured};
-use crate::effects::{Departures, EffectKind};
+use crate::effects::{Departures, Effect, EffectKind};
 use crate::robot::RobotConfig;
 use std::collections::BTreeMap;
 
@@ -96,14 +96,16 @@ pub fn run(
     Ok(pass.diagnosis(&replay, m, p, robot, found))
 }
 
-/// Tyres whose radius follows their load ([`load`]), looked for when the
-/// selection named an encoder gain (at one speed the two are one law):
-/// when the load law is the reading, or either is, the table effects are
-/// selected again on the rows with the load's part taken out, and the fault
-/// is named if that selection no longer needs an encoder gain. Returns the
-/// pass on the corrected rows, the fault and, when the run cannot tell the
-/// two laws apart, what is left open: the gain's reading in full (its
-/// effects as first selected), so that neither is presented as the finding.
+/// Tyres whose radius follows their load ([`load`]), compared with the
+/// encoder gain whose law they share at one speed: when the selection named
+/// a gain, with the radii and the wheel base fitted again beside each; when
+/// it named radii and no gain, with the radii alone, on the rows read on
+/// the scan matcher's scale. When the load law is the reading, or either
+/// is, the table effects are selected again on the rows with the load's
+/// part taken out, and the fault is named if that selection names no
+/// encoder gain. Returns the pass on the corrected rows, the fault and,
+/// when the run cannot tell the two laws apart, what is left open with the
+/// gain's reading in full, so that neither is presented as the finding.
 fn load_transfer(
     r: &Rows,
     pass: &Pass,
@@ -112,26 +114,42 @@ fn load_transfer(
     robot: &RobotConfig,
     p: &DiagnoseParams,
 ) -> Option<(Pass, Fault, Option<Remaining>)> {
-    let xm = Departures::of(&pass.model().effects);
-    if xm.encoder_gain == 0.0 {
+    let model = pass.model();
+    let xm = Departures::of(&model.effects);
+    let (nuisance, icp) = if xm.encoder_gain != 0.0 {
+        (Nuisance::RadiiAndBase, pass.icp.clone())
+    } else if xm.radius_scale != [0.0; 2] && p.instrument.enabled {
+        (Nuisance::Radii, p.instrument.debiased(&pass.icp))
+    } else {
         return None;
-    }
+    };
     let all = Part {
         replay: r.replay,
-        icp: &pass.icp,
+        icp: &icp,
         gyro: &pass.gyro,
     };
-    let fit = load::compare(all, &xm, robot, &pass.model().scale, &p.load)?;
+    let fit = load::compare(all, &xm, robot, &model.scale, &p.load, nuisance)?;
     let reading = fit.reading(&p.load);
     if reading == Reading::Gain {
         return None;
     }
+    // The gain's reading: the selection's own when it named one, else the
+    // radii it named moved by the gain's fit, and that gain.
+    let gain_reading = if xm.encoder_gain != 0.0 {
+        model.effects.clone()
+    } else {
+        gain_reading(&model.effects, &fit)
+    };
+    let gain = Departures::of(&gain_reading).encoder_gain;
+    let either = (reading == Reading::Either).then(|| faults::load_or_gain(&fit, &gain_reading));
+    let alt = faults::GainAlternative::of(&fit, reading, gain);
+    let kappa = fit.load;
     let rows = Part {
         replay: r.replay,
         icp: icp0,
         gyro: gyro0,
     };
-    let (icp, gyro) = load::without_load(rows, &xm, robot, fit.kappa);
+    let (icp, gyro) = load::without_load(rows, &xm, robot, kappa.kappa);
     let again = select_twice(r, &icp, &gyro, p).ok()?;
     let gain_left = again
         .model()
@@ -141,12 +159,26 @@ fn load_transfer(
     if gain_left {
         return None;
     }
-    let either = (reading == Reading::Either).then(|| faults::load_or_gain(&fit, pass.model()));
-    Some((
-        again,
-        faults::tyre_load_transfer(&fit, reading, pass.model()),
-        either,
-    ))
+    Some((again, faults::tyre_load_transfer(&kappa, Some(alt)), either))
+}
+
+/// The selected `effects` read as an encoder gain instead ([`load::compare`]
+/// with the radii fitted again): the radius scales moved by the gain fit's,
+/// and its gain.
+fn gain_reading(effects: &[Effect], fit: &load::LoadFit) -> Vec<Effect> {
+    let [dr, dl] = fit.gain_radii;
+    let mut out: Vec<Effect> = effects
+        .iter()
+        .map(|e| match *e {
+            Effect::RadiusScale { right, left } => Effect::RadiusScale {
+                right: right + dr,
+                left: left + dl,
+            },
+            other => other,
+        })
+        .collect();
+    out.push(Effect::EncoderGain { k: fit.gain });
+    out
 }
 
 /// The gyro's fault when its turn scale is one ([`super::gyro_check`]);
