@@ -226,39 +226,43 @@ impl GainAlternative {
 }
 
 /// Tyres whose radius follows their load ([`super::load`]): each radius
-/// shorter on the outer wheel and longer on the inner by κ v ω. Parameters:
-/// `kappa` (relative radius change per m/s² of lateral acceleration, s²/m)
-/// and `kappa_stderr` (Newey–West); when it was compared with a selected
-/// encoder gain, also `encoder_gain_alternative` (that gain, s/rad),
-/// `vuong_z` (the load law against it; positive favours the load) and
-/// `told_apart` (1 when the gain is rejected, 0 when the run's speeds
-/// cannot tell the two apart).
-pub fn tyre_load_transfer(k: &super::load::Kappa, alt: Option<GainAlternative>) -> Fault {
+/// shorter on the outer wheel and longer on the inner by κ v ω, compared
+/// with the encoder gain `alt` (`on_scale`: on ICP rows read on the scan
+/// matcher's scale). Parameters: `kappa` (relative radius change per m/s²
+/// of lateral acceleration, s²/m) and `kappa_stderr` (Newey–West),
+/// `encoder_gain_alternative` (the gain, s/rad), `vuong_z` (the load law
+/// against it; positive favours the load) and `told_apart` (1 when the
+/// gain is rejected, 0 when the run's speeds cannot tell the two apart).
+pub fn tyre_load_transfer(k: &super::load::Kappa, alt: GainAlternative, on_scale: bool) -> Fault {
     let mut parameters = BTreeMap::new();
-    parameters.insert("kappa".to_string(), k.kappa);
-    parameters.insert("kappa_stderr".to_string(), k.stderr);
-    if let Some(a) = alt {
-        parameters.insert("encoder_gain_alternative".to_string(), a.gain);
-        parameters.insert("vuong_z".to_string(), a.vuong_z);
-        parameters.insert("told_apart".to_string(), f64::from(u8::from(a.told_apart)));
+    for (key, v) in [
+        ("kappa", k.kappa),
+        ("kappa_stderr", k.stderr),
+        ("encoder_gain_alternative", alt.gain),
+        ("vuong_z", alt.vuong_z),
+        ("told_apart", f64::from(u8::from(alt.told_apart))),
+    ] {
+        parameters.insert(key.to_string(), v);
     }
-    let against = match alt {
-        Some(a) if a.told_apart => format!(
+    let against = if alt.told_apart {
+        format!(
             "an encoder over-reading with its rate fits worse (Vuong z = {:+.1})",
-            a.vuong_z
-        ),
-        Some(a) => format!(
+            alt.vuong_z
+        )
+    } else {
+        format!(
             "an encoder over-reading with its rate (encoder_gain k = {:.4} s/rad) fits as \
              well (Vuong z = {:+.1}): at one speed the two are one law, and this run's \
              changes of speed do not tell them apart; a drive that takes the same turns \
              at two speeds does",
-            a.gain, a.vuong_z
-        ),
-        None => "read against the radii the selection named, with the scan matcher's own \
-                 forward-speed and turn-rate errors taken out of its rows (along a corridor \
-                 ICP reads the forward speed short by about what the load makes the radii \
-                 short)"
-            .to_string(),
+            alt.gain, alt.vuong_z
+        )
+    };
+    let rows = if on_scale {
+        " (on ICP's rows read on the scan matcher's own scale: along a corridor ICP \
+         reads the forward speed short by about what the load makes the radii short)"
+    } else {
+        ""
     };
     Fault {
         name: TYRE_LOAD_TRANSFER.into(),
@@ -267,7 +271,8 @@ pub fn tyre_load_transfer(k: &super::load::Kappa, alt: Option<GainAlternative>) 
             "the wheels over-read in turns by a lateral-acceleration law: each radius \
              {:.2} ± {:.2} % shorter on the outer wheel and longer on the inner per m/s² \
              of v·ω (Newey–West), what tyres deflecting under the load a turn moves \
-             outwards do; {against}; the effects below are fitted with that part taken out",
+             outwards do{rows}; {against}; the effects below are fitted with that part \
+             taken out",
             100.0 * k.kappa,
             100.0 * k.stderr
         ),

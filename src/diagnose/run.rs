@@ -116,16 +116,18 @@ fn load_transfer(
 ) -> Option<(Pass, Fault, Option<Remaining>)> {
     let model = pass.model();
     let xm = Departures::of(&model.effects);
-    let (nuisance, icp) = if xm.encoder_gain != 0.0 {
-        (Nuisance::RadiiAndBase, pass.icp.clone())
+    let on_scale;
+    let (nuisance, icp): (Nuisance, &[IcpRow]) = if xm.encoder_gain != 0.0 {
+        (Nuisance::RadiiAndBase, &pass.icp)
     } else if xm.radius_scale != [0.0; 2] && p.instrument.enabled {
-        (Nuisance::Radii, p.instrument.debiased(&pass.icp))
+        on_scale = p.instrument.debiased(&pass.icp);
+        (Nuisance::Radii, &on_scale)
     } else {
         return None;
     };
     let all = Part {
         replay: r.replay,
-        icp: &icp,
+        icp,
         gyro: &pass.gyro,
     };
     let fit = load::compare(all, &xm, robot, &model.scale, &p.load, nuisance)?;
@@ -159,7 +161,12 @@ fn load_transfer(
     if gain_left {
         return None;
     }
-    Some((again, faults::tyre_load_transfer(&kappa, Some(alt)), either))
+    let on_scale = nuisance == Nuisance::Radii;
+    Some((
+        again,
+        faults::tyre_load_transfer(&kappa, alt, on_scale),
+        either,
+    ))
 }
 
 /// The selected `effects` read as an encoder gain instead ([`load::compare`]
