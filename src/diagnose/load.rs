@@ -528,6 +528,77 @@ mod tests {
         }
     }
 
+    /// Rows stacked by hand: each residual and its regressors divided by
+    /// the row's σ times its stream's scale, ICP forward and turn rate then
+    /// the gyro, at the rows' mid-times; rows with a residual or σ that is
+    /// not finite, or σ 0, left out.
+    #[test]
+    fn rows_are_stacked_with_their_weights_by_hand() {
+        let robot = RobotConfig::default();
+        let wheels: Vec<WheelSample> = (0..=100)
+            .map(|i| {
+                let t = 0.01 * i as f64;
+                WheelSample {
+                    stamp: t,
+                    right: 3.0 * t,
+                    left: 2.0 * t,
+                }
+            })
+            .collect();
+        let replay = Replay::new(&robot, &wheels, 0.0, 0.0);
+        let x = Departures::default();
+        let row = |t0: f64, off: [f64; 3], sigma: [f64; 3]| {
+            let p = replay.icp(&x, t0, t0 + 0.2);
+            IcpRow {
+                t0,
+                t1: t0 + 0.2,
+                z: [p.v + off[0], p.l + off[1], p.w + off[2]],
+                sigma,
+            }
+        };
+        let icp = [
+            row(0.2, [0.01, 0.0, 0.02], [0.5, 1.0, 0.25]),
+            row(0.4, [f64::NAN, 0.0, 0.04], [0.5, 1.0, 0.0]),
+            row(0.6, [0.03, 0.0, 0.0], [f64::INFINITY, 1.0, 0.25]),
+        ];
+        let gyro = [GyroRow {
+            t0: 0.3,
+            t1: 0.5,
+            w: replay.gyro(&x, 0.3, 0.5) + 0.002,
+            sigma: 0.1,
+        }];
+        let all = Part {
+            replay: &replay,
+            icp: &icp,
+            gyro: &gyro,
+        };
+        let scale = [2.0, 7.0, 4.0, 0.5];
+        let (y, cols, t) = stacked(&all, &x, &robot, &scale);
+        // Kept: row 1's forward (σ 0.5 · 2) and turn (0.25 · 4), the gyro
+        // (0.1 · 0.5); row 2's forward is NaN and its turn's σ 0, row 3's
+        // forward σ infinite and its turn's residual 0 (kept).
+        let want_y = [0.01 / 1.0, 0.02 / 1.0, 0.0, 0.002 / 0.05];
+        let want_t = [0.3, 0.3, 0.7, 0.4];
+        assert_eq!(y.len(), 4, "{y:?}");
+        for k in 0..4 {
+            assert!((y[k] - want_y[k]).abs() < 1e-9, "{k}: {y:?}");
+            assert!((t[k] - want_t[k]).abs() < 1e-12, "{k}: {t:?}");
+        }
+        // Regressors: the motion's at 3 and 2 rad/s (V 0.8 m/s, W 0.32/0.65
+        // rad/s), over each row's own weight.
+        let w = 0.32 / 0.65;
+        let (load_v, load_w) = (-0.8 * w * w * 0.65 / 2.0, -2.0 * 0.64 * w / 0.65);
+        for (k, (want, weight)) in [(load_v, 1.0), (load_w, 1.0), (load_w, 1.0), (load_w, 0.05)]
+            .iter()
+            .enumerate()
+        {
+            assert!(
+                (cols[k][LOAD] - want / weight).abs() < 1e-9,
+                "{k}: {cols:?}"
+            );
+        }
+    }
+
     #[test]
     fn turns_at_two_speeds_tell_tyres_under_load_from_an_encoder_gain() {
         let tyres = compared(&[0.4, 1.0], Truth::Load(0.01));
