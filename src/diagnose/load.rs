@@ -733,6 +733,29 @@ mod tests {
     }
 
     #[test]
+    fn newey_west_standard_error_by_hand() {
+        // One column of ones (a mean), residuals (1, −1, 1, −1): lag 0 sums
+        // u² = 4, (AᵀA)⁻¹ = 1/4, variance 4/16, σ 0.5; with one lag
+        // (Bartlett weight 1/2) the products of neighbours, −3, add
+        // 2 · 1/2 · (−3): variance 1/16, σ 0.25.
+        let mut cols = vec![[0.0; COLUMNS]; 4];
+        for c in &mut cols {
+            c[2] = 1.0;
+        }
+        let u = [1.0, -1.0, 1.0, -1.0];
+        let se0 = hac_stderr(&cols, &[2], &u, 0, 0).unwrap();
+        assert!((se0 - 0.5).abs() < 1e-12, "{se0}");
+        let se1 = hac_stderr(&cols, &[2], &u, 1, 0).unwrap();
+        assert!((se1 - 0.25).abs() < 1e-12, "{se1}");
+        // Two lags: weights 2/3 and 1/3, products −3 and +2: variance
+        // (4 − 4 + 4/3)/16, σ √(1/12).
+        let se2 = hac_stderr(&cols, &[2], &u, 2, 0).unwrap();
+        assert!((se2 - (1.0f64 / 12.0).sqrt()).abs() < 1e-12, "{se2}");
+        // No residual, no standard error.
+        assert!(hac_stderr(&cols, &[2], &[0.0; 4], 1, 0).is_none());
+    }
+
+    #[test]
     fn vuong_by_hand() {
         // d = (1, 3) mean 2, centred (−1, 1): variance sum 2 at lag 0, the
         // lag-1 term 2·(1/2)·(−1) = −1: z = 2·2/√1 = 4.
