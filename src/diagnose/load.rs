@@ -490,11 +490,9 @@ mod tests {
         .unwrap()
     }
 
-    #[test]
-    fn the_first_order_changes_are_the_laws_by_hand() {
-        // Wheels at 3 and 2 rad/s on the nominal chair (r 0.32 m, D 0.65 m):
-        // rims 0.96 and 0.64 m/s, V 0.8 m/s, W 0.32/0.65 rad/s.
-        let robot = RobotConfig::default();
+    /// One second of the nominal chair's wheels turning steadily at 3 and
+    /// 2 rad/s (100 Hz).
+    fn steady(robot: &RobotConfig) -> Replay {
         let wheels: Vec<WheelSample> = (0..=100)
             .map(|i| {
                 let t = 0.01 * i as f64;
@@ -505,7 +503,15 @@ mod tests {
                 }
             })
             .collect();
-        let replay = Replay::new(&robot, &wheels, 0.0, 0.0);
+        Replay::new(robot, &wheels, 0.0, 0.0)
+    }
+
+    #[test]
+    fn the_first_order_changes_are_the_laws_by_hand() {
+        // Wheels at 3 and 2 rad/s on the nominal chair (r 0.32 m, D 0.65 m):
+        // rims 0.96 and 0.64 m/s, V 0.8 m/s, W 0.32/0.65 rad/s.
+        let robot = RobotConfig::default();
+        let replay = steady(&robot);
         let all = Part {
             replay: &replay,
             icp: &[],
@@ -540,17 +546,7 @@ mod tests {
     #[test]
     fn rows_are_stacked_with_their_weights_by_hand() {
         let robot = RobotConfig::default();
-        let wheels: Vec<WheelSample> = (0..=100)
-            .map(|i| {
-                let t = 0.01 * i as f64;
-                WheelSample {
-                    stamp: t,
-                    right: 3.0 * t,
-                    left: 2.0 * t,
-                }
-            })
-            .collect();
-        let replay = Replay::new(&robot, &wheels, 0.0, 0.0);
+        let replay = steady(&robot);
         let x = Departures::default();
         let row = |t0: f64, off: [f64; 3], sigma: [f64; 3]| {
             let p = replay.icp(&x, t0, t0 + 0.2);
